@@ -1,0 +1,7 @@
+/* One function per subcommand, each in cmd_<name>.c. */
+#pragma once
+
+int cmd_info(int argc, char **argv);
+
+/* Shared by subcommands: print "col0rme CMD: error: MSG" and return 1. */
+int c0_cli_error(const char *cmd);

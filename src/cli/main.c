@@ -1,0 +1,60 @@
+#define _POSIX_C_SOURCE 200809L
+#include "cli/commands.h"
+#include "core/err.h"
+#include "core/progress.h"
+#include "c0_version.h"
+
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+static const struct {
+	const char *name;
+	int (*run)(int, char **);
+	const char *summary;
+} commands[] = {
+	{ "info", cmd_info, "describe TIFF stacks: size, frames, type, calibration, statistics" },
+};
+
+int c0_cli_error(const char *cmd)
+{
+	fprintf(stderr, "col0rme %s: error: %s\n", cmd, c0_errmsg());
+	return 1;
+}
+
+static void usage(FILE *f)
+{
+	fprintf(f, "usage: col0rme <command> [options]\n\n"
+		   "3D super-resolution from multi-angle TIRF stacks of blinking fluorophores (3D-COL0RME).\n\ncommands:\n");
+	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+		fprintf(f, "  %-10s %s\n", commands[i].name, commands[i].summary);
+	fprintf(f, "\n'col0rme <command> --help' describes each command; --version prints the version.\n");
+}
+
+int main(int argc, char **argv)
+{
+	if (argc < 2) {
+		usage(stderr);
+		return 2;
+	}
+	if (!strcmp(argv[1], "--version")) {
+		printf("col0rme %s\n", C0_VERSION);
+		return 0;
+	}
+	if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
+		usage(stdout);
+		return 0;
+	}
+	/* progress lines only on a terminal; --verbose turns them on elsewhere */
+	int verbose = 0;
+	for (int i = 2; i < argc; i++)
+		if (!strcmp(argv[i], "--verbose"))
+			verbose = 1;
+	c0_progress_enable(verbose || isatty(STDERR_FILENO));
+	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+		if (!strcmp(argv[1], commands[i].name))
+			return commands[i].run(argc - 1, argv + 1);
+	fprintf(stderr, "col0rme: error: unknown command '%s'\n", argv[1]);
+	usage(stderr);
+	return 2;
+}

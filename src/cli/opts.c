@@ -1,0 +1,175 @@
+#include "cli/opts.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void show_default(const struct c0_opt *o, char *buf, size_t n)
+{
+	buf[0] = '\0';
+	if (o->defhint) {
+		snprintf(buf, n, " (default: %s)", o->defhint);
+		return;
+	}
+	switch (o->type) {
+	case C0_OPT_INT: snprintf(buf, n, " (default: %d)", *(int *)o->dst); break;
+	case C0_OPT_LONG: snprintf(buf, n, " (default: %lld)", *(long long *)o->dst); break;
+	case C0_OPT_DOUBLE: snprintf(buf, n, " (default: %g)", *(double *)o->dst); break;
+	case C0_OPT_STRING:
+		if (*(const char **)o->dst)
+			snprintf(buf, n, " (default: %s)", *(const char **)o->dst);
+		break;
+	case C0_OPT_DOUBLES:
+		if (*o->count) {
+			size_t k = (size_t)snprintf(buf, n, " (default: ");
+			for (int i = 0; i < *o->count && k < n; i++)
+				k += (size_t)snprintf(buf + k, n - k, "%s%g", i ? "," : "", ((double *)o->dst)[i]);
+			if (k < n)
+				snprintf(buf + k, n - k, ")");
+		}
+		break;
+	default: break;
+	}
+}
+
+void c0_opts_help(const struct c0_cmd_spec *spec)
+{
+	printf("usage: col0rme %s %s\n\n%s\n\noptions:\n", spec->name, spec->args, spec->summary);
+	for (int i = 0; i < spec->nopts; i++) {
+		const struct c0_opt *o = &spec->opts[i];
+		char head[64], def[160];
+		snprintf(head, sizeof head, "%c%c%s--%s %s", o->shortname ? '-' : ' ', o->shortname ? o->shortname : ' ',
+			 o->shortname ? ", " : "  ", o->name, o->type == C0_OPT_FLAG ? "" : o->metavar ? o->metavar : "X");
+		show_default(o, def, sizeof def);
+		printf("  %-28s %s%s\n", head, o->help, def);
+	}
+	printf("  %-28s %s\n", "-h, --help", "show this help");
+}
+
+static int bad(const struct c0_cmd_spec *spec, const char *name, const char *val, const char *why)
+{
+	fprintf(stderr, "col0rme %s: error: --%s %s: %s\n", spec->name, name, val ? val : "", why);
+	return 2;
+}
+
+static int parse_list(const struct c0_cmd_spec *spec, const struct c0_opt *o, const char *v)
+{
+	int n = 0;
+	const char *p = v;
+	while (*p) {
+		if (n >= o->max)
+			return bad(spec, o->name, v, "too many values");
+		char *end;
+		errno = 0;
+		if (o->type == C0_OPT_DOUBLES)
+			((double *)o->dst)[n] = strtod(p, &end);
+		else {
+			long x = strtol(p, &end, 10);
+			((int *)o->dst)[n] = (int)x;
+		}
+		if (end == p || errno || (*end && *end != ','))
+			return bad(spec, o->name, v, "expected a comma-separated list of numbers");
+		n++;
+		p = *end ? end + 1 : end;
+	}
+	if (!n)
+		return bad(spec, o->name, v, "empty list");
+	*o->count = n;
+	return 0;
+}
+
+static int set_value(const struct c0_cmd_spec *spec, const struct c0_opt *o, const char *v)
+{
+	char *end;
+	errno = 0;
+	switch (o->type) {
+	case C0_OPT_INT: {
+		long x = strtol(v, &end, 10);
+		if (end == v || *end || errno || x < -2147483647L || x > 2147483647L)
+			return bad(spec, o->name, v, "expected an integer");
+		*(int *)o->dst = (int)x;
+		return 0;
+	}
+	case C0_OPT_LONG: {
+		long long x = strtoll(v, &end, 10);
+		if (end == v || *end || errno)
+			return bad(spec, o->name, v, "expected an integer");
+		*(long long *)o->dst = x;
+		return 0;
+	}
+	case C0_OPT_DOUBLE: {
+		double x = strtod(v, &end);
+		if (end == v || *end || errno || x != x)
+			return bad(spec, o->name, v, "expected a number");
+		*(double *)o->dst = x;
+		return 0;
+	}
+	case C0_OPT_STRING:
+		*(const char **)o->dst = v;
+		return 0;
+	case C0_OPT_DOUBLES:
+	case C0_OPT_INTS:
+		return parse_list(spec, o, v);
+	default:
+		return 2;
+	}
+}
+
+int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *npos, char **pos)
+{
+	int np = 0, only_pos = 0;
+	for (int i = 1; i < argc; i++) {
+		char *a = argv[i];
+		if (only_pos || a[0] != '-' || !a[1]) {
+			pos[np++] = a;
+			continue;
+		}
+		if (!strcmp(a, "--")) {
+			only_pos = 1;
+			continue;
+		}
+		if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+			c0_opts_help(spec);
+			return 1;
+		}
+		const struct c0_opt *o = NULL;
+		const char *val = NULL;
+		if (a[1] == '-') {
+			const char *name = a + 2, *eq = strchr(name, '=');
+			size_t l = eq ? (size_t)(eq - name) : strlen(name);
+			for (int k = 0; k < spec->nopts; k++)
+				if (strlen(spec->opts[k].name) == l && !strncmp(spec->opts[k].name, name, l))
+					o = &spec->opts[k];
+			if (eq)
+				val = eq + 1;
+		} else if (!a[2]) {
+			for (int k = 0; k < spec->nopts; k++)
+				if (spec->opts[k].shortname == a[1])
+					o = &spec->opts[k];
+		}
+		if (!o) {
+			fprintf(stderr, "col0rme %s: error: unknown option %s (see col0rme %s --help)\n", spec->name, a, spec->name);
+			return 2;
+		}
+		if (o->type == C0_OPT_FLAG) {
+			if (val)
+				return bad(spec, o->name, val, "takes no value");
+			*(int *)o->dst = 1;
+			continue;
+		}
+		if (!val) {
+			if (i + 1 >= argc)
+				return bad(spec, o->name, "", "missing value");
+			val = argv[++i];
+		}
+		if (set_value(spec, o, val))
+			return 2;
+	}
+	if (np < spec->min_pos || (spec->max_pos >= 0 && np > spec->max_pos)) {
+		fprintf(stderr, "col0rme %s: error: expected %s (see col0rme %s --help)\n", spec->name, spec->args, spec->name);
+		return 2;
+	}
+	*npos = np;
+	return 0;
+}

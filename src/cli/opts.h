@@ -1,0 +1,41 @@
+/* Table-driven options: one row gives parsing, help text and the default
+ * (the value already in dst when parsing starts). */
+#pragma once
+
+enum c0_opt_type {
+	C0_OPT_FLAG,     /* int, set to 1 */
+	C0_OPT_INT,      /* int */
+	C0_OPT_LONG,     /* long long */
+	C0_OPT_DOUBLE,   /* double */
+	C0_OPT_STRING,   /* const char * */
+	C0_OPT_DOUBLES,  /* comma list into double[max], count in *count */
+	C0_OPT_INTS,     /* comma list into int[max], count in *count */
+};
+
+struct c0_opt {
+	const char *name;      /* long name, without "--" */
+	char shortname;        /* 0 for none */
+	enum c0_opt_type type;
+	void *dst;
+	const char *metavar;
+	const char *help;
+	const char *defhint;   /* shown instead of the current value, if set */
+	int max;               /* list options: capacity */
+	int *count;            /* list options: parsed length */
+};
+
+struct c0_cmd_spec {
+	const char *name;
+	const char *args;      /* e.g. "[options] FILE..." */
+	const char *summary;
+	const struct c0_opt *opts;
+	int nopts;
+	int min_pos, max_pos;  /* positional argument count (max < 0: any) */
+};
+
+#define C0_NOPTS(a) ((int)(sizeof(a) / sizeof((a)[0])))
+
+/* Returns 0 to go on, 1 when help was printed (exit 0), 2 on error (message
+ * already printed). Positional arguments are left in pos[0..*npos). */
+int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *npos, char **pos);
+void c0_opts_help(const struct c0_cmd_spec *spec);

@@ -1,0 +1,2 @@
+#pragma once
+double c0_now(void);   /* monotonic seconds */

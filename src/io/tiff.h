@@ -1,0 +1,70 @@
+/* TIFF stacks through libtiff.
+ *
+ * Reading streams one plane at a time (nothing needs the whole stack in
+ * memory) and converts any supported sample type to float or double.
+ * Writing produces ImageJ hyperstacks (calibrated, Fiji opens them as such)
+ * under a temporary name that is renamed on success, so a failure never
+ * leaves a half-written file. */
+#pragma once
+#include <stddef.h>
+#include <stdint.h>
+
+enum c0_dtype { C0_U8, C0_U16, C0_U32, C0_I16, C0_I32, C0_F32, C0_F64 };
+
+const char *c0_dtype_name(enum c0_dtype t);
+size_t c0_dtype_size(enum c0_dtype t);
+
+struct c0_tiff_info {
+	int64_t width, height;
+	int64_t pages;                 /* planes in the file */
+	int64_t channels, slices, frames; /* ImageJ hyperstack shape, 1 if absent */
+	enum c0_dtype dtype;
+	double pixel_size_nm;          /* 0 when the file has no calibration */
+	double z_spacing_nm;           /* 0 when absent */
+	char unit[16];                 /* calibration unit as written in the file */
+	int bigtiff, big_endian, tiled;
+	char compression[16];
+	int imagej, ome;
+};
+
+struct c0_tiff_reader;
+
+int c0_tiff_open(const char *path, struct c0_tiff_reader **out);
+/* Reads from memory (the buffer must outlive the reader); name is for messages. */
+int c0_tiff_open_mem(const void *data, size_t size, const char *name, struct c0_tiff_reader **out);
+const struct c0_tiff_info *c0_tiff_get_info(const struct c0_tiff_reader *r);
+/* Plane `page` (0-based) into dst (width*height values, row-major). Sequential
+ * access is cheapest; any order works. */
+int c0_tiff_read_f32(struct c0_tiff_reader *r, int64_t page, float *dst);
+int c0_tiff_read_f64(struct c0_tiff_reader *r, int64_t page, double *dst);
+void c0_tiff_close(struct c0_tiff_reader *r);
+
+/* Whole-file convenience: allocates pages*height*width floats. */
+int c0_tiff_load_f32(const char *path, struct c0_tiff_info *info, float **data);
+
+struct c0_tiff_wopts {
+	int64_t width, height;
+	int64_t channels, slices, frames;  /* 0 is taken as 1; planes in XYCZT order */
+	enum c0_dtype dtype;               /* C0_U8, C0_U16 or C0_F32 */
+	double pixel_size_nm;              /* 0: uncalibrated */
+	double z_spacing_nm;               /* 0: not written */
+	double frame_interval_s;           /* 0: not written */
+	double display_min, display_max;   /* both 0: not written */
+	int bigtiff;                       /* 1: force BigTIFF; 0: only when needed */
+	const char *software;              /* Software tag, e.g. the command line */
+};
+
+struct c0_tiff_writer;
+
+/* BigTIFF is chosen by this rule: classic TIFF offsets end at 4 GiB. */
+int c0_tiff_needs_bigtiff(int64_t data_bytes);
+int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_tiff_writer **out);
+/* Planes are given as float and converted (rounded and clamped for integers). */
+int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane);
+/* Closes and renames into place; fails if not every plane was written. */
+int c0_tiff_commit(struct c0_tiff_writer *w);
+/* Closes and deletes the temporary file. */
+void c0_tiff_abort(struct c0_tiff_writer *w);
+
+/* Whole-array convenience with display range from the data. */
+int c0_tiff_save_f32(const char *path, const struct c0_tiff_wopts *o, const float *data);

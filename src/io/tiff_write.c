@@ -1,0 +1,209 @@
+/* ImageJ-hyperstack TIFF writer (uint8, uint16, float32), one strip per
+ * plane where it fits, BigTIFF past 4 GiB, temporary name until commit. */
+#define _POSIX_C_SOURCE 200809L
+#include "io/tiff.h"
+#include "io/imagej.h"
+#include "io/atomic.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <tiffio.h>
+
+struct c0_tiff_writer {
+	TIFF *tif;
+	struct c0_tiff_wopts o;
+	char path[4096], tmp[4096];
+	char tiffmsg[256];
+	char desc[1024];
+	int64_t planes, written;
+	uint8_t *buf;
+};
+
+static int on_error(TIFF *tif, void *ud, const char *module, const char *fmt, va_list ap)
+{
+	(void)tif, (void)module;
+	struct c0_tiff_writer *w = ud;
+	vsnprintf(w->tiffmsg, sizeof w->tiffmsg, fmt, ap);
+	return 1;
+}
+
+int c0_tiff_needs_bigtiff(int64_t data_bytes)
+{
+	/* keep ~1 % headroom for directories and tags under the 4 GiB offset limit */
+	return data_bytes > (int64_t)(4294967296.0 * 0.99);
+}
+
+int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_tiff_writer **out)
+{
+	*out = NULL;
+	if (o->width <= 0 || o->height <= 0 || o->width > UINT32_MAX || o->height > UINT32_MAX)
+		return c0_fail(C0_EINVAL, "%s: invalid image size %lldx%lld", path, (long long)o->width, (long long)o->height);
+	if (o->dtype != C0_U8 && o->dtype != C0_U16 && o->dtype != C0_F32)
+		return c0_fail(C0_EINVAL, "%s: can write uint8, uint16 or float32, not %s", path, c0_dtype_name(o->dtype));
+	struct c0_tiff_writer *w = c0_alloc(1, sizeof *w);
+	if (!w)
+		return C0_ENOMEM;
+	w->o = *o;
+	if (w->o.channels <= 0) w->o.channels = 1;
+	if (w->o.slices <= 0) w->o.slices = 1;
+	if (w->o.frames <= 0) w->o.frames = 1;
+	w->planes = w->o.channels * w->o.slices * w->o.frames;
+	snprintf(w->path, sizeof w->path, "%s", path);
+	c0_tmp_name(path, w->tmp, sizeof w->tmp);
+	int64_t bytes = w->planes * o->width * o->height * (int64_t)c0_dtype_size(o->dtype);
+	int big = o->bigtiff || c0_tiff_needs_bigtiff(bytes);
+	if (c0_ij_format(w->desc, sizeof w->desc, w->o.channels, w->o.slices, w->o.frames, o->pixel_size_nm > 0,
+			 o->z_spacing_nm / 1000, o->frame_interval_s, o->display_min, o->display_max) < 0) {
+		free(w);
+		return c0_fail(C0_EINVAL, "%s: metadata too long", path);
+	}
+	w->buf = c0_alloc((size_t)o->width * o->height, c0_dtype_size(o->dtype));
+	TIFFOpenOptions *oo = TIFFOpenOptionsAlloc();
+	if (!w->buf || !oo) {
+		free(w->buf);
+		free(w);
+		TIFFOpenOptionsFree(oo);
+		return C0_ENOMEM;
+	}
+	TIFFOpenOptionsSetErrorHandlerExtR(oo, on_error, w);
+	TIFFOpenOptionsSetWarningHandlerExtR(oo, on_error, w);
+	w->tif = TIFFOpenExt(w->tmp, big ? "w8" : "w", oo);
+	TIFFOpenOptionsFree(oo);
+	if (!w->tif) {
+		int st = c0_fail(C0_EIO, "%s: cannot create (%s)", path, w->tiffmsg);
+		free(w->buf);
+		free(w);
+		return st;
+	}
+	*out = w;
+	return C0_OK;
+}
+
+static void convert_plane(const struct c0_tiff_wopts *o, const float *src, uint8_t *dst)
+{
+	size_t n = (size_t)o->width * o->height;
+	if (o->dtype == C0_F32) {
+		memcpy(dst, src, n * sizeof(float));
+		return;
+	}
+	double hi = o->dtype == C0_U8 ? 255 : 65535;
+	for (size_t i = 0; i < n; i++) {
+		double v = src[i];
+		v = v != v ? 0 : v < 0 ? 0 : v > hi ? hi : v;   /* NaN -> 0, clamp */
+		uint32_t q = (uint32_t)lrint(v);
+		if (o->dtype == C0_U8)
+			dst[i] = (uint8_t)q;
+		else
+			((uint16_t *)(void *)dst)[i] = (uint16_t)q;
+	}
+}
+
+int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
+{
+	const struct c0_tiff_wopts *o = &w->o;
+	if (w->written >= w->planes)
+		return c0_fail(C0_EINVAL, "%s: more planes than the %lld declared", w->path, (long long)w->planes);
+	TIFF *t = w->tif;
+	uint16_t bps = (uint16_t)(8 * c0_dtype_size(o->dtype));
+	TIFFSetField(t, TIFFTAG_SUBFILETYPE, 0);
+	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)o->width);
+	TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)o->height);
+	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, bps);
+	TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, o->dtype == C0_F32 ? SAMPLEFORMAT_IEEEFP : SAMPLEFORMAT_UINT);
+	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+	TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
+	size_t plane_bytes = (size_t)o->width * o->height * (bps / 8);
+	uint32_t rps = plane_bytes <= (64u << 20) ? (uint32_t)o->height : TIFFDefaultStripSize(t, 0);
+	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
+	if (o->pixel_size_nm > 0) {
+		float res = (float)(1000.0 / o->pixel_size_nm);   /* pixels per µm */
+		TIFFSetField(t, TIFFTAG_XRESOLUTION, res);
+		TIFFSetField(t, TIFFTAG_YRESOLUTION, res);
+		TIFFSetField(t, TIFFTAG_RESOLUTIONUNIT, RESUNIT_NONE);
+	}
+	if (w->written == 0) {
+		TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, w->desc);
+		if (o->software)
+			TIFFSetField(t, TIFFTAG_SOFTWARE, o->software);
+	}
+	convert_plane(o, plane, w->buf);
+	size_t row = (size_t)o->width * (bps / 8);
+	for (int64_t y0 = 0; y0 < o->height; y0 += rps) {
+		int64_t ny = o->height - y0 < rps ? o->height - y0 : rps;
+		uint32_t s = TIFFComputeStrip(t, (uint32_t)y0, 0);
+		if (TIFFWriteEncodedStrip(t, s, w->buf + (size_t)y0 * row, (tmsize_t)(ny * row)) < 0)
+			return c0_fail(C0_EIO, "%s: write failed at plane %lld (%s)", w->path, (long long)w->written + 1, w->tiffmsg);
+	}
+	if (!TIFFWriteDirectory(t))
+		return c0_fail(C0_EIO, "%s: write failed at plane %lld (%s)", w->path, (long long)w->written + 1, w->tiffmsg);
+	w->written++;
+	return C0_OK;
+}
+
+static void release(struct c0_tiff_writer *w)
+{
+	free(w->buf);
+	free(w);
+}
+
+void c0_tiff_abort(struct c0_tiff_writer *w)
+{
+	if (!w)
+		return;
+	if (w->tif)
+		TIFFClose(w->tif);
+	remove(w->tmp);
+	release(w);
+}
+
+int c0_tiff_commit(struct c0_tiff_writer *w)
+{
+	if (w->written != w->planes) {
+		int st = c0_fail(C0_EINVAL, "%s: %lld of %lld planes written", w->path, (long long)w->written, (long long)w->planes);
+		c0_tiff_abort(w);
+		return st;
+	}
+	w->tiffmsg[0] = '\0';
+	TIFFClose(w->tif);
+	w->tif = NULL;
+	int st = w->tiffmsg[0] ? c0_fail(C0_EIO, "%s: closing failed (%s)", w->path, w->tiffmsg)
+			       : c0_commit_file(w->tmp, w->path);
+	if (st)
+		remove(w->tmp);
+	release(w);
+	return st;
+}
+
+int c0_tiff_save_f32(const char *path, const struct c0_tiff_wopts *opts, const float *data)
+{
+	struct c0_tiff_wopts o = *opts;
+	int64_t planes = (o.channels > 0 ? o.channels : 1) * (o.slices > 0 ? o.slices : 1) * (o.frames > 0 ? o.frames : 1);
+	size_t plane = (size_t)o.width * o.height, n = plane * planes;
+	if (o.display_min == 0 && o.display_max == 0 && n) {
+		float lo = INFINITY, hi = -INFINITY;
+		for (size_t i = 0; i < n; i++) {
+			if (data[i] < lo) lo = data[i];
+			if (data[i] > hi) hi = data[i];
+		}
+		if (lo <= hi) {
+			o.display_min = lo;
+			o.display_max = hi > lo ? hi : lo + 1;
+		}
+	}
+	struct c0_tiff_writer *w;
+	int st = c0_tiff_create(path, &o, &w);
+	for (int64_t p = 0; !st && p < planes; p++)
+		st = c0_tiff_write_plane(w, data + p * plane);
+	if (st) {
+		c0_tiff_abort(w);
+		return st;
+	}
+	return c0_tiff_commit(w);
+}

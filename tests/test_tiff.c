@@ -1,0 +1,199 @@
+/* TIFF reader/writer round trips, metadata and bad input (C side; the
+ * independent tifffile checks are in python/test_tiff_interop.py). */
+#define _POSIX_C_SOURCE 200809L
+#include "check.h"
+#include "io/tiff.h"
+#include "io/imagej.h"
+#include "core/err.h"
+
+#include <dirent.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static char dir[256];
+
+static int count_files(void)
+{
+	DIR *d = opendir(dir);
+	int n = 0;
+	for (struct dirent *e; (e = readdir(d));)
+		n += e->d_name[0] != '.' || (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."));
+	closedir(d);
+	return n;
+}
+
+static void roundtrip(enum c0_dtype t)
+{
+	char path[512];
+	snprintf(path, sizeof path, "%s/rt_%s.tif", dir, c0_dtype_name(t));
+	const int W = 13, H = 7, Z = 3, T = 2;
+	float *data = malloc(sizeof(float) * W * H * Z * T);
+	for (int i = 0; i < W * H * Z * T; i++)
+		data[i] = t == C0_F32 ? (float)(i * 0.37 - 50) : (float)(i % (t == C0_U8 ? 256 : 60000));
+	struct c0_tiff_wopts o = { .width = W, .height = H, .slices = Z, .frames = T, .dtype = t,
+				   .pixel_size_nm = 25, .z_spacing_nm = 20 };
+	CHECK(c0_tiff_save_f32(path, &o, data) == C0_OK);
+	struct c0_tiff_info in;
+	float *back = NULL;
+	CHECK(c0_tiff_load_f32(path, &in, &back) == C0_OK);
+	if (!back) {
+		free(data);
+		return;
+	}
+	CHECK(in.width == W && in.height == H && in.pages == Z * T);
+	CHECK(in.slices == Z && in.frames == T && in.channels == 1);
+	CHECK(in.dtype == t);
+	CHECK_CLOSE(in.pixel_size_nm, 25, 1e-3);
+	CHECK_CLOSE(in.z_spacing_nm, 20, 1e-6);
+	int same = 1;
+	for (int i = 0; i < W * H * Z * T; i++)
+		same &= back[i] == data[i];
+	CHECK(same);
+	free(data);
+	free(back);
+}
+
+static void test_roundtrip(void)
+{
+	roundtrip(C0_U8);
+	roundtrip(C0_U16);
+	roundtrip(C0_F32);
+}
+
+static void test_integer_clamp(void)
+{
+	char path[512];
+	snprintf(path, sizeof path, "%s/clamp.tif", dir);
+	float v[4] = { -3.f, 1.6f, 70000.f, NAN };
+	struct c0_tiff_wopts o = { .width = 4, .height = 1, .dtype = C0_U16 };
+	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
+	struct c0_tiff_info in;
+	float *b = NULL;
+	CHECK(c0_tiff_load_f32(path, &in, &b) == C0_OK);
+	CHECK(b && b[0] == 0 && b[1] == 2 && b[2] == 65535 && b[3] == 0);
+	CHECK(in.pixel_size_nm == 0);
+	free(b);
+}
+
+static void test_bigtiff(void)
+{
+	CHECK(!c0_tiff_needs_bigtiff(1000));
+	CHECK(!c0_tiff_needs_bigtiff(4000000000LL));
+	CHECK(c0_tiff_needs_bigtiff(4294967296LL));
+	char path[512];
+	snprintf(path, sizeof path, "%s/big.tif", dir);
+	float v[6] = { 1, 2, 3, 4, 5, 6 };
+	struct c0_tiff_wopts o = { .width = 3, .height = 2, .dtype = C0_F32, .bigtiff = 1 };
+	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
+	struct c0_tiff_reader *r;
+	CHECK(c0_tiff_open(path, &r) == C0_OK);
+	CHECK(c0_tiff_get_info(r)->bigtiff);
+	c0_tiff_close(r);
+}
+
+static void test_abort_leaves_nothing(void)
+{
+	int before = count_files();
+	char path[512];
+	snprintf(path, sizeof path, "%s/partial.tif", dir);
+	struct c0_tiff_wopts o = { .width = 4, .height = 4, .frames = 3, .dtype = C0_U16 };
+	struct c0_tiff_writer *w;
+	float p[16] = { 0 };
+	CHECK(c0_tiff_create(path, &o, &w) == C0_OK);
+	CHECK(c0_tiff_write_plane(w, p) == C0_OK);
+	/* two of three planes missing: commit must refuse and clean up */
+	CHECK(c0_tiff_commit(w) != C0_OK);
+	CHECK(strstr(c0_errmsg(), "partial.tif") != NULL);
+	CHECK(count_files() == before);
+	CHECK(access(path, F_OK) != 0);
+}
+
+static void expect_error(const char *path, const char *needle)
+{
+	struct c0_tiff_reader *r = NULL;
+	int st = c0_tiff_open(path, &r);
+	CHECK_MSG(st != C0_OK && r == NULL, "%s opened", path);
+	CHECK_MSG(strstr(c0_errmsg(), path) && strstr(c0_errmsg(), needle), "message '%s' lacks '%s'", c0_errmsg(), needle);
+}
+
+static void test_bad_input(void)
+{
+	char p[512];
+	snprintf(p, sizeof p, "%s/missing.tif", dir);
+	expect_error(p, "No such file");
+	snprintf(p, sizeof p, "%s/text.tif", dir);
+	FILE *f = fopen(p, "w");
+	fputs("this is not an image at all\n", f);
+	fclose(f);
+	expect_error(p, "not a TIFF");
+	snprintf(p, sizeof p, "%s/empty.tif", dir);
+	fclose(fopen(p, "w"));
+	expect_error(p, "not a TIFF");
+	/* header whose first directory offset is 0: zero pages */
+	snprintf(p, sizeof p, "%s/nopages.tif", dir);
+	f = fopen(p, "wb");
+	fwrite("II*\0\0\0\0\0", 1, 8, f);
+	fclose(f);
+	expect_error(p, "no image pages");
+	/* truncated: a valid file cut in the middle of its pixel data */
+	char good[512];
+	snprintf(good, sizeof good, "%s/rt_uint16.tif", dir);
+	snprintf(p, sizeof p, "%s/cut.tif", dir);
+	FILE *in = fopen(good, "rb");
+	char buf[300];
+	size_t n = fread(buf, 1, sizeof buf, in);
+	fclose(in);
+	f = fopen(p, "wb");
+	fwrite(buf, 1, n, f);
+	fclose(f);
+	struct c0_tiff_reader *r = NULL;
+	int st = c0_tiff_open(p, &r);
+	if (st == C0_OK) {       /* header survived: reading pixels must fail */
+		float plane[13 * 7];
+		st = c0_tiff_read_f32(r, 0, plane);
+		c0_tiff_close(r);
+	}
+	CHECK(st != C0_OK);
+	CHECK(strstr(c0_errmsg(), "cut.tif") != NULL);
+	expect_error(dir, "directory");
+}
+
+static void test_imagej_meta(void)
+{
+	struct c0_ij_meta m;
+	c0_ij_parse("ImageJ=1.52e\nimages=50\nframes=50\nunit=micron\nspacing=0.375\nloop=false\n", &m);
+	CHECK(m.present && m.images == 50 && m.frames == 50 && m.slices == 1 && m.channels == 1);
+	CHECK(!strcmp(m.unit, "um"));
+	CHECK_CLOSE(m.spacing, 0.375, 1e-12);
+	c0_ij_parse("ImageJ=1.51w\nimages=20\nslices=20\nunit=\\u00B5m\n", &m);
+	CHECK(!strcmp(m.unit, "um") && m.slices == 20);
+	c0_ij_parse("not imagej", &m);
+	CHECK(!m.present && m.frames == 1);
+	double z = 0;
+	CHECK_CLOSE(c0_ome_pixel_size_nm("<OME><Pixels PhysicalSizeX=\"0.08\" PhysicalSizeZ=\"120\" PhysicalSizeZUnit=\"nm\"/></OME>", &z), 80, 1e-9);
+	CHECK_CLOSE(z, 120, 1e-9);
+	char buf[256];
+	CHECK(c0_ij_format(buf, sizeof buf, 1, 5, 2, 1, 0.02, 0, 0, 1) > 0);
+	c0_ij_parse(buf, &m);
+	CHECK(m.images == 10 && m.slices == 5 && m.frames == 2 && !strcmp(m.unit, "um"));
+	CHECK(strstr(buf, "hyperstack=true") != NULL);
+	CHECK(c0_ij_format(buf, 8, 1, 5, 2, 1, 0.02, 0, 0, 1) < 0);
+}
+
+int main(void)
+{
+	snprintf(dir, sizeof dir, "/tmp/c0_test_tiff_XXXXXX");
+	if (!mkdtemp(dir))
+		return 1;
+	RUN(test_roundtrip);
+	RUN(test_integer_clamp);
+	RUN(test_bigtiff);
+	RUN(test_abort_leaves_nothing);
+	RUN(test_bad_input);
+	RUN(test_imagej_meta);
+	char cmd[300];
+	snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+	if (system(cmd)) {}
+	return CHECK_DONE();
+}
