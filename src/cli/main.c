@@ -14,6 +14,7 @@ static const struct {
 	const char *summary;
 } commands[] = {
 	{ "info", cmd_info, "describe TIFF stacks: size, frames, type, calibration, statistics" },
+	{ "simulate", cmd_simulate, "simulate MA-TIRF blinking stacks with ground truth" },
 };
 
 int c0_cli_error(const char *cmd)

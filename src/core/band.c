@@ -1,0 +1,187 @@
+#include "core/band.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+int c0_band_alloc(struct c0_band *b, int m, int n, int w)
+{
+	memset(b, 0, sizeof *b);
+	if (m <= 0 || n <= 0 || w <= 0)
+		return c0_fail(C0_EINVAL, "band: invalid size %dx%d, width %d", m, n, w);
+	if (w > n)
+		w = n;
+	b->m = m, b->n = n, b->w = w;
+	b->start = c0_alloc((size_t)m, sizeof *b->start);
+	b->v = c0_alloc((size_t)m * w, sizeof *b->v);
+	if (!b->start || !b->v) {
+		c0_band_free(b);
+		return C0_ENOMEM;
+	}
+	return C0_OK;
+}
+
+void c0_band_free(struct c0_band *b)
+{
+	free(b->start);
+	free(b->v);
+	b->start = NULL;
+	b->v = NULL;
+}
+
+double c0_band_get(const struct c0_band *b, int i, int j)
+{
+	int k = j - b->start[i];
+	return k >= 0 && k < b->w ? b->v[(size_t)i * b->w + k] : 0;
+}
+
+int c0_band_transpose(const struct c0_band *b, struct c0_band *t)
+{
+	/* column j is touched by rows whose band covers it; find the span */
+	int *lo = c0_alloc((size_t)b->n, sizeof *lo), *hi = c0_alloc((size_t)b->n, sizeof *hi);
+	if (!lo || !hi) {
+		free(lo), free(hi);
+		return C0_ENOMEM;
+	}
+	for (int j = 0; j < b->n; j++)
+		lo[j] = b->m, hi[j] = -1;
+	for (int i = 0; i < b->m; i++)
+		for (int k = 0; k < b->w; k++) {
+			int j = b->start[i] + k;
+			if (b->v[(size_t)i * b->w + k] != 0) {
+				lo[j] = i < lo[j] ? i : lo[j];
+				hi[j] = i > hi[j] ? i : hi[j];
+			}
+		}
+	int w = 1;
+	for (int j = 0; j < b->n; j++)
+		if (hi[j] >= lo[j] && hi[j] - lo[j] + 1 > w)
+			w = hi[j] - lo[j] + 1;
+	int st = c0_band_alloc(t, b->n, b->m, w);
+	if (!st) {
+		for (int j = 0; j < b->n; j++) {
+			int s = hi[j] >= lo[j] ? lo[j] : 0;
+			if (s > b->m - t->w)
+				s = b->m - t->w;
+			t->start[j] = s;
+			for (int k = 0; k < t->w; k++)
+				t->v[(size_t)j * t->w + k] = c0_band_get(b, s + k, j);
+		}
+	}
+	free(lo), free(hi);
+	return st;
+}
+
+int c0_band_trim(struct c0_band *b, double tol)
+{
+	double mx = 0;
+	for (size_t i = 0; i < (size_t)b->m * b->w; i++)
+		mx = fmax(mx, fabs(b->v[i]));
+	int *s0 = c0_alloc((size_t)b->m, sizeof *s0), *s1 = c0_alloc((size_t)b->m, sizeof *s1);
+	if (!s0 || !s1) {
+		free(s0), free(s1);
+		return C0_ENOMEM;
+	}
+	int w = 1;
+	for (int i = 0; i < b->m; i++) {
+		const double *r = b->v + (size_t)i * b->w;
+		int a = 0, z = b->w - 1;
+		while (a < z && fabs(r[a]) <= tol * mx) a++;
+		while (z > a && fabs(r[z]) <= tol * mx) z--;
+		s0[i] = a, s1[i] = z;
+		if (z - a + 1 > w)
+			w = z - a + 1;
+	}
+	struct c0_band t;
+	int st = c0_band_alloc(&t, b->m, b->n, w);
+	if (!st) {
+		for (int i = 0; i < b->m; i++) {
+			int s = b->start[i] + s0[i];
+			if (s > b->n - w)
+				s = b->n - w;
+			t.start[i] = s;
+			for (int k = 0; k < w; k++) {
+				int j = s + k;
+				t.v[(size_t)i * w + k] = (j - b->start[i] >= s0[i] && j - b->start[i] <= s1[i]) ? c0_band_get(b, i, j) : 0;
+			}
+		}
+		c0_band_free(b);
+		*b = t;
+	}
+	free(s0), free(s1);
+	return st;
+}
+
+void c0_band_to_dense(const struct c0_band *b, double *d)
+{
+	memset(d, 0, sizeof *d * (size_t)b->m * b->n);
+	for (int i = 0; i < b->m; i++)
+		for (int k = 0; k < b->w; k++)
+			d[(size_t)i * b->n + b->start[i] + k] = b->v[(size_t)i * b->w + k];
+}
+
+void c0_band_apply_x(const struct c0_band *b, int ny, const double *in, double *out)
+{
+	const int m = b->m, n = b->n, w = b->w;
+#pragma omp parallel for schedule(static) if ((long)ny * m * w > 100000)
+	for (int y = 0; y < ny; y++) {
+		const double *src = in + (size_t)y * n;
+		double *dst = out + (size_t)y * m;
+		for (int i = 0; i < m; i++) {
+			const double *r = b->v + (size_t)i * w, *s = src + b->start[i];
+			double acc = 0;
+			for (int k = 0; k < w; k++)
+				acc += r[k] * s[k];
+			dst[i] = acc;
+		}
+	}
+}
+
+void c0_band_apply_y(const struct c0_band *b, int nx, const double *in, double *out)
+{
+	const int m = b->m, w = b->w;
+#pragma omp parallel for schedule(static) if ((long)nx * m * w > 100000)
+	for (int i = 0; i < m; i++) {
+		double *dst = out + (size_t)i * nx;
+		const double *r = b->v + (size_t)i * w;
+		memset(dst, 0, sizeof *dst * (size_t)nx);
+		for (int k = 0; k < w; k++) {
+			const double c = r[k], *src = in + (size_t)(b->start[i] + k) * nx;
+			if (c != 0)
+				for (int x = 0; x < nx; x++)
+					dst[x] += c * src[x];
+		}
+	}
+}
+
+double c0_band_lambda_max(const struct c0_band *b, int iters)
+{
+	int n = b->n;
+	double *v = c0_alloc((size_t)n, sizeof *v), *u = c0_alloc((size_t)n, sizeof *u);
+	if (!v || !u) {
+		free(v), free(u);
+		return NAN;
+	}
+	for (int i = 0; i < n; i++)
+		v[i] = 1 / sqrt(n);
+	double lam = 0;
+	for (int it = 0; it < iters; it++) {
+		c0_band_apply_x(b, 1, v, u);
+		double dot = 0, nn = 0;
+		for (int i = 0; i < n; i++)
+			dot += u[i] * v[i], nn += u[i] * u[i];
+		double prev = lam;
+		lam = dot;                       /* Rayleigh quotient, v normalised */
+		nn = sqrt(nn);
+		if (nn == 0)
+			break;
+		for (int i = 0; i < n; i++)
+			v[i] = u[i] / nn;
+		if (it > 2 && fabs(lam - prev) <= 1e-15 * lam)
+			break;
+	}
+	free(v), free(u);
+	return lam;
+}

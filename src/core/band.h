@@ -1,0 +1,28 @@
+/* Banded matrices with a fixed number of stored entries per row: row i holds
+ * columns start[i] .. start[i]+w-1 (entries past the band are zero). Used for
+ * the separable 1-D factors of every operator here, applied along one axis
+ * of a row-major image (x fastest). */
+#pragma once
+
+struct c0_band {
+	int m, n;      /* rows, columns */
+	int w;         /* stored entries per row */
+	int *start;    /* m first columns, with 0 <= start[i] <= n - w */
+	double *v;     /* m*w values */
+};
+
+int c0_band_alloc(struct c0_band *b, int m, int n, int w);
+void c0_band_free(struct c0_band *b);
+double c0_band_get(const struct c0_band *b, int i, int j);
+/* Transpose as a new band (exact). */
+int c0_band_transpose(const struct c0_band *b, struct c0_band *t);
+/* Drops stored entries below tol*max|v| at the ends of rows to shrink w. */
+int c0_band_trim(struct c0_band *b, double tol);
+void c0_band_to_dense(const struct c0_band *b, double *dense);   /* m*n, row-major */
+/* out[y][i] = sum_k B[i][k] in[y][k]; in is ny x n, out is ny x m */
+void c0_band_apply_x(const struct c0_band *b, int ny, const double *in, double *out);
+/* out[i][x] = sum_k B[i][k] in[k][x]; in is n x nx, out is m x nx */
+void c0_band_apply_y(const struct c0_band *b, int nx, const double *in, double *out);
+/* Largest eigenvalue of a symmetric nonnegative band (power iteration from
+ * the all-ones vector, close to the Perron vector). */
+double c0_band_lambda_max(const struct c0_band *b, int iters);

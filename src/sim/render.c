@@ -1,0 +1,137 @@
+/* Frames of one angle: expected photons, then camera noise. */
+#include "sim/sim.h"
+#include "optics/psf.h"
+#include "core/c0math.h"
+#include "core/err.h"
+#include "core/mem.h"
+#include "core/rng.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* stream ids: 0 structure, 1<<56 blinking, 2<<56 background, 3<<56 camera */
+#define STREAM(kind, q, i) (((uint64_t)(kind) << 56) | ((uint64_t)(q) << 40) | (uint64_t)(i))
+
+struct c0_sim_scene {
+	const struct c0_sim_conf *c;
+	int nem, K;          /* emitters, PSF window (pixels per axis) */
+	int *x0, *y0;        /* window corners */
+	double *wx, *wy;     /* nem x K */
+	double *amp;         /* photons per frame when on */
+	float *on;           /* nem x frames */
+	double *bg;          /* H x W photons */
+};
+
+static void background(const struct c0_sim_conf *c, int q, double scale, double *bg)
+{
+	struct c0_rng r;
+	c0_rng_init(&r, c->seed, STREAM(2, q, 0));
+	const int W = c->width, H = c->height;
+	double cx[3], cy[3], s[3], mx = 0;
+	for (int k = 0; k < 3; k++) {
+		cx[k] = W * c0_rng_uniform(&r), cy[k] = H * c0_rng_uniform(&r);
+		s[k] = (0.3 + 0.3 * c0_rng_uniform(&r)) * (W > H ? W : H);
+	}
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			double v = 0;
+			for (int k = 0; k < 3; k++)
+				v += exp(-((x + 0.5 - cx[k]) * (x + 0.5 - cx[k]) + (y + 0.5 - cy[k]) * (y + 0.5 - cy[k])) / (2 * s[k] * s[k]));
+			bg[y * W + x] = v;
+			mx = fmax(mx, v);
+		}
+	/* smooth, between half and full level */
+	for (int i = 0; i < W * H; i++)
+		bg[i] = c->background * scale * (0.5 + 0.5 * bg[i] / mx);
+}
+
+void c0_sim_scene_free(struct c0_sim_scene *s)
+{
+	if (!s)
+		return;
+	free(s->x0), free(s->y0), free(s->wx), free(s->wy), free(s->amp), free(s->on), free(s->bg);
+	free(s);
+}
+
+int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, int nem, int q,
+		     struct c0_sim_scene **out)
+{
+	*out = NULL;
+	double p, i0_1 = c0_tirf_i0(&c->tirf, c->angles[0]);
+	int st = c0_tirf_p(&c->tirf, c->angles[q], &p);
+	if (st)
+		return st;
+	double rel = c0_tirf_i0(&c->tirf, c->angles[q]) / i0_1, sig = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
+	struct c0_sim_scene *s = c0_alloc(1, sizeof *s);
+	if (!s)
+		return C0_ENOMEM;
+	s->c = c, s->nem = nem;
+	s->K = 2 * (int)ceil(C0_PSF_CUTOFF * sig) + 2;
+	size_t K = (size_t)s->K;
+	s->x0 = c0_alloc((size_t)nem, sizeof(int));
+	s->y0 = c0_alloc((size_t)nem, sizeof(int));
+	s->wx = c0_alloc(nem * K, sizeof(double));
+	s->wy = c0_alloc(nem * K, sizeof(double));
+	s->amp = c0_alloc((size_t)nem, sizeof(double));
+	s->on = c0_alloc((size_t)nem * c->frames, sizeof(float));
+	s->bg = c0_alloc((size_t)c->width * c->height, sizeof(double));
+	if (!s->x0 || !s->y0 || !s->wx || !s->wy || !s->amp || !s->on || !s->bg) {
+		c0_sim_scene_free(s);
+		return C0_ENOMEM;
+	}
+	const int half = (int)ceil(C0_PSF_CUTOFF * sig);
+#pragma omp parallel for schedule(dynamic, 64)
+	for (int e = 0; e < nem; e++) {
+		double ex = em[e].x / c->pixel_nm, ey = em[e].y / c->pixel_nm;
+		s->x0[e] = (int)floor(ex) - half;
+		s->y0[e] = (int)floor(ey) - half;
+		c0_psf_pixel_weights(ex, sig, s->x0[e], s->K, s->wx + e * K);
+		c0_psf_pixel_weights(ey, sig, s->y0[e], s->K, s->wy + e * K);
+		s->amp[e] = em[e].brightness * rel * exp(-p * em[e].z);
+		c0_sim_blink(c, STREAM(1, q, e), c->frames, s->on + (size_t)e * c->frames);
+	}
+	background(c, q, rel, s->bg);
+	*out = s;
+	return C0_OK;
+}
+
+const float *c0_sim_scene_onfrac(const struct c0_sim_scene *s) { return s->on; }
+const double *c0_sim_scene_background(const struct c0_sim_scene *s) { return s->bg; }
+
+void c0_sim_render(const struct c0_sim_scene *s, int t, double *ph)
+{
+	const struct c0_sim_conf *c = s->c;
+	const int W = c->width, H = c->height, K = s->K;
+	for (int i = 0; i < W * H; i++)
+		ph[i] = s->bg[i];
+	for (int e = 0; e < s->nem; e++) {
+		double a = s->amp[e] * s->on[(size_t)e * c->frames + t];
+		if (a == 0)
+			continue;
+		const double *wx = s->wx + (size_t)e * K, *wy = s->wy + (size_t)e * K;
+		for (int j = 0; j < K; j++) {
+			int y = s->y0[e] + j;
+			if (y < 0 || y >= H)
+				continue;
+			double ay = a * wy[j];
+			for (int k = 0; k < K; k++) {
+				int x = s->x0[e] + k;
+				if (x >= 0 && x < W)
+					ph[y * W + x] += ay * wx[k];
+			}
+		}
+	}
+}
+
+void c0_sim_camera(const struct c0_sim_conf *c, int q, int t, double read_noise, const double *ph, float *adu)
+{
+	struct c0_rng r;
+	c0_rng_init(&r, c->seed, STREAM(3, q, t));
+	for (int i = 0; i < c->width * c->height; i++) {
+		double v = c->gain * (double)c0_rng_poisson(&r, ph[i]) + c->offset;
+		if (read_noise > 0)
+			v += read_noise * c0_rng_normal(&r);
+		v = nearbyint(v);
+		adu[i] = (float)(v < 0 ? 0 : v > 65535 ? 65535 : v);
+	}
+}

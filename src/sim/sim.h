@@ -1,0 +1,98 @@
+/* Simulated MA-TIRF acquisitions of blinking emitters, with ground truth.
+ *
+ * Model, per angle q (a separate acquisition with its own blinking):
+ *   photons(pixel, t) = sum_e B_e * E_q(z_e) * on_e,q(t) * PSF_e(pixel) + bg_q(pixel)
+ *   E_q(z) = I0(alpha_q)/I0(alpha_1) * exp(-p(alpha_q) z)       (tirf.h physics)
+ *   ADU = gain * Poisson(photons) + offset + Normal(0, read_noise^2), rounded to uint16
+ * on_e,q(t) is the fraction of frame t the emitter spends on (two-state
+ * telegraph process integrated within the frame) and zero once bleached.
+ *
+ * SNR (the paper's 14.75 dB, as in the COL0RME reference code):
+ *   SNR_dB = 10 log10( var(noise-free ADU over all pixels and frames) / read_noise^2 )
+ * per angle; with snr_db > 0 the read noise is set from it. */
+#pragma once
+#include "optics/tirf.h"
+
+#include <stdint.h>
+
+#define C0_MAX_ANGLES 32
+
+struct c0_emitter {
+	double x, y, z;          /* nm; x, y from the image's top-left corner */
+	double brightness;       /* photons per frame when fully on at z = 0 under angle 1 */
+};
+
+struct c0_sim_conf {
+	uint64_t seed;             /* 1 */
+	int width, height;         /* 64 x 64 camera pixels */
+	int frames;                /* 500 per angle */
+	double pixel_nm;           /* 100 */
+	double fwhm_nm;            /* 229 */
+	int srf;                   /* 4: truth grid factor */
+	int nangles;               /* 5 */
+	double angles[C0_MAX_ANGLES]; /* deg; default: 5 equally spaced in n_g sin(alpha) from alpha_c + 0.3 to 70 deg */
+	struct c0_tirf tirf;       /* 1.518 / 1.33 / 488 nm / 0.75 s */
+	/* structure */
+	int filaments;             /* 5 worm-like chains crossing the field */
+	double persistence_nm;     /* 4000 */
+	double density_per_um;     /* 60 emitters per um of filament */
+	double z_min_nm, z_max_nm; /* 0, 400: depth varies smoothly inside */
+	int pairs;                 /* 0; 1 adds a parallel partner 100-150 nm away */
+	const char *emitters_csv;  /* x_nm,y_nm,z_nm[,brightness] instead of filaments */
+	/* photophysics */
+	double tau_on_ms, tau_off_ms;  /* 20, 40 */
+	double tau_bleach_s;       /* 35: mean time from the start of an angle's acquisition to bleaching; <= 0: none */
+	double fps;                /* 100; each frame integrates its whole period */
+	double brightness;         /* 300 photons per frame, fully on, z = 0, angle 1 */
+	double brightness_cv;      /* 0.3: log-normal spread (coefficient of variation) */
+	/* background and camera */
+	double background;         /* 40 photons/pixel/frame at angle 1, smooth pattern per angle */
+	double offset;             /* 100 ADU */
+	double gain;               /* 1 ADU per photon */
+	double read_noise;         /* ADU sd; used when snr_db <= 0 */
+	double snr_db;             /* 14.75 */
+};
+
+void c0_sim_defaults(struct c0_sim_conf *c);
+int c0_sim_check(const struct c0_sim_conf *c);
+/* Sets the default angle set for c->tirf (nangles equally spaced in NA). */
+void c0_sim_default_angles(struct c0_sim_conf *c, int n);
+
+/* Emitters: from the CSV if given, else filaments. *out is malloc'ed. */
+int c0_sim_structure(const struct c0_sim_conf *c, struct c0_emitter **out, int *n);
+int c0_sim_read_csv(const char *path, double default_brightness, struct c0_emitter **out, int *n);
+
+/* Fraction of each frame spent on: on[t] for t < frames, one emitter, one
+ * acquisition. Stationary start; bleaching at an exponential time. */
+void c0_sim_blink(const struct c0_sim_conf *c, uint64_t stream, int frames, float *on);
+/* Variance of the per-frame on-fraction of the unbleached telegraph process. */
+double c0_sim_onfrac_variance(const struct c0_sim_conf *c);
+
+struct c0_sim_angle {
+	double p_per_nm, depth_nm, i0_rel;  /* physics of this angle */
+	double read_noise, snr_db;          /* what was used / achieved */
+	double *mean_on;                    /* per emitter, over the acquisition */
+};
+
+struct c0_sim_result {
+	int nemitters;
+	struct c0_emitter *em;
+	struct c0_sim_angle angle[C0_MAX_ANGLES];
+	double seconds;
+};
+
+/* Writes OUTDIR/stack_qNN.tif (uint16) and the ground truth. */
+struct c0_outdir;
+int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_sim_result *res);
+void c0_sim_result_free(struct c0_sim_result *r);
+
+/* One angle's frames t0..t0+n-1 as expected photons (noise-free) or ADU with
+ * noise; used by c0_simulate and by the tests. */
+struct c0_sim_scene;
+int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, int nem, int q,
+		     struct c0_sim_scene **out);
+void c0_sim_scene_free(struct c0_sim_scene *s);
+const float *c0_sim_scene_onfrac(const struct c0_sim_scene *s);   /* nem x frames */
+const double *c0_sim_scene_background(const struct c0_sim_scene *s); /* photons, H x W */
+void c0_sim_render(const struct c0_sim_scene *s, int t, double *photons);
+void c0_sim_camera(const struct c0_sim_conf *c, int q, int t, double read_noise, const double *photons, float *adu);

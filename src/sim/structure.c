@@ -1,0 +1,219 @@
+/* Sample structures: worm-like-chain filaments in 3D, or a CSV of emitters. */
+#define _POSIX_C_SOURCE 200809L
+#include "sim/sim.h"
+#include "core/c0math.h"
+#include "core/err.h"
+#include "core/mem.h"
+#include "core/rng.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void c0_sim_default_angles(struct c0_sim_conf *c, int n)
+{
+	double ac = c0_tirf_critical_deg(&c->tirf);
+	double lo = c->tirf.n_glass * sin((ac + 0.3) * C0_PI / 180), hi = c->tirf.n_glass * sin(70 * C0_PI / 180);
+	c->nangles = n;
+	for (int q = 0; q < n; q++) {
+		double na = n > 1 ? lo + (hi - lo) * q / (n - 1) : lo;
+		c->angles[q] = asin(na / c->tirf.n_glass) * 180 / C0_PI;
+	}
+}
+
+void c0_sim_defaults(struct c0_sim_conf *c)
+{
+	*c = (struct c0_sim_conf){
+		.seed = 1, .width = 64, .height = 64, .frames = 500, .pixel_nm = 100, .fwhm_nm = 229, .srf = 4,
+		.tirf = C0_TIRF_DEFAULTS, .filaments = 5, .persistence_nm = 4000, .density_per_um = 60,
+		.z_min_nm = 0, .z_max_nm = 400, .tau_on_ms = 20, .tau_off_ms = 40, .tau_bleach_s = 35, .fps = 100,
+		.brightness = 300, .brightness_cv = 0.3, .background = 40, .offset = 100, .gain = 1,
+		.read_noise = 0, .snr_db = 14.75,
+	};
+	c0_sim_default_angles(c, 5);
+}
+
+int c0_sim_check(const struct c0_sim_conf *c)
+{
+	if (c->width < 8 || c->height < 8)
+		return c0_fail(C0_EINVAL, "--size %dx%d: at least 8x8 pixels", c->width, c->height);
+	if (c->frames < 1)
+		return c0_fail(C0_EINVAL, "--frames %d: must be at least 1", c->frames);
+	if (!(c->pixel_nm > 0))
+		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm)", c->pixel_nm);
+	if (!(c->fwhm_nm > 0))
+		return c0_fail(C0_EINVAL, "--fwhm %g: must be positive (nm)", c->fwhm_nm);
+	if (c->srf < 1 || c->srf > 16)
+		return c0_fail(C0_EINVAL, "--srf %d: must be 1..16", c->srf);
+	if (c->nangles < 1 || c->nangles > C0_MAX_ANGLES)
+		return c0_fail(C0_EINVAL, "--angles: need 1..%d angles", C0_MAX_ANGLES);
+	int st = c0_tirf_check(&c->tirf);
+	if (st)
+		return st;
+	for (int q = 0; q < c->nangles; q++) {
+		double p;
+		if (c0_tirf_p(&c->tirf, c->angles[q], &p))
+			return c0_fail(C0_EINVAL, "--angles: %s", c0_errmsg());
+	}
+	if (!(c->tau_on_ms > 0) || !(c->tau_off_ms > 0))
+		return c0_fail(C0_EINVAL, "--tau-on %g / --tau-off %g: lifetimes must be positive (ms)", c->tau_on_ms, c->tau_off_ms);
+	if (!(c->fps > 0))
+		return c0_fail(C0_EINVAL, "--fps %g: must be positive", c->fps);
+	if (c->tau_bleach_s < 0)
+		return c0_fail(C0_EINVAL, "--tau-bleach %g: must be >= 0 (0: no bleaching)", c->tau_bleach_s);
+	if (!(c->brightness >= 0) || !(c->brightness_cv >= 0) || !(c->background >= 0))
+		return c0_fail(C0_EINVAL, "--brightness / --brightness-cv / --background must be >= 0");
+	if (!(c->gain > 0) || !(c->read_noise >= 0) || !(c->offset >= 0))
+		return c0_fail(C0_EINVAL, "--gain must be positive, --read-noise and --offset >= 0");
+	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
+		return c0_fail(C0_EINVAL, "--z-range %g,%g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
+	if (!c->emitters_csv && (c->filaments < 1 || !(c->density_per_um > 0) || !(c->persistence_nm > 0)))
+		return c0_fail(C0_EINVAL, "empty structure: --filaments %d, --density %g, --persistence %g must be positive (or give --emitters CSV)",
+			       c->filaments, c->density_per_um, c->persistence_nm);
+	return C0_OK;
+}
+
+struct elist { struct c0_emitter *e; int n, cap; };
+
+static int push(struct elist *l, double x, double y, double z, double b)
+{
+	if (l->n == l->cap) {
+		int cap = l->cap ? 2 * l->cap : 1024;
+		void *p = realloc(l->e, sizeof *l->e * (size_t)cap);
+		if (!p)
+			return c0_fail(C0_ENOMEM, "out of memory for emitters");
+		l->e = p, l->cap = cap;
+	}
+	l->e[l->n++] = (struct c0_emitter){ x, y, z, b };
+	return C0_OK;
+}
+
+static double draw_brightness(const struct c0_sim_conf *c, struct c0_rng *r)
+{
+	if (c->brightness_cv <= 0)
+		return c->brightness;
+	double s2 = log1p(c->brightness_cv * c->brightness_cv);   /* log-normal with the given mean and CV */
+	return c->brightness * exp(sqrt(s2) * c0_rng_normal(r) - s2 / 2);
+}
+
+/* One filament: a WLC path through a random point, grown both ways until it
+ * leaves the field; emitters as a Poisson process along it. */
+static int filament(const struct c0_sim_conf *c, struct c0_rng *r, struct elist *l)
+{
+	const double W = c->width * c->pixel_nm, H = c->height * c->pixel_nm, ds = 5, margin = 200;
+	double x0 = W * (0.1 + 0.8 * c0_rng_uniform(r)), y0 = H * (0.1 + 0.8 * c0_rng_uniform(r));
+	double th0 = C0_PI * c0_rng_uniform(r);
+	double zr = c->z_max_nm - c->z_min_nm, amp = 0.5 * zr * c0_rng_uniform(r);
+	double zc = c->z_min_nm + amp + (zr - 2 * amp) * c0_rng_uniform(r);
+	double period = 2000 + 4000 * c0_rng_uniform(r), phase = 2 * C0_PI * c0_rng_uniform(r);
+	double sep = c->pairs ? 100 + 50 * c0_rng_uniform(r) : 0;
+	double step_sd = sqrt(ds / c->persistence_nm);
+	for (int dir = 0; dir < 2; dir++) {
+		double x = x0, y = y0, th = th0 + dir * C0_PI, s = 0;
+		double next = dir ? c0_rng_exp(r, 1000 / c->density_per_um) : 0;
+		while (x > -margin && x < W + margin && y > -margin && y < H + margin && s < 50000) {
+			while (next <= ds) {
+				double t = next / ds, ex = x + t * ds * cos(th), ey = y + t * ds * sin(th);
+				double arc = (dir ? -1 : 1) * (s + next);
+				double z = zc + amp * sin(2 * C0_PI * arc / period + phase);
+				for (int k = 0; k <= (sep > 0); k++) {
+					/* the partner runs along the local normal */
+					double px = ex - k * sep * sin(th), py = ey + k * sep * cos(th);
+					if (px >= 0 && px < W && py >= 0 && py < H) {
+						int st = push(l, px, py, z, draw_brightness(c, r));
+						if (st)
+							return st;
+					}
+				}
+				next += c0_rng_exp(r, 1000 / c->density_per_um);
+			}
+			next -= ds;
+			x += ds * cos(th), y += ds * sin(th), s += ds;
+			th += step_sd * c0_rng_normal(r);
+		}
+	}
+	return C0_OK;
+}
+
+int c0_sim_read_csv(const char *path, double default_brightness, struct c0_emitter **out, int *n)
+{
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return c0_fail(C0_EIO, "--emitters %s: %s", path, strerror(errno));
+	struct elist l = { 0 };
+	char line[1024];
+	int lineno = 0, st = C0_OK;
+	while (!st && fgets(line, sizeof line, f)) {
+		lineno++;
+		char *p = line;
+		while (*p == ' ' || *p == '\t')
+			p++;
+		if (*p == '#' || *p == '\n' || *p == '\r' || !*p)
+			continue;
+		double v[4] = { 0, 0, 0, default_brightness };
+		int k = sscanf(p, "%lf , %lf , %lf , %lf", &v[0], &v[1], &v[2], &v[3]);
+		if (k < 3) {
+			if (lineno == 1 && !l.n)
+				continue;   /* header */
+			st = c0_fail(C0_EFORMAT, "--emitters %s: line %d: expected x_nm,y_nm,z_nm[,brightness]", path, lineno);
+			break;
+		}
+		if (v[2] < 0 || v[3] < 0 || v[0] != v[0] || v[1] != v[1]) {
+			st = c0_fail(C0_EFORMAT, "--emitters %s: line %d: negative depth or brightness", path, lineno);
+			break;
+		}
+		st = push(&l, v[0], v[1], v[2], v[3]);
+	}
+	fclose(f);
+	if (!st && !l.n)
+		st = c0_fail(C0_EINVAL, "--emitters %s: empty structure (no emitters)", path);
+	if (st) {
+		free(l.e);
+		return st;
+	}
+	*out = l.e, *n = l.n;
+	return C0_OK;
+}
+
+int c0_sim_structure(const struct c0_sim_conf *c, struct c0_emitter **out, int *n)
+{
+	*out = NULL, *n = 0;
+	if (c->emitters_csv) {
+		int st = c0_sim_read_csv(c->emitters_csv, c->brightness, out, n);
+		if (st)
+			return st;
+		/* keep what lies in the field */
+		int k = 0;
+		for (int i = 0; i < *n; i++) {
+			const struct c0_emitter *e = &(*out)[i];
+			if (e->x >= 0 && e->x < c->width * c->pixel_nm && e->y >= 0 && e->y < c->height * c->pixel_nm)
+				(*out)[k++] = *e;
+		}
+		if (!k) {
+			free(*out);
+			*out = NULL;
+			return c0_fail(C0_EINVAL, "--emitters %s: empty structure (no emitter inside the %gx%g nm field)",
+				       c->emitters_csv, c->width * c->pixel_nm, c->height * c->pixel_nm);
+		}
+		*n = k;
+		return C0_OK;
+	}
+	struct c0_rng r;
+	c0_rng_init(&r, c->seed, 0);
+	struct elist l = { 0 };
+	for (int i = 0; i < c->filaments; i++) {
+		int st = filament(c, &r, &l);
+		if (st) {
+			free(l.e);
+			return st;
+		}
+	}
+	if (!l.n) {
+		free(l.e);
+		return c0_fail(C0_EINVAL, "empty structure: no emitter fell inside the field");
+	}
+	*out = l.e, *n = l.n;
+	return C0_OK;
+}
