@@ -1,0 +1,176 @@
+/* Simulator physics: blinking statistics, TIRF closed forms, and the
+ * temporal variance of rendered stacks against the model's prediction. */
+#include "check.h"
+#include "sim/sim.h"
+#include "optics/tirf.h"
+#include "core/err.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static void test_onfraction(void)
+{
+	struct c0_sim_conf c;
+	c0_sim_defaults(&c);
+	c.tau_bleach_s = 0;
+	const int T = 200000;
+	float *on = malloc(sizeof(float) * T);
+	c0_sim_blink(&c, 7, T, on);
+	double m = 0, v = 0;
+	for (int t = 0; t < T; t++)
+		m += on[t];
+	m /= T;
+	for (int t = 0; t < T; t++)
+		v += (on[t] - m) * (on[t] - m);
+	v /= T - 1;
+	CHECK_CLOSE(m, 20.0 / 60.0, 0.01);
+	CHECK_REL(v, c0_sim_onfrac_variance(&c), 0.03);
+	/* fractions are fractions */
+	int ok = 1;
+	for (int t = 0; t < T; t++)
+		ok &= on[t] >= 0 && on[t] <= 1;
+	CHECK(ok);
+	/* bleaching: after 20 mean bleach times nearly everything is dark */
+	c.tau_bleach_s = 0.05;
+	int lit = 0;
+	for (int e = 0; e < 200; e++) {
+		c0_sim_blink(&c, 100 + e, 100, on);
+		lit += on[99] > 0;
+	}
+	CHECK(lit <= 2);
+	free(on);
+}
+
+static void test_tirf_closed_forms(void)
+{
+	struct c0_tirf t = C0_TIRF_DEFAULTS;
+	CHECK_CLOSE(c0_tirf_critical_deg(&t), 61.18, 0.01);
+	double p;
+	/* penetration depths 1/p, reference/matirf.md table (488 nm, n 1.33) */
+	const double ang[] = { 62, 63, 64, 65, 66, 68, 70, 72, 75 }, d[] = { 234, 158, 128, 110, 99, 84, 75, 69, 63 };
+	for (int i = 0; i < 9; i++) {
+		CHECK(c0_tirf_p(&t, ang[i], &p) == C0_OK);
+		CHECK_CLOSE(1 / p, d[i], 0.6);
+	}
+	t.n_sample = 1.38;
+	CHECK(c0_tirf_p(&t, 66, &p) == C0_OK);
+	CHECK_CLOSE(1 / p, 284, 0.6);
+	CHECK(c0_tirf_p(&t, 64, &p) != C0_OK);        /* below critical */
+	CHECK(strstr(c0_errmsg(), "critical") != NULL);
+	t.n_sample = 1.37;
+	CHECK_CLOSE(c0_tirf_critical_deg(&t), 64.49, 0.01);
+	/* Axelrod I0 at n 1.34 */
+	t.n_sample = 1.34;
+	double is, ip;
+	c0_tirf_i0_sp(&t, 62.6, &is, &ip);
+	CHECK_CLOSE(ip, 4.91, 0.01);
+	CHECK_CLOSE(is, 3.84, 0.01);
+	CHECK_CLOSE(c0_tirf_i0(&t, 70), 2.25, 0.01);
+	/* bin-averaged weights approach the point value for thin bins */
+	double W[2], a = 65;
+	c0_tirf_p(&t, a, &p);
+	CHECK(c0_tirf_weights(&t, 1, &a, NULL, 2, 100, 1e-3, W) == C0_OK);
+	CHECK_REL(W[0], c0_tirf_i0(&t, a) * exp(-p * 100), 1e-5);
+}
+
+static void test_variance_image(void)
+{
+	struct c0_sim_conf c;
+	c0_sim_defaults(&c);
+	c.width = c.height = 24;
+	c.frames = 6000;
+	c.tau_bleach_s = 0;
+	c.read_noise = 2;
+	c.snr_db = 0;
+	c.nangles = 1;
+	struct c0_emitter em[] = { { 500, 600, 0, 400 }, { 1700, 900, 100, 300 }, { 1210, 1830, 50, 500 }, { 1300, 1900, 150, 350 } };
+	const int ne = 4;
+	struct c0_sim_scene *s;
+	CHECK(c0_sim_scene_new(&c, em, ne, 0, &s) == C0_OK);
+	const int n = c.width * c.height;
+	double *ph = malloc(sizeof(double) * n), *s1 = calloc(n, sizeof(double)), *s2 = calloc(n, sizeof(double));
+	float *adu = malloc(sizeof(float) * n);
+	for (int t = 0; t < c.frames; t++) {
+		c0_sim_render(s, t, ph);
+		c0_sim_camera(&c, 0, t, c.read_noise, ph, adu);
+		for (int i = 0; i < n; i++)
+			s1[i] += adu[i], s2[i] += (double)adu[i] * adu[i];
+	}
+	/* prediction: blinking term per emitter + Poisson (mean photons) + read noise + rounding */
+	double vb = c0_sim_onfrac_variance(&c);
+	double *pred = calloc(n, sizeof(double)), *mean_ph = calloc(n, sizeof(double));
+	struct c0_sim_conf one = c;
+	/* each emitter's footprint (amplitude x PSF): a single-emitter scene in a
+	 * frame where it is on, minus the (identical) background */
+	const float *on = c0_sim_scene_onfrac(s);
+	const double *bg = c0_sim_scene_background(s);
+	double *fp = calloc((size_t)n * ne, sizeof(double));
+	for (int e = 0; e < ne; e++) {
+		struct c0_sim_scene *se;
+		c0_sim_scene_new(&one, &em[e], 1, 0, &se);
+		const float *on1 = c0_sim_scene_onfrac(se);
+		int t1 = -1;
+		for (int t = 0; t < c.frames && t1 < 0; t++)
+			if (on1[t] > 0.5)
+				t1 = t;
+		c0_sim_render(se, t1, ph);
+		for (int i = 0; i < n; i++)
+			fp[(size_t)e * n + i] = (ph[i] - bg[i]) / on1[t1];
+		c0_sim_scene_free(se);
+	}
+	for (int i = 0; i < n; i++) {
+		double m = bg[i];
+		for (int e = 0; e < ne; e++) {
+			double f = fp[(size_t)e * n + i];
+			pred[i] += f * f * vb;
+			double mo = 0;
+			for (int t = 0; t < c.frames; t++)
+				mo += on[(size_t)e * c.frames + t];
+			m += f * mo / c.frames;
+		}
+		mean_ph[i] = m;
+		pred[i] += m + c.read_noise * c.read_noise + 1.0 / 12;
+	}
+	double se_sum = 0, sp_sum = 0;
+	int bad = 0, strong = 0;
+	for (int i = 0; i < n; i++) {
+		double mu = s1[i] / c.frames, var = (s2[i] - c.frames * mu * mu) / (c.frames - 1);
+		se_sum += var, sp_sum += pred[i];
+		CHECK_MSG(fabs(mu - c.offset - mean_ph[i]) < 0.05 * mean_ph[i] + 0.5, "pixel %d mean %g vs %g", i, mu - c.offset, mean_ph[i]);
+		if (pred[i] > 2 * (mean_ph[i] + 4)) {     /* blinking dominates here */
+			strong++;
+			bad += fabs(var - pred[i]) > 0.1 * pred[i];
+		}
+	}
+	CHECK_REL(se_sum, sp_sum, 0.03);
+	CHECK(strong > 10);
+	CHECK_MSG(bad <= strong / 10, "%d of %d strong pixels off by >10%%", bad, strong);
+	free(ph), free(s1), free(s2), free(adu), free(pred), free(mean_ph), free(fp);
+	c0_sim_scene_free(s);
+}
+
+static void test_bad_params(void)
+{
+	struct c0_sim_conf c;
+	c0_sim_defaults(&c);
+	c.tau_on_ms = -1;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--tau-on"));
+	c0_sim_defaults(&c);
+	c.angles[2] = 55;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "critical"));
+	c0_sim_defaults(&c);
+	c.filaments = 0;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "empty structure"));
+	c0_sim_defaults(&c);
+	c.z_min_nm = 300, c.z_max_nm = 100;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--z-range"));
+}
+
+int main(void)
+{
+	RUN(test_onfraction);
+	RUN(test_tirf_closed_forms);
+	RUN(test_variance_image);
+	RUN(test_bad_params);
+	return CHECK_DONE();
+}
