@@ -85,8 +85,9 @@ void c0_ij_parse(const char *desc, struct c0_ij_meta *m)
 /* Attribute value attr="..." in xml after position p. */
 static int xml_attr(const char *xml, const char *attr, char *val, size_t n)
 {
-	char pat[64];
-	snprintf(pat, sizeof pat, " %s=\"", attr);
+	char pat[80];
+	if (snprintf(pat, sizeof pat, " %s=\"", attr) >= (int)sizeof pat)
+		return 0;
 	const char *p = strstr(xml, pat);
 	if (!p)
 		return 0;
@@ -101,7 +102,7 @@ static int xml_attr(const char *xml, const char *attr, char *val, size_t n)
 
 static double ome_length_nm(const char *xml, const char *attr)
 {
-	char v[64], ua[64], u[64], nu[16];
+	char v[64], ua[80], u[64], nu[16];
 	if (!xml_attr(xml, attr, v, sizeof v))
 		return 0;
 	snprintf(ua, sizeof ua, "%sUnit", attr);

@@ -1,0 +1,111 @@
+#define _XOPEN_SOURCE 700
+#include "cli/common.h"
+#include "io/tiff.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int c0_check_inputs(char **stacks, int n, const char *outdir)
+{
+	char od[PATH_MAX] = "";
+	if (outdir && !realpath(outdir, od))
+		od[0] = '\0';          /* does not exist yet: cannot hold an input */
+	for (int i = 0; i < n; i++) {
+		struct c0_tiff_reader *r;
+		int st = c0_tiff_open(stacks[i], &r);
+		if (st)
+			return st;
+		c0_tiff_close(r);
+		char in[PATH_MAX];
+		if (od[0] && realpath(stacks[i], in)) {
+			char *slash = strrchr(in, '/');
+			if (slash)
+				*slash = '\0';
+			if (!strcmp(in[0] ? in : "/", od))
+				return c0_fail(C0_EINVAL, "-o %s: is the directory of input %s; write results elsewhere", outdir, stacks[i]);
+		}
+	}
+	return C0_OK;
+}
+
+int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_support_result *res, cJSON *rep)
+{
+	cJSON *arr = cJSON_AddArrayToObject(rep, "support");
+	for (int i = 0; i < n; i++) {
+		struct c0_tiff_reader *r;
+		int st = c0_tiff_open(stacks[i], &r);
+		if (st)
+			return st;
+		const struct c0_tiff_info *in = c0_tiff_get_info(r);
+		if (!(c->pixel_nm > 0) && in->pixel_size_nm > 0)
+			c->pixel_nm = in->pixel_size_nm;
+		st = c0_support_stack(c, r, stacks[i], &res[i]);
+		c0_tiff_close(r);
+		if (st)
+			return st;
+		if (i > 0 && (res[i].Ly != res[0].Ly || res[i].Lx != res[0].Lx))
+			return c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s", stacks[i], res[i].Lx / c->srf,
+				       res[i].Ly / c->srf, stacks[0]);
+		const struct c0_support_result *s = &res[i];
+		cJSON *o = cJSON_CreateObject();
+		cJSON_AddStringToObject(o, "stack", stacks[i]);
+		cJSON_AddNumberToObject(o, "frames", (double)s->frames);
+		cJSON_AddNumberToObject(o, "lag_px", s->lag);
+		cJSON_AddNumberToObject(o, "lags", s->nlag);
+		cJSON_AddNumberToObject(o, "lambda", s->lambda);
+		cJSON_AddNumberToObject(o, "lambda_max", s->lambda_max);
+		cJSON_AddNumberToObject(o, "lambda_relative", s->lambda_max > 0 ? s->lambda / s->lambda_max : 0);
+		cJSON_AddNumberToObject(o, "normalisation", s->norm);
+		cJSON_AddNumberToObject(o, "noise_variance", s->sigma2);
+		cJSON_AddNumberToObject(o, "iterations", s->iters);
+		cJSON_AddBoolToObject(o, "converged", s->converged);
+		cJSON_AddNumberToObject(o, "support_pixels", s->support_pixels);
+		cJSON_AddNumberToObject(o, "covariance_s", s->t_cov);
+		cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);
+		cJSON_AddNumberToObject(o, "solve_s", s->t_solve);
+		c0_report_add_array(o, "objective", s->hist, s->nhist);
+		cJSON_AddItemToArray(arr, o);
+	}
+	cJSON *p = cJSON_AddObjectToObject(rep, "support_parameters");
+	cJSON_AddNumberToObject(p, "pixel_size_nm", c->pixel_nm);
+	cJSON_AddNumberToObject(p, "fwhm_nm", c->fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", c->srf);
+	cJSON_AddStringToObject(p, "penalty", c->penalty == C0_PENALTY_L1 ? "l1" : "cel0");
+	cJSON_AddNumberToObject(p, "max_iterations", c->fista.maxit);
+	cJSON_AddNumberToObject(p, "tol", c->fista.tol);
+	return C0_OK;
+}
+
+int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, const struct c0_support_result *res,
+		     int n, cJSON *rep)
+{
+	const size_t L = (size_t)res[0].Ly * res[0].Lx;
+	float *img = c0_alloc(L * (size_t)n, sizeof *img);
+	if (!img)
+		return C0_ENOMEM;
+	int count = 0;
+	for (size_t i = 0; i < L; i++) {
+		int on = 0;
+		for (int k = 0; k < n; k++)
+			on |= res[k].mask[i];
+		img[i] = (float)on;
+		count += on;
+	}
+	cJSON_AddNumberToObject(rep, "support_pixels_union", count);
+	struct c0_tiff_wopts o = { .width = res[0].Lx, .height = res[0].Ly, .dtype = C0_U8,
+				   .pixel_size_nm = c->pixel_nm / c->srf, .software = "col0rme" };
+	int st = c0_tiff_save_f32(c0_outdir_file(out, "support.tif"), &o, img);
+	if (!st) {
+		for (int k = 0; k < n; k++)
+			memcpy(img + k * L, res[k].rx, L * sizeof *img);
+		o.dtype = C0_F32;
+		o.slices = n;
+		st = c0_tiff_save_f32(c0_outdir_file(out, "rx.tif"), &o, img);
+	}
+	free(img);
+	return st;
+}

@@ -1,0 +1,15 @@
+/* Glue shared by the subcommands that run pipeline stages: input checks,
+ * stage runs that fill the JSON report, and writing their outputs. */
+#pragma once
+#include "stages/support.h"
+#include "io/outdir.h"
+#include "io/report.h"
+
+/* Every stack opens as a TIFF, and OUTDIR is not where an input lives. */
+int c0_check_inputs(char **stacks, int n, const char *outdir);
+/* Support of each stack (pixel size from the first stack's calibration when
+ * c->pixel_nm is 0); fills rep["support"]. */
+int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_support_result *res, cJSON *rep);
+/* support.tif (union of the masks) and rx.tif (one plane per stack). */
+int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, const struct c0_support_result *res,
+		     int n, cJSON *rep);

@@ -1,0 +1,108 @@
+#include "solve/fista.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double norm2(const double *v, size_t n)
+{
+	double s = 0;
+#pragma omp parallel for reduction(+ : s) if (n > 100000)
+	for (size_t i = 0; i < n; i++)
+		s += v[i] * v[i];
+	return sqrt(s);
+}
+
+int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w, double lam,
+		double *x, const struct c0_fista_conf *conf, struct c0_fista_info *info)
+{
+	if (!(lip > 0) || !(lam >= 0))
+		return c0_fail(C0_EINVAL, "fista: need a positive Lipschitz constant and lambda >= 0 (got %g, %g)", lip, lam);
+	double *z = c0_alloc(n, sizeof *z), *g = c0_alloc(n, sizeof *g), *xn = c0_alloc(n, sizeof *xn);
+	if (!z || !g || !xn) {
+		free(z), free(g), free(xn);
+		return C0_ENOMEM;
+	}
+	memcpy(z, x, n * sizeof *x);
+	double theta = 1, step = 1 / lip;
+	int nh = info->nhist, restarts = 0;
+	info->iters = info->converged = 0;
+	for (int it = 0; it < conf->maxit; it++) {
+		double fz = f(ctx, z, g), pen = 0, dn = 0, dot = 0;
+#pragma omp parallel for reduction(+ : pen, dn, dot) if (n > 100000)
+		for (size_t i = 0; i < n; i++) {
+			double wi = w ? w[i] : 1;
+			pen += wi * z[i];
+			double v = z[i] - step * (g[i] + lam * wi);
+			v = v > 0 ? v : 0;
+			double d = v - x[i];
+			dn += d * d;
+			dot += (z[i] - v) * d;     /* restart test <z - x+, x+ - x> */
+			xn[i] = v;
+		}
+		info->obj = fz + lam * pen;
+		if (info->hist && it < nh)
+			info->hist[it] = info->obj;
+		info->iters = it + 1;
+		double xnorm = norm2(xn, n);
+		double tp = (1 + sqrt(1 + 4 * theta * theta)) / 2, beta = (theta - 1) / tp;
+		if (dot > 0) {
+			beta = 0, tp = 1;   /* momentum points uphill: restart */
+			restarts++;
+		}
+#pragma omp parallel for if (n > 100000)
+		for (size_t i = 0; i < n; i++) {
+			z[i] = xn[i] + beta * (xn[i] - x[i]);
+			x[i] = xn[i];
+		}
+		theta = tp;
+		if (sqrt(dn) <= conf->tol * fmax(xnorm, 1e-300)) {
+			info->converged = 1;
+			break;
+		}
+	}
+	info->restarts = restarts;
+	free(z), free(g), free(xn);
+	return C0_OK;
+}
+
+int c0_irl1_cel0(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *anorm, double lam,
+		 double *x, const struct c0_fista_conf *inner, int outer_max, double tol, struct c0_fista_info *info)
+{
+	double *w = c0_alloc(n, sizeof *w), *prev = c0_alloc(n, sizeof *prev);
+	if (!w || !prev) {
+		free(w), free(prev);
+		return C0_ENOMEM;
+	}
+	int total = 0, st = C0_OK;
+	info->converged = 0;
+	double s2l = sqrt(2 * lam);
+	struct c0_fista_info in = *info;
+	for (int k = 0; k < outer_max && !st; k++) {
+		for (size_t i = 0; i < n; i++) {
+			double v = s2l * anorm[i] - anorm[i] * anorm[i] * fabs(x[i]);
+			w[i] = v > 0 ? v : 0;
+		}
+		memcpy(prev, x, n * sizeof *x);
+		in.hist = info->hist ? info->hist + total : NULL;
+		in.nhist = info->hist ? info->nhist - total : 0;
+		if (in.nhist < 0)
+			in.nhist = 0;
+		st = c0_fista_nn(f, ctx, n, lip, w, 1, x, inner, &in);
+		total += in.iters;
+		double dn = 0, xn = 0;
+		for (size_t i = 0; i < n; i++)
+			dn += (x[i] - prev[i]) * (x[i] - prev[i]), xn += x[i] * x[i];
+		if (k > 0 && sqrt(dn) <= tol * fmax(sqrt(xn), 1e-300)) {
+			info->converged = 1;
+			break;
+		}
+	}
+	info->iters = total;
+	info->obj = in.obj;
+	info->restarts = in.restarts;
+	free(w), free(prev);
+	return st;
+}

@@ -1,0 +1,51 @@
+/* COL0RME support estimation: sparse fine-grid emitter variances r_x from
+ * the banded covariance of a stack, with the noise variance in closed form.
+ *   min_{x >= 0, s >= 0}  1/2 ||R - Psi diag(x) Psi^T - s I||_F^2 + pen(x)
+ * R normalised by its largest pixel variance; pen = lam ||x||_1 or CEL0(lam). */
+#pragma once
+#include "ops/covariance.h"
+#include "solve/fista.h"
+#include "io/tiff.h"
+
+#include <stdint.h>
+
+enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };
+
+struct c0_support_conf {
+	double pixel_nm;           /* camera pixel size (required) */
+	double fwhm_nm;            /* PSF FWHM (required) */
+	int srf;                   /* 4: fine grid factor r */
+	enum c0_penalty penalty;   /* l1 */
+	double lambda_rel;         /* lambda / lambda_max; 0: the penalty's default (c0_support_default_lambda) */
+	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
+	struct c0_fista_conf fista;/* 2000 iterations, tol 1e-5 */
+	int cel0_outer;            /* 10 reweightings */
+};
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10 }
+
+struct c0_support_result {
+	int Ly, Lx, lag, nlag;
+	int64_t frames;
+	uint8_t *mask;             /* Ly x Lx, 1 where r_x > 0 */
+	float *rx;                 /* Ly x Lx, emitter variance in camera units^2 */
+	double *mean;              /* Ny x Nx temporal mean of the stack */
+	double sigma2;             /* noise variance, camera units^2 */
+	double lambda, lambda_max; /* in normalised covariance units */
+	double norm;               /* normalisation: largest pixel variance */
+	int iters, converged, support_pixels;
+	double *hist;              /* objective per iteration */
+	int nhist;
+	double t_cov, t_solve;     /* seconds */
+};
+
+int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name);
+int c0_support_lag(const struct c0_support_conf *c);
+/* Measured on simulated filaments (docs/parameters.md): l1 1e-2, cel0 3e-5.
+ * The two differ because CEL0's lambda_max is on the l0 scale. */
+double c0_support_default_lambda(enum c0_penalty p);
+/* Streams the stack once for its covariance, then solves. */
+int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
+		     struct c0_support_result *res);
+/* Solves from a finished covariance (which is left unchanged). */
+int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res);
+void c0_support_result_free(struct c0_support_result *r);

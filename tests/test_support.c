@@ -1,0 +1,428 @@
+/* COL0RME support: every fast identity against explicitly built dense
+ * matrices on a tiny grid, adjoint tests, the banded covariance against the
+ * dense sample covariance, and accuracy on simulated data. */
+#define _POSIX_C_SOURCE 200809L
+#include "check.h"
+#include "ops/covop.h"
+#include "ops/covariance.h"
+#include "optics/psf.h"
+#include "stages/support.h"
+#include "sim/sim.h"
+#include "eval/metrics.h"
+#include "io/outdir.h"
+#include "io/tiff.h"
+#include "core/band.h"
+#include "core/rng.h"
+#include "core/err.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+enum { NY = 6, NX = 5, R = 2, LY = NY * R, LX = NX * R, NP = NY * NX, NL = LY * LX };
+static const double SIG = 0.9;
+static struct c0_rng rng;
+
+static double *rnd(size_t n, double lo)
+{
+	double *v = malloc(n * sizeof *v);
+	for (size_t i = 0; i < n; i++)
+		v[i] = lo + c0_rng_uniform(&rng);
+	return v;
+}
+
+static double dot(const double *a, const double *b, size_t n)
+{
+	double s = 0;
+	for (size_t i = 0; i < n; i++)
+		s += a[i] * b[i];
+	return s;
+}
+
+static double maxdiff(const double *a, const double *b, size_t n)
+{
+	double d = 0, m = 0;
+	for (size_t i = 0; i < n; i++)
+		d = fmax(d, fabs(a[i] - b[i])), m = fmax(m, fabs(b[i]));
+	return d / fmax(m, 1e-300);
+}
+
+/* dense Psi (NP x NL): Psi[(i,j),(a,b)] = Gy[i][a] Gx[j][b] */
+static double *dense_psi(struct c0_covop *op)
+{
+	double gy[NY * LY], gx[NX * LX];
+	c0_band_to_dense(&op->Gy, gy);
+	c0_band_to_dense(&op->Gx, gx);
+	double *P = malloc(sizeof(double) * NP * NL);
+	for (int i = 0; i < NY; i++)
+		for (int j = 0; j < NX; j++)
+			for (int a = 0; a < LY; a++)
+				for (int b = 0; b < LX; b++)
+					P[(size_t)(i * NX + j) * NL + a * LX + b] = gy[i * LY + a] * gx[j * LX + b];
+	return P;
+}
+
+/* dense A^T v for a symmetric NP x NP matrix V: (A^T V)_k = psi_k^T V psi_k */
+static void dense_At(const double *P, const double *V, double *out)
+{
+	for (int k = 0; k < NL; k++) {
+		double s = 0;
+		for (int p = 0; p < NP; p++)
+			for (int q = 0; q < NP; q++)
+				s += P[(size_t)p * NL + k] * V[p * NP + q] * P[(size_t)q * NL + k];
+		out[k] = s;
+	}
+}
+
+/* dense M(x) = Psi diag(x) Psi^T */
+static void dense_M(const double *P, const double *x, double *M)
+{
+	for (int p = 0; p < NP; p++)
+		for (int q = 0; q < NP; q++) {
+			double s = 0;
+			for (int k = 0; k < NL; k++)
+				s += P[(size_t)p * NL + k] * x[k] * P[(size_t)q * NL + k];
+			M[p * NP + q] = s;
+		}
+}
+
+static void test_band_ops(void)
+{
+	struct c0_band b;
+	c0_band_alloc(&b, 7, 11, 4);
+	for (int i = 0; i < 7; i++) {
+		b.start[i] = i < 3 ? 0 : i > 5 ? 7 : i;
+		for (int k = 0; k < 4; k++)
+			b.v[i * 4 + k] = c0_rng_uniform(&rng) - 0.5;
+	}
+	double D[77], *x = rnd(13 * 11, -0.5), yx[13 * 7], ref[13 * 7];
+	c0_band_to_dense(&b, D);
+	c0_band_apply_x(&b, 13, x, yx);
+	for (int y = 0; y < 13; y++)
+		for (int i = 0; i < 7; i++)
+			ref[y * 7 + i] = dot(D + i * 11, x + y * 11, 11);
+	CHECK(maxdiff(yx, ref, 13 * 7) < 1e-14);
+	double *xy = rnd(11 * 3, -0.5), yy[7 * 3], ry[7 * 3];
+	c0_band_apply_y(&b, 3, xy, yy);
+	for (int i = 0; i < 7; i++)
+		for (int c = 0; c < 3; c++) {
+			double s = 0;
+			for (int k = 0; k < 11; k++)
+				s += D[i * 11 + k] * xy[k * 3 + c];
+			ry[i * 3 + c] = s;
+		}
+	CHECK(maxdiff(yy, ry, 21) < 1e-14);
+	struct c0_band t;
+	CHECK(c0_band_transpose(&b, &t) == C0_OK);
+	double DT[77];
+	c0_band_to_dense(&t, DT);
+	int same = 1;
+	for (int i = 0; i < 7; i++)
+		for (int j = 0; j < 11; j++)
+			same &= DT[j * 7 + i] == D[i * 11 + j];
+	CHECK(same);
+	c0_band_free(&t), c0_band_free(&b), free(x), free(xy);
+}
+
+static void test_psf_factor(void)
+{
+	/* columns of G integrate the whole Gaussian when it lies inside the field */
+	struct c0_band G;
+	CHECK(c0_psf_factor(20, 4, 1.0, &G) == C0_OK);
+	double col = 0;
+	for (int i = 0; i < 20; i++)
+		col += c0_band_get(&G, i, 40);
+	CHECK_CLOSE(col, 1, 1e-6);
+	/* fine pixel a is centred at (a + 1/2)/r: pixel 41 is centred at 10.375 */
+	double v;
+	c0_psf_pixel_weights(41.5 / 4, 1.0, 10, 1, &v);
+	CHECK_CLOSE(c0_band_get(&G, 10, 41), v, 1e-15);
+	CHECK_CLOSE(c0_band_get(&G, 10, 41), 0.5 * (erf(0.625 / sqrt(2)) - erf(-0.375 / sqrt(2))), 1e-12);
+	c0_band_free(&G);
+}
+
+static void test_dense_identities(void)
+{
+	struct c0_covop op;
+	CHECK(c0_covop_init(&op, NY, NX, R, SIG, 5) == C0_OK);
+	double *P = dense_psi(&op);
+	/* A^T A x = H_y X H_x */
+	double *x = rnd(NL, 0), *fast = malloc(sizeof(double) * NL), *slow = malloc(sizeof(double) * NL);
+	double *M = malloc(sizeof(double) * NP * NP);
+	dense_M(P, x, M);
+	dense_At(P, M, slow);
+	c0_covop_normal(&op, x, fast);
+	CHECK_MSG(maxdiff(fast, slow, NL) < 1e-10, "normal operator off by %g", maxdiff(fast, slow, NL));
+	/* column norms: ||psi_k||^2, and ||a_k||^2 = (A^T A)_kk */
+	double *e = calloc(NL, sizeof(double));
+	int ok = 1;
+	for (int k = 0; k < NL; k++) {
+		double s = 0;
+		for (int p = 0; p < NP; p++)
+			s += P[(size_t)p * NL + k] * P[(size_t)p * NL + k];
+		ok &= fabs(s - op.n[k]) <= 1e-12 * s;
+		e[k] = 1;
+		c0_covop_normal(&op, e, fast);
+		ok &= fabs(fast[k] - op.n[k] * op.n[k]) <= 1e-10 * fast[k];
+		e[k] = 0;
+	}
+	CHECK(ok);
+	/* Lipschitz constant = largest eigenvalue of the dense A^T A (power iteration, long) */
+	double *AtA = malloc(sizeof(double) * NL * NL);
+	for (int k = 0; k < NL; k++) {
+		e[k] = 1;
+		dense_M(P, e, M);
+		dense_At(P, M, AtA + (size_t)k * NL);
+		e[k] = 0;
+	}
+	double *v = rnd(NL, 0), lam = 0;
+	for (int it = 0; it < 20000; it++) {
+		for (int i = 0; i < NL; i++)
+			fast[i] = dot(AtA + (size_t)i * NL, v, NL);
+		double nn = sqrt(dot(fast, fast, NL));
+		lam = dot(fast, v, NL);
+		for (int i = 0; i < NL; i++)
+			v[i] = fast[i] / nn;
+	}
+	CHECK_REL(op.lip, lam, 1e-9);
+	/* Psi and Psi^T against the dense matrix, and their adjointness */
+	double *y = rnd(NP, -0.5), psix[NP], psity[NL];
+	c0_covop_psi(&op, x, psix);
+	for (int p = 0; p < NP; p++)
+		slow[p] = dot(P + (size_t)p * NL, x, NL);
+	CHECK(maxdiff(psix, slow, NP) < 1e-12);
+	c0_covop_psit(&op, y, psity);
+	CHECK_REL(dot(psix, y, NP), dot(x, psity, NL), 1e-12);
+	free(P), free(x), free(fast), free(slow), free(M), free(e), free(AtA), free(v), free(y);
+	c0_covop_free(&op);
+}
+
+/* a covariance with random entries on its band, from a random stack */
+static int random_cov(int d, int T, struct c0_cov *cov, double *dense)
+{
+	struct c0_cov_acc *a;
+	c0_cov_acc_new(NX, NY, d, &a);
+	float *frames = malloc(sizeof(float) * NP * T);
+	for (int i = 0; i < NP * T; i++)
+		frames[i] = (float)(100 + 20 * c0_rng_normal(&rng));
+	for (int t = 0; t < T; t++)
+		c0_cov_acc_add(a, frames + t * NP);
+	int st = c0_cov_acc_finish(a, cov);
+	/* dense sample covariance, mean removed, 1/(T-1) */
+	for (int p = 0; p < NP; p++)
+		for (int q = 0; q < NP; q++) {
+			double mp = 0, mq = 0, s = 0;
+			for (int t = 0; t < T; t++)
+				mp += frames[t * NP + p], mq += frames[t * NP + q];
+			mp /= T, mq /= T;
+			for (int t = 0; t < T; t++)
+				s += (frames[t * NP + p] - mp) * (frames[t * NP + q] - mq);
+			dense[p * NP + q] = s / (T - 1);
+		}
+	free(frames);
+	return st;
+}
+
+static void test_covariance(void)
+{
+	struct c0_cov cov;
+	double *D = malloc(sizeof(double) * NP * NP);
+	CHECK(random_cov(2, 20, &cov, D) == C0_OK);
+	CHECK(cov.nlag == 13 && cov.dy[0] == 0 && cov.dx[0] == 0);
+	double err = 0;
+	int inband = 0;
+	for (int l = 0; l < cov.nlag; l++)
+		for (int y = 0; y < NY; y++)
+			for (int x = 0; x < NX; x++) {
+				int yy = y + cov.dy[l], xx = x + cov.dx[l];
+				double v = cov.r[(size_t)l * NP + y * NX + x];
+				if (yy >= NY || xx < 0 || xx >= NX) {
+					err = fmax(err, fabs(v));
+					continue;
+				}
+				inband++;
+				err = fmax(err, fabs(v - D[(y * NX + x) * NP + yy * NX + xx]) / D[0]);
+			}
+	CHECK_MSG(err < 1e-12, "banded vs dense covariance: %g", err);
+	CHECK(inband > 100);
+	c0_cov_free(&cov);
+	/* fewer than 3 frames is refused */
+	struct c0_cov_acc *a;
+	c0_cov_acc_new(NX, NY, 1, &a);
+	float f[NP] = { 0 };
+	c0_cov_acc_add(a, f), c0_cov_acc_add(a, f);
+	CHECK(c0_cov_acc_finish(a, &cov) == C0_EINVAL && strstr(c0_errmsg(), "3 frames"));
+	free(D);
+}
+
+static void test_covariance_operator(void)
+{
+	struct c0_covop op;
+	c0_covop_init(&op, NY, NX, R, SIG, 5);
+	double *D = malloc(sizeof(double) * NP * NP), *P = dense_psi(&op);
+	struct c0_cov cov;
+	/* lag 5 covers every pixel pair of the 6x5 grid: banded = dense */
+	random_cov(5, 30, &cov, D);
+	double *C = malloc(sizeof(double) * NL), *Cd = malloc(sizeof(double) * NL);
+	c0_covop_adjoint(&op, &cov, cov.r, C);
+	dense_At(P, D, Cd);
+	CHECK_MSG(maxdiff(C, Cd, NL) < 1e-10, "C = A^T vec(R): %g", maxdiff(C, Cd, NL));
+	/* banded forward equals the dense model covariance on the band */
+	double *x = rnd(NL, 0), *m = malloc(sizeof(double) * cov.nlag * NP), *M = malloc(sizeof(double) * NP * NP);
+	c0_covop_forward(&op, &cov, x, m);
+	dense_M(P, x, M);
+	double err = 0;
+	for (int l = 0; l < cov.nlag; l++)
+		for (int y = 0; y + cov.dy[l] < NY; y++)
+			for (int xx = 0; xx < NX; xx++) {
+				int x2 = xx + cov.dx[l];
+				if (x2 < 0 || x2 >= NX)
+					continue;
+				err = fmax(err, fabs(m[(size_t)l * NP + y * NX + xx] - M[(y * NX + xx) * NP + (y + cov.dy[l]) * NX + x2]));
+			}
+	CHECK(err < 1e-12 * M[0]);
+	/* adjoint test in the band's Frobenius product, with a narrower band */
+	c0_cov_free(&cov);
+	random_cov(2, 10, &cov, D);
+	c0_covop_forward(&op, &cov, x, m);
+	c0_covop_adjoint(&op, &cov, cov.r, C);
+	double lhs = 0;
+	for (int l = 0; l < cov.nlag; l++)
+		lhs += c0_cov_weight(&cov, l) * dot(m + (size_t)l * NP, cov.r + (size_t)l * NP, NP);
+	CHECK_REL(lhs, dot(x, C, NL), 1e-12);
+	/* gradient of 1/2||R - M(x) - sI||^2 in x at fixed s, and the closed-form s */
+	c0_cov_free(&cov);
+	random_cov(5, 30, &cov, D);
+	c0_covop_adjoint(&op, &cov, cov.r, C);
+	double trR = 0, xn = 0;
+	for (int p = 0; p < NP; p++)
+		trR += D[p * NP + p];
+	for (int k = 0; k < NL; k++)
+		xn += x[k] * op.n[k];
+	for (int k = 0; k < NL; k++)
+		x[k] *= 0.2 * trR / xn;     /* keep s > 0 */
+	xn *= 0.2 * trR / xn;
+	dense_M(P, x, M);
+	double trM = 0;
+	for (int p = 0; p < NP; p++)
+		trM += M[p * NP + p];
+	double s = (trR - xn) / NP;
+	CHECK_REL(s, (trR - trM) / NP, 1e-12);       /* s = mean diagonal residual */
+	double *V = malloc(sizeof(double) * NP * NP), *gd = malloc(sizeof(double) * NL), *g = malloc(sizeof(double) * NL);
+	for (int i = 0; i < NP * NP; i++)
+		V[i] = M[i] - D[i] + (i % (NP + 1) == 0 ? s : 0);
+	dense_At(P, V, gd);
+	c0_covop_normal(&op, x, g);
+	for (int k = 0; k < NL; k++)
+		g[k] += s * op.n[k] - C[k];
+	CHECK_MSG(maxdiff(g, gd, NL) < 1e-10, "gradient: %g", maxdiff(g, gd, NL));
+	free(D), free(P), free(C), free(Cd), free(x), free(m), free(M), free(V), free(gd), free(g);
+	c0_cov_free(&cov);
+	c0_covop_free(&op);
+}
+
+static void test_wrong_inputs(void)
+{
+	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
+	c.pixel_nm = 100, c.fwhm_nm = 229;
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_OK);
+	CHECK(c0_support_check(&c, 10, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "smaller than the PSF band"));
+	CHECK(c0_support_check(&c, 64, 64, 2, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "at least 3"));
+	c.pixel_nm = 0;
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--pixel-size"));
+	c.pixel_nm = 100, c.fwhm_nm = -1;
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--fwhm"));
+	c.fwhm_nm = 229, c.srf = 0;
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--srf"));
+}
+
+/* Gaussian read noise only (no Poisson): the estimated noise variance is the read noise's */
+static void test_noise_variance(void)
+{
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	s.width = s.height = 32, s.frames = 400, s.nangles = 1, s.background = 0, s.filaments = 3;
+	struct c0_emitter *em;
+	int ne;
+	CHECK(c0_sim_structure(&s, &em, &ne) == C0_OK);
+	struct c0_sim_scene *sc;
+	c0_sim_scene_new(&s, em, ne, 0, &sc);
+	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
+	c.pixel_nm = 100, c.fwhm_nm = 229;
+	struct c0_cov_acc *a;
+	c0_cov_acc_new(32, 32, c0_support_lag(&c), &a);
+	double ph[32 * 32];
+	float fr[32 * 32];
+	const double sd = 12;
+	struct c0_rng r;
+	c0_rng_init(&r, 99, 1);
+	for (int t = 0; t < s.frames; t++) {
+		c0_sim_render(sc, t, ph);
+		for (int i = 0; i < 32 * 32; i++)
+			fr[i] = (float)(100 + ph[i] + sd * c0_rng_normal(&r));
+		c0_cov_acc_add(a, fr);
+	}
+	struct c0_cov cov;
+	c0_cov_acc_finish(a, &cov);
+	struct c0_support_result res;
+	memset(&res, 0, sizeof res);
+	CHECK(c0_support_solve(&c, &cov, &res) == C0_OK);
+	CHECK_MSG(fabs(res.sigma2 - sd * sd) <= 0.1 * sd * sd, "sigma2 %g vs %g", res.sigma2, sd * sd);
+	CHECK(res.support_pixels > 0);
+	c0_support_result_free(&res);
+	c0_cov_free(&cov);
+	c0_sim_scene_free(sc);
+	free(em);
+}
+
+/* one angle, 500 frames, fixed seed: the support matches the truth */
+static void test_accuracy(void)
+{
+	char dir[] = "/tmp/c0_test_support_XXXXXX";
+	CHECK(mkdtemp(dir) != NULL);
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	s.seed = 11, s.nangles = 1;
+	struct c0_outdir out;
+	c0_outdir_open(&out, dir, 1);
+	struct c0_sim_result sr;
+	CHECK(c0_simulate(&s, &out, &sr) == C0_OK);
+	c0_sim_result_free(&sr);
+	char p[256];
+	snprintf(p, sizeof p, "%s/stack_q01.tif", dir);
+	struct c0_tiff_reader *rd;
+	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
+	c.pixel_nm = 100, c.fwhm_nm = 229;
+	struct c0_support_result res;
+	CHECK(c0_support_stack(&c, rd, p, &res) == C0_OK);
+	c0_tiff_close(rd);
+	snprintf(p, sizeof p, "%s/truth_support.tif", dir);
+	struct c0_tiff_info in;
+	float *t;
+	CHECK(c0_tiff_load_f32(p, &in, &t) == C0_OK);
+	uint8_t *tm = malloc(in.width * in.height);
+	for (int i = 0; i < in.width * in.height; i++)
+		tm[i] = t[i] > 0;
+	struct c0_jaccard ji;
+	CHECK(c0_jaccard_index(res.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &ji) == C0_OK);
+	fprintf(stderr, "support: JI %.3f (tp %d fp %d fn %d), %d iterations, %.2fs\n", ji.index, ji.tp, ji.fp, ji.fn, res.iters, res.t_solve);
+	CHECK(ji.index >= 0.5);
+	c0_support_result_free(&res);
+	free(t), free(tm);
+	snprintf(p, sizeof p, "rm -rf %s", dir);
+	if (system(p)) {}
+}
+
+int main(void)
+{
+	c0_rng_init(&rng, 42, 0);
+	RUN(test_band_ops);
+	RUN(test_psf_factor);
+	RUN(test_dense_identities);
+	RUN(test_covariance);
+	RUN(test_covariance_operator);
+	RUN(test_wrong_inputs);
+	RUN(test_noise_variance);
+	RUN(test_accuracy);
+	return CHECK_DONE();
+}
