@@ -109,3 +109,62 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 	free(img);
 	return st;
 }
+
+int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
+		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
+		     cJSON *rep)
+{
+	cJSON *arr = cJSON_AddArrayToObject(rep, "intensity");
+	for (int i = 0; i < n; i++) {
+		struct c0_tiff_reader *r;
+		int st = c0_tiff_open(stacks[i], &r);
+		if (st)
+			return st;
+		struct c0_cov cov;
+		double tc, s2 = sigma2 ? sigma2[i] : 0;
+		st = c0_stack_covariance(sc, r, stacks[i], &cov, &tc);
+		c0_tiff_close(r);
+		if (st)
+			return st;
+		if (!(s2 > 0))
+			st = c0_support_noise(sc, &cov, mask, &s2);
+		if (!st)
+			st = c0_intensity_solve(ic, cov.mean, cov.H, cov.W, cov.frames, mask, s2, &res[i]);
+		int64_t frames = cov.frames;
+		c0_cov_free(&cov);
+		if (st)
+			return st;
+		const struct c0_intensity_result *s = &res[i];
+		char name[64];
+		struct c0_tiff_wopts o = { .width = s->Lx, .height = s->Ly, .dtype = C0_F32,
+					   .pixel_size_nm = ic->pixel_nm / ic->srf, .software = "col0rme" };
+		snprintf(name, sizeof name, "intensity_q%02d.tif", i + 1);
+		if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->x)))
+			return st;
+		o.width = s->Nx, o.height = s->Ny, o.pixel_size_nm = ic->pixel_nm;
+		snprintf(name, sizeof name, "background_q%02d.tif", i + 1);
+		if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->b)))
+			return st;
+		cJSON *j = cJSON_CreateObject();
+		cJSON_AddStringToObject(j, "stack", stacks[i]);
+		cJSON_AddNumberToObject(j, "frames", (double)frames);
+		cJSON_AddNumberToObject(j, "noise_variance", s->sigma2);
+		cJSON_AddNumberToObject(j, "mu", s->mu);
+		cJSON_AddNumberToObject(j, "residual2", s->residual2);
+		cJSON_AddNumberToObject(j, "discrepancy_target2", s->target2);
+		static const char *dp[] = { "met", "below: even the smallest mu leaves a larger residual",
+					    "above: even the largest mu leaves a smaller residual", "not converged" };
+		cJSON_AddStringToObject(j, "discrepancy", s->dp_status < 0 ? "fixed mu" : dp[s->dp_status]);
+		cJSON_AddNumberToObject(j, "solves", s->solves);
+		cJSON_AddNumberToObject(j, "cg_iterations", s->cg_iters);
+		cJSON_AddNumberToObject(j, "seconds", s->seconds + tc);
+		cJSON_AddItemToArray(arr, j);
+	}
+	cJSON *p = cJSON_AddObjectToObject(rep, "intensity_parameters");
+	static const char *bg[] = { "none", "constant", "smooth" };
+	cJSON_AddStringToObject(p, "background", bg[ic->background]);
+	cJSON_AddNumberToObject(p, "beta", ic->beta);
+	cJSON_AddNumberToObject(p, "nu", ic->nu);
+	cJSON_AddNumberToObject(p, "fixed_mu", ic->mu);
+	return C0_OK;
+}

@@ -13,3 +13,13 @@ int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_su
 /* support.tif (union of the masks) and rx.tif (one plane per stack). */
 int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, const struct c0_support_result *res,
 		     int n, cJSON *rep);
+
+#include "stages/intensity.h"
+
+/* Intensity and background of each stack on the support mask (Ly x Lx):
+ * one pass per stack for its mean and covariance; the noise variance comes
+ * from sigma2[i] when > 0, else from the covariance restricted to the mask.
+ * Writes intensity_qNN.tif and background_qNN.tif, fills rep["intensity"]. */
+int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
+		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
+		     cJSON *rep);

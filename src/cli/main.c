@@ -15,6 +15,7 @@ static const struct {
 } commands[] = {
 	{ "info", cmd_info, "describe TIFF stacks: size, frames, type, calibration, statistics" },
 	{ "simulate", cmd_simulate, "simulate MA-TIRF blinking stacks with ground truth" },
+	{ "intensity", cmd_intensity, "per-angle intensity and background on a support" },
 	{ "support", cmd_support, "COL0RME support estimation from the stacks' covariance" },
 };
 

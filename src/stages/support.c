@@ -57,6 +57,7 @@ struct ctx {
 	const double *C;
 	double trR, R2, HW;
 	double *Ax;
+	const uint8_t *mask;     /* if set, x is free only here */
 };
 
 /* f(x) = min_s 1/2 ||R - M(x) - s I||^2 (s in closed form) and its gradient */
@@ -73,11 +74,33 @@ static double smooth(void *vctx, const double *x, double *g)
 	double s = fmax(0, (c->trR - xn) / c->HW);
 #pragma omp parallel for if (L > 100000)
 	for (size_t i = 0; i < L; i++)
-		g[i] = c->Ax[i] + s * op->n[i] - c->C[i];
+		g[i] = c->mask && !c->mask[i] ? 0 : c->Ax[i] + s * op->n[i] - c->C[i];
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
 
+static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
+		 struct c0_support_result *res);
+
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
+{
+	return solve(c, cov, NULL, res);
+}
+
+int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2)
+{
+	struct c0_support_conf cc = *c;
+	cc.penalty = C0_PENALTY_L1;
+	cc.fista.maxit = 300;
+	struct c0_support_result r;
+	memset(&r, 0, sizeof r);
+	int st = solve(&cc, cov, mask, &r);
+	*sigma2 = r.sigma2;
+	c0_support_result_free(&r);
+	return st;
+}
+
+static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
+		 struct c0_support_result *res)
 {
 	double t0 = c0_now();
 	const int W = cov->W, H = cov->H, r = c->srf;
@@ -107,7 +130,7 @@ int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, 
 		goto out;
 	}
 	res->norm = mx;
-	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax };
+	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, mask };
 	for (int l = 0; l < cov->nlag; l++) {
 		double w = c0_cov_weight(cov, l);
 		for (size_t i = 0; i < n; i++) {
@@ -129,10 +152,10 @@ int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, 
 			lmax = fmax(lmax, gi * gi / (2 * op.n[i] * op.n[i]));
 	}
 	res->lambda_max = lmax;
-	res->lambda = lambda_rel(c) * lmax;
+	res->lambda = mask ? 0 : lambda_rel(c) * lmax;
 	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
-	if (lmax > 0) {
-		if (c->penalty == C0_PENALTY_L1)
+	if (lmax > 0 || mask) {
+		if (c->penalty == C0_PENALTY_L1 || mask)
 			st = c0_fista_nn(smooth, &ctx, L, op.lip, NULL, res->lambda, x, &c->fista, &info);
 		else
 			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &c->fista, c->cel0_outer, c->fista.tol, &info);
@@ -157,10 +180,9 @@ out:
 	return st;
 }
 
-int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-		     struct c0_support_result *res)
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
+			struct c0_cov *cov, double *seconds)
 {
-	memset(res, 0, sizeof *res);
 	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
 	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
 	if (st)
@@ -188,14 +210,25 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd,
 		c0_cov_acc_free(acc);
 		return st;
 	}
+	st = c0_cov_acc_finish(acc, cov);
+	*seconds = c0_now() - t0;
+	return st;
+}
+
+int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
+		     struct c0_support_result *res)
+{
+	memset(res, 0, sizeof *res);
 	struct c0_cov cov;
-	if ((st = c0_cov_acc_finish(acc, &cov)))
+	double tc;
+	int st = c0_stack_covariance(c, rd, name, &cov, &tc);
+	if (st)
 		return st;
-	res->t_cov = c0_now() - t0;
 	struct c0_progress ps;
 	c0_progress_begin(&ps, "support", 1);
 	st = c0_support_solve(c, &cov, res);
 	c0_progress_end(&ps);
+	res->t_cov = tc;
 	if (!st) {
 		res->mean = cov.mean;
 		cov.mean = NULL;

@@ -49,3 +49,9 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *r, 
 /* Solves from a finished covariance (which is left unchanged). */
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res);
 void c0_support_result_free(struct c0_support_result *r);
+/* One streaming pass: banded covariance (lag from the PSF) and temporal mean. */
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
+			struct c0_cov *cov, double *seconds);
+/* Noise variance of a stack whose support is known: the same model with
+ * r_x free on the mask only and no penalty (a few hundred iterations). */
+int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2);

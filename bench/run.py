@@ -1,0 +1,78 @@
+"""Benchmarks: prints one table (size, time, throughput, peak memory, ratio to
+a baseline measured in the same run). Run from the repository root after
+scripts/setup.sh:  /usr/bin/python3 bench/run.py [--quick]
+
+Each timed command runs in its own process; peak memory is that process's
+maximum resident set size."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+BUILD = os.environ.get("BUILD", "build")
+CLI = os.path.join(BUILD, "col0rme")
+QUICK = "--quick" in sys.argv
+rows = []
+
+
+def timed(cmd):
+    """(seconds, peak RSS MiB, stdout) of one child process (its own rusage via wait4)."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    out, err = p.stdout.read(), p.stderr.read()
+    _, status, ru = os.wait4(p.pid, 0)
+    dt = time.perf_counter() - t0
+    p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode:
+        sys.exit("bench: %s failed:\n%s" % (" ".join(cmd), err))
+    return dt, ru.ru_maxrss / 1024.0, out
+
+
+def sim(out, w, frames, angles="62", extra=()):
+    subprocess.run([CLI, "simulate", "-o", out, "--width", str(w), "--height", str(w), "--frames", str(frames),
+                    "--angles", angles, "--filaments", str(max(5, w // 12)), *extra], check=True, capture_output=True)
+
+
+def row(what, size, secs, thr, mem, ratio=""):
+    rows.append((what, size, "%.3g" % secs, thr, "%.0f" % mem, ratio))
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    # simulate: the default dataset (5 angles x 500 frames x 64x64)
+    d = os.path.join(tmp, "sim64")
+    dt, mem, _ = timed([CLI, "simulate", "-o", d])
+    row("simulate (default)", "5 x 64x64x500", dt, "%.0f frames/s" % (2500 / dt), mem)
+
+    # support: dense reference formulation vs ours on the same 20x20 stack
+    d20 = os.path.join(tmp, "s20")
+    sim(d20, 20, 500)
+    its = 2 if QUICK else 5
+    dt, mem, out = timed([os.path.join(BUILD, "bench", "dense_baseline"), os.path.join(d20, "stack_q01.tif"), "100", "229", "4", str(its)])
+    dense_it = float(out.split()[0])
+    row("support, dense (reference formulation)", "20x20x500 r4", dense_it, "per iteration", mem)
+    o = os.path.join(tmp, "o20")
+    dt, mem, _ = timed([CLI, "support", "--fwhm", "229", "--pixel-size", "100", "-o", o, os.path.join(d20, "stack_q01.tif")])
+    rep = json.load(open(os.path.join(o, "report.json")))["support"][0]
+    ours_it = rep["solve_s"] / max(rep["iterations"], 1)
+    row("support, banded (col0rme)", "20x20x500 r4", ours_it, "per iteration", mem, "%.0fx faster" % (dense_it / ours_it))
+
+    cases = [(64, 500)] + ([] if QUICK else [(256, 1000)])
+    for w, T in cases:
+        d = os.path.join(tmp, "s%d" % w)
+        sim(d, w, T)
+        o = os.path.join(tmp, "o%d" % w)
+        dt, mem, _ = timed([CLI, "support", "--fwhm", "229", "--pixel-size", "100", "-o", o, os.path.join(d, "stack_q01.tif")])
+        rep = json.load(open(os.path.join(o, "report.json")))["support"][0]
+        row("support, whole command", "%dx%dx%d r4" % (w, w, T), dt,
+            "%.0f frames/s cov; %d its, %.1f ms/it" % (rep["covariance_frames_per_s"], rep["iterations"],
+                                                       1e3 * rep["solve_s"] / max(rep["iterations"], 1)), mem,
+            "%.0fx dense per it" % (dense_it / (rep["solve_s"] / max(rep["iterations"], 1))))
+
+widths = [max(len(str(r[i])) for r in rows + [("stage", "size", "time s", "throughput", "peak MiB", "ratio")]) for i in range(6)]
+hdr = ("stage", "size", "time s", "throughput", "peak MiB", "ratio")
+print(" | ".join(h.ljust(w) for h, w in zip(hdr, widths)))
+print("-+-".join("-" * w for w in widths))
+for r in rows:
+    print(" | ".join(str(c).ljust(w) for c, w in zip(r, widths)))

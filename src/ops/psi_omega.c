@@ -1,0 +1,146 @@
+#include "ops/psi_omega.h"
+#include "optics/psf.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma, const uint8_t *mask)
+{
+	memset(p, 0, sizeof *p);
+	p->Ny = Ny, p->Nx = Nx, p->Ly = Ny * r, p->Lx = Nx * r;
+	const size_t L = (size_t)p->Ly * p->Lx;
+	int *pos = c0_alloc(L, sizeof *pos);
+	if (!pos)
+		return C0_ENOMEM;
+	for (size_t i = 0; i < L; i++)
+		pos[i] = mask[i] ? p->n++ : -1;
+	if (!p->n) {
+		free(pos);
+		return c0_fail(C0_EINVAL, "the support is empty: no fine pixel to estimate");
+	}
+	p->idx = c0_alloc((size_t)p->n, sizeof *p->idx);
+	p->e0 = c0_alloc((size_t)p->n * 2, sizeof *p->e0);
+	p->e1 = c0_alloc((size_t)p->n * 2, sizeof *p->e1);
+	struct c0_band Gy, Gx;
+	int st = !p->idx || !p->e0 || !p->e1 ? C0_ENOMEM : C0_OK;
+	if (!st)
+		st = c0_psf_factor(Ny, r, sigma, &Gy);
+	if (!st) {
+		st = c0_psf_factor(Nx, r, sigma, &Gx);
+		if (!st) {
+			st = c0_band_transpose(&Gy, &p->GyT);
+			if (!st)
+				st = c0_band_transpose(&Gx, &p->GxT);
+			c0_band_free(&Gx);
+		}
+		c0_band_free(&Gy);
+	}
+	if (st) {
+		free(pos);
+		c0_psi_omega_free(p);
+		return st;
+	}
+	for (int y = 0; y < p->Ly; y++)
+		for (int x = 0; x < p->Lx; x++) {
+			int k = pos[(size_t)y * p->Lx + x];
+			if (k < 0)
+				continue;
+			p->idx[k] = y * p->Lx + x;
+			if (x + 1 < p->Lx && pos[(size_t)y * p->Lx + x + 1] >= 0)
+				p->e0[p->ne] = k, p->e1[p->ne++] = pos[(size_t)y * p->Lx + x + 1];
+			if (y + 1 < p->Ly && pos[(size_t)(y + 1) * p->Lx + x] >= 0)
+				p->e0[p->ne] = k, p->e1[p->ne++] = pos[(size_t)(y + 1) * p->Lx + x];
+		}
+	free(pos);
+	return C0_OK;
+}
+
+void c0_psi_omega_free(struct c0_psi_omega *p)
+{
+	free(p->idx), free(p->e0), free(p->e1);
+	c0_band_free(&p->GyT), c0_band_free(&p->GxT);
+	memset(p, 0, sizeof *p);
+}
+
+void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double *y)
+{
+	const int wy = p->GyT.w, wx = p->GxT.w;
+	memset(y, 0, sizeof *y * (size_t)p->Ny * p->Nx);
+	for (int k = 0; k < p->n; k++) {
+		if (x[k] == 0)
+			continue;
+		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
+		const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
+		const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
+		for (int i = 0; i < wy; i++) {
+			double c = x[k] * gy[i];
+			double *row = y + (size_t)(i0 + i) * p->Nx + j0;
+			for (int j = 0; j < wx; j++)
+				row[j] += c * gx[j];
+		}
+	}
+}
+
+void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x)
+{
+	const int wy = p->GyT.w, wx = p->GxT.w;
+#pragma omp parallel for schedule(static) if (p->n > 4096)
+	for (int k = 0; k < p->n; k++) {
+		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
+		const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
+		const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
+		double s = 0;
+		for (int i = 0; i < wy; i++) {
+			const double *row = y + (size_t)(i0 + i) * p->Nx + j0;
+			double t = 0;
+			for (int j = 0; j < wx; j++)
+				t += row[j] * gx[j];
+			s += gy[i] * t;
+		}
+		x[k] = s;
+	}
+}
+
+void c0_grad_omega(const struct c0_psi_omega *p, const double *x, double *g)
+{
+	for (int e = 0; e < p->ne; e++)
+		g[e] = x[p->e1[e]] - x[p->e0[e]];
+}
+
+void c0_grad_omega_adjoint(const struct c0_psi_omega *p, const double *g, double *x)
+{
+	memset(x, 0, sizeof *x * (size_t)p->n);
+	for (int e = 0; e < p->ne; e++) {
+		x[p->e1[e]] += g[e];
+		x[p->e0[e]] -= g[e];
+	}
+}
+
+double c0_psi_norm2(const struct c0_psi_omega *p)
+{
+	/* ||Psi||^2 = lambda_max(Gy Gy^T) lambda_max(Gx Gx^T); G^T's rows are G's columns */
+	double l[2];
+	const struct c0_band *T[2] = { &p->GyT, &p->GxT };
+	for (int ax = 0; ax < 2; ax++) {
+		struct c0_band G, GG;
+		c0_band_transpose(T[ax], &G);      /* N x L */
+		int N = G.m;
+		c0_band_alloc(&GG, N, N, N);
+		for (int i = 0; i < N; i++) {
+			GG.start[i] = 0;
+			for (int j = 0; j < N; j++) {
+				double s = 0;
+				for (int k = 0; k < G.w; k++) {
+					int a = G.start[i] + k;
+					s += G.v[(size_t)i * G.w + k] * c0_band_get(&G, j, a);
+				}
+				GG.v[(size_t)i * N + j] = s;
+			}
+		}
+		l[ax] = c0_band_lambda_max(&GG, 1000);
+		c0_band_free(&G), c0_band_free(&GG);
+	}
+	return l[0] * l[1];
+}

@@ -1,0 +1,26 @@
+/* Psi restricted to a support: intensities x on the n fine pixels of a mask
+ * Omega map to the coarse image sum_a x_a gy_a (x) gx_a, where gy_a, gx_a are
+ * the columns of the separable PSF factors (optics/psf.h). Stored as the
+ * columns themselves, so it costs n (PSF width)^2, whatever the field size.
+ * Also the graph gradient on Omega: differences across each pair of
+ * 4-neighbour pixels both in Omega. */
+#pragma once
+#include "core/band.h"
+
+#include <stdint.h>
+
+struct c0_psi_omega {
+	int Ny, Nx, Ly, Lx, n;
+	int *idx;                   /* n fine indices (row-major) */
+	struct c0_band GyT, GxT;    /* L x N: row a is column a of G */
+	int ne, *e0, *e1;           /* graph edges as positions in 0..n-1 */
+};
+
+int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma_px, const uint8_t *mask);
+void c0_psi_omega_free(struct c0_psi_omega *p);
+void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double *y);  /* n -> Ny*Nx */
+void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x);  /* Ny*Nx -> n */
+void c0_grad_omega(const struct c0_psi_omega *p, const double *x, double *g);         /* n -> ne */
+void c0_grad_omega_adjoint(const struct c0_psi_omega *p, const double *g, double *x); /* ne -> n */
+/* lambda_max(Psi^T Psi) of the full operator, an upper bound for Psi_Omega */
+double c0_psi_norm2(const struct c0_psi_omega *p);

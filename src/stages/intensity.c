@@ -1,0 +1,245 @@
+#include "stages/intensity.h"
+#include "ops/psi_omega.h"
+#include "optics/psf.h"
+#include "solve/root.h"
+#include "core/clock.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+int c0_intensity_check(const struct c0_intensity_conf *c)
+{
+	if (!(c->pixel_nm > 0))
+		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm)", c->pixel_nm);
+	if (!(c->fwhm_nm > 0))
+		return c0_fail(C0_EINVAL, "--fwhm %g: must be positive (nm)", c->fwhm_nm);
+	if (c->srf < 1 || c->srf > 16)
+		return c0_fail(C0_EINVAL, "--srf %d: must be 1..16", c->srf);
+	if (!(c->beta >= 0) || !(c->nu >= 0) || !(c->mu >= 0))
+		return c0_fail(C0_EINVAL, "--beta, --nu and --mu must be >= 0");
+	return C0_OK;
+}
+
+void c0_intensity_result_free(struct c0_intensity_result *r)
+{
+	free(r->x), free(r->b);
+	memset(r, 0, sizeof *r);
+}
+
+/* Unknowns v = [x (n), b (nb)], nb = HW (smooth), 1 (constant, scaled to a
+ * unit column) or 0. Variables fixed at zero by the active set are masked. */
+struct prob {
+	const struct c0_intensity_conf *c;
+	struct c0_psi_omega P;
+	int n, nb, NN;
+	double bscale;            /* constant mode: b = bscale * v_b */
+	double mu;
+	const double *ybar;
+	uint8_t *fixed;           /* n + nb */
+	double *dinv;             /* Jacobi preconditioner */
+	double *psi2;             /* ||psi_k||^2 on the support */
+	int *deg;                 /* graph degree of each support pixel */
+	double *y, *g, *v, *rhs;  /* workspaces */
+	int cg_iters, solves, rounds;
+};
+
+/* background smoothness: Neumann Laplacian on the coarse grid */
+static void lap_b(const struct prob *p, const double *b, double *out)
+{
+	const int Ny = p->P.Ny, Nx = p->P.Nx;
+	for (int y = 0; y < Ny; y++)
+		for (int x = 0; x < Nx; x++) {
+			double c = b[y * Nx + x], s = 0;
+			if (x > 0) s += c - b[y * Nx + x - 1];
+			if (x < Nx - 1) s += c - b[y * Nx + x + 1];
+			if (y > 0) s += c - b[(y - 1) * Nx + x];
+			if (y < Ny - 1) s += c - b[(y + 1) * Nx + x];
+			out[y * Nx + x] = s;
+		}
+}
+
+/* the normal operator of the quadratic, on the free variables */
+static void normal(void *ctx, const double *in, double *out)
+{
+	struct prob *p = ctx;
+	const int n = p->n, nb = p->nb, NN = p->NN;
+	double *v = p->v;
+	for (int i = 0; i < n + nb; i++)
+		v[i] = p->fixed[i] ? 0 : in[i];
+	c0_psi_omega_forward(&p->P, v, p->y);
+	if (nb == NN)
+		for (int i = 0; i < NN; i++)
+			p->y[i] += v[n + i];
+	else if (nb == 1)
+		for (int i = 0; i < NN; i++)
+			p->y[i] += p->bscale * v[n];
+	c0_psi_omega_adjoint(&p->P, p->y, out);
+	c0_grad_omega(&p->P, v, p->g);
+	double *gx = p->rhs + n + nb;      /* spare room after rhs */
+	c0_grad_omega_adjoint(&p->P, p->g, gx);
+	for (int i = 0; i < n; i++)
+		out[i] += p->mu * gx[i];
+	if (nb == NN) {
+		lap_b(p, v + n, out + n);
+		for (int i = 0; i < NN; i++)
+			out[n + i] = p->y[i] + p->c->beta * out[n + i];
+	} else if (nb == 1) {
+		double s = 0;
+		for (int i = 0; i < NN; i++)
+			s += p->y[i];
+		out[n] = p->bscale * s;
+	}
+	for (int i = 0; i < n + nb; i++)
+		if (p->fixed[i])
+			out[i] = 0;
+}
+
+/* Solve for the current mu: CG on the free set, then fix negative variables
+ * at zero and solve again until none is negative (an active-set projection). */
+static int solve(struct prob *p, double *sol)
+{
+	const int n = p->n, nb = p->nb, NN = p->NN;
+	double *b = p->rhs;
+	memset(p->fixed, 0, (size_t)(n + nb));
+	for (int round = 0; round < 20; round++) {
+		/* rhs = A^T ybar on the free set */
+		c0_psi_omega_adjoint(&p->P, p->ybar, b);
+		if (nb == NN)
+			memcpy(b + n, p->ybar, sizeof *b * NN);
+		else if (nb == 1) {
+			double s = 0;
+			for (int i = 0; i < NN; i++)
+				s += p->ybar[i];
+			b[n] = p->bscale * s;
+		}
+		for (int i = 0; i < n + nb; i++)
+			if (p->fixed[i])
+				b[i] = 0, sol[i] = 0;
+		for (int i = 0; i < n; i++)
+			p->dinv[i] = p->fixed[i] ? 1 : 1 / (p->psi2[i] + p->mu * p->deg[i]);
+		for (int i = 0; i < nb; i++) {
+			int y = i / p->P.Nx, x = i % p->P.Nx;
+			int d = (y > 0) + (y < p->P.Ny - 1) + (x > 0) + (x < p->P.Nx - 1);
+			p->dinv[n + i] = p->fixed[n + i] ? 1 : nb == NN ? 1 / (1 + p->c->beta * d) : 1;
+		}
+		struct c0_cg_info info;
+		int st = c0_cg(normal, p, (size_t)(n + nb), b, p->dinv, sol, p->c->tol, p->c->maxit, &info);
+		if (st)
+			return st;
+		p->cg_iters += info.iters;
+		p->rounds++;
+		int neg = 0;
+		for (int i = 0; i < n + nb; i++)
+			if (!p->fixed[i] && sol[i] < 0)
+				p->fixed[i] = 1, sol[i] = 0, neg++;
+		if (!neg)
+			break;
+	}
+	p->solves++;
+	return C0_OK;
+}
+
+static double residual2(struct prob *p, const double *sol)
+{
+	const int n = p->n, NN = p->NN;
+	c0_psi_omega_forward(&p->P, sol, p->y);
+	double s = 0;
+	for (int i = 0; i < NN; i++) {
+		double bi = p->nb == NN ? sol[n + i] : p->nb == 1 ? p->bscale * sol[n] : 0;
+		double r = p->y[i] + bi - p->ybar[i];
+		s += r * r;
+	}
+	return s;
+}
+
+struct dp { struct prob *p; double *sol, target; int fail; };
+
+static double discrepancy(void *ctx, double t)
+{
+	struct dp *d = ctx;
+	d->p->mu = exp(t);
+	if (solve(d->p, d->sol))
+		d->fail = 1;
+	return residual2(d->p, d->sol) - d->target;
+}
+
+int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
+{
+	memset(res, 0, sizeof *res);
+	double t0 = c0_now();
+	int st = c0_intensity_check(c);
+	if (st)
+		return st;
+	if (c->mu == 0 && !(sigma2 > 0))
+		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give --mu)", sigma2);
+	struct prob p = { .c = c, .ybar = ybar, .NN = Ny * Nx };
+	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), mask)))
+		return st;
+	p.n = p.P.n;
+	p.nb = c->background == C0_BG_SMOOTH ? p.NN : c->background == C0_BG_CONSTANT ? 1 : 0;
+	p.bscale = 1 / sqrt((double)p.NN);
+	size_t nv = (size_t)p.n + p.nb;
+	double *sol = c0_alloc(nv, sizeof *sol);
+	p.fixed = c0_alloc(nv, 1);
+	p.dinv = c0_alloc(nv, sizeof *p.dinv);
+	p.psi2 = c0_alloc((size_t)p.n, sizeof *p.psi2);
+	p.deg = c0_alloc((size_t)p.n, sizeof *p.deg);
+	p.y = c0_alloc((size_t)p.NN, sizeof *p.y);
+	p.g = c0_alloc((size_t)p.P.ne + 1, sizeof *p.g);
+	p.v = c0_alloc(nv, sizeof *p.v);
+	p.rhs = c0_alloc(nv + p.n, sizeof *p.rhs);
+	res->x = c0_alloc((size_t)p.P.Ly * p.P.Lx, sizeof *res->x);
+	res->b = c0_alloc((size_t)p.NN, sizeof *res->b);
+	if (!sol || !p.fixed || !p.y || !p.g || !p.v || !p.rhs || !res->x || !res->b || !p.dinv || !p.psi2 || !p.deg) {
+		st = C0_ENOMEM;
+		goto out;
+	}
+	for (int k = 0; k < p.n; k++) {
+		/* ||psi_k||^2 = ||gy_a||^2 ||gx_b||^2 */
+		const int a = p.P.idx[k] / p.P.Lx, b = p.P.idx[k] % p.P.Lx;
+		double sy = 0, sx = 0;
+		for (int i = 0; i < p.P.GyT.w; i++)
+			sy += p.P.GyT.v[(size_t)a * p.P.GyT.w + i] * p.P.GyT.v[(size_t)a * p.P.GyT.w + i];
+		for (int j = 0; j < p.P.GxT.w; j++)
+			sx += p.P.GxT.v[(size_t)b * p.P.GxT.w + j] * p.P.GxT.v[(size_t)b * p.P.GxT.w + j];
+		p.psi2[k] = sy * sx;
+	}
+	for (int e = 0; e < p.P.ne; e++)
+		p.deg[p.P.e0[e]]++, p.deg[p.P.e1[e]]++;
+	res->Ly = p.P.Ly, res->Lx = p.P.Lx, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2;
+	double nu = c->nu > 0 ? c->nu : sqrt((double)T);
+	res->target2 = nu * nu * p.NN * sigma2 / (double)T;
+	if (c->mu > 0) {
+		p.mu = c->mu;
+		st = solve(&p, sol);
+		res->dp_status = -1;
+	} else {
+		struct dp d = { &p, sol, res->target2, 0 };
+		double t;
+		int evals;
+		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), log(1e-3), log(1e8), 0.01 * res->target2, 40, &t, &evals);
+		st = d.fail ? C0_ENOMEM : C0_OK;
+		if (!st && fabs(p.mu - exp(t)) > 1e-12 * p.mu) {   /* make sol belong to the returned mu */
+			p.mu = exp(t);
+			st = solve(&p, sol);
+		}
+	}
+	if (st)
+		goto out;
+	res->mu = p.mu;
+	res->residual2 = residual2(&p, sol);
+	for (int k = 0; k < p.n; k++)
+		res->x[p.P.idx[k]] = (float)sol[k];
+	for (int i = 0; i < p.NN; i++)
+		res->b[i] = (float)(p.nb == p.NN ? sol[p.n + i] : p.nb == 1 ? p.bscale * sol[p.n] : 0);
+	res->solves = p.solves, res->cg_iters = p.cg_iters, res->active_rounds = p.rounds;
+out:
+	free(sol), free(p.fixed), free(p.dinv), free(p.psi2), free(p.deg), free(p.y), free(p.g), free(p.v), free(p.rhs);
+	c0_psi_omega_free(&p.P);
+	res->seconds = c0_now() - t0;
+	return st;
+}

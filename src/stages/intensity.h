@@ -1,0 +1,40 @@
+/* Intensity and background of one angle on a known support (COL0RME step 2):
+ *   min_{x >= 0 on Omega, b >= 0}  1/2 ||Psi_Omega x + b - ybar||^2
+ *                                 + mu/2 ||grad_Omega x||^2 + beta/2 ||grad b||^2
+ * ybar is the stack's temporal mean (camera units), x the mean intensity per
+ * fine pixel (camera units per frame, total over the PSF), b the background
+ * including the camera offset. mu by the discrepancy principle:
+ *   ||Psi x + b - ybar||^2 = nu^2 H W sigma2 / T. */
+#pragma once
+#include "solve/cg.h"
+
+#include <stdint.h>
+
+enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };
+
+struct c0_intensity_conf {
+	double pixel_nm, fwhm_nm;  /* required */
+	int srf;                   /* 4 */
+	enum c0_background background; /* smooth */
+	double beta;               /* 20: background smoothness (coarse grid) */
+	double nu;                 /* 1; 0 means sqrt(T), the reference's choice (docs/parameters.md) */
+	double mu;                 /* 0: discrepancy principle; > 0: fixed */
+	double tol;                /* 1e-5: CG relative residual */
+	int maxit;                 /* 500 CG steps per active-set round */
+};
+#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-5, 500 }
+
+struct c0_intensity_result {
+	int Ly, Lx, Ny, Nx;
+	float *x;                  /* Ly x Lx, zero off the support */
+	float *b;                  /* Ny x Nx */
+	double mu, residual2, target2, sigma2;
+	int dp_status;             /* enum c0_root_status; 0 = discrepancy met */
+	int solves, cg_iters, active_rounds;
+	double seconds;
+};
+
+int c0_intensity_check(const struct c0_intensity_conf *c);
+int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
+void c0_intensity_result_free(struct c0_intensity_result *r);

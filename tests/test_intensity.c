@@ -1,0 +1,202 @@
+/* Intensity and background on a support: operator adjoints and fast-vs-slow
+ * checks, the discrepancy equation, background accuracy, PSNR on simulated
+ * data, and refusals. */
+#define _POSIX_C_SOURCE 200809L
+#include "check.h"
+#include "ops/psi_omega.h"
+#include "ops/covop.h"
+#include "stages/intensity.h"
+#include "sim/sim.h"
+#include "eval/metrics.h"
+#include "core/rng.h"
+#include "core/err.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static struct c0_rng rng;
+
+static double dot(const double *a, const double *b, size_t n)
+{
+	double s = 0;
+	for (size_t i = 0; i < n; i++)
+		s += a[i] * b[i];
+	return s;
+}
+
+static uint8_t *random_mask(int L, double frac)
+{
+	uint8_t *m = malloc((size_t)L);
+	for (int i = 0; i < L; i++)
+		m[i] = c0_rng_uniform(&rng) < frac;
+	return m;
+}
+
+static void test_operators(void)
+{
+	const int Ny = 9, Nx = 7, r = 3, L = Ny * r * Nx * r;
+	uint8_t *m = random_mask(L, 0.3);
+	struct c0_psi_omega P;
+	CHECK(c0_psi_omega_init(&P, Ny, Nx, r, 1.1, m) == C0_OK);
+	double *x = malloc(sizeof(double) * P.n), *xa = malloc(sizeof(double) * P.n), *y = malloc(sizeof(double) * Ny * Nx);
+	double *yy = malloc(sizeof(double) * Ny * Nx), *g = malloc(sizeof(double) * P.ne), *ga = malloc(sizeof(double) * P.ne);
+	for (int i = 0; i < P.n; i++)
+		x[i] = c0_rng_uniform(&rng);
+	for (int i = 0; i < Ny * Nx; i++)
+		yy[i] = c0_rng_normal(&rng);
+	c0_psi_omega_forward(&P, x, y);
+	c0_psi_omega_adjoint(&P, yy, xa);
+	CHECK_REL(dot(y, yy, Ny * Nx), dot(x, xa, P.n), 1e-12);
+	/* against the full separable Psi applied to x scattered on the fine grid */
+	struct c0_covop op;
+	c0_covop_init(&op, Ny, Nx, r, 1.1, 0);
+	double *full = calloc(L, sizeof(double)), *ref = malloc(sizeof(double) * Ny * Nx);
+	for (int k = 0; k < P.n; k++)
+		full[P.idx[k]] = x[k];
+	c0_covop_psi(&op, full, ref);
+	double d = 0;
+	for (int i = 0; i < Ny * Nx; i++)
+		d = fmax(d, fabs(ref[i] - y[i]));
+	CHECK(d < 1e-12);
+	/* graph gradient adjoint, and edges only between 4-neighbours inside the mask */
+	for (int e = 0; e < P.ne; e++)
+		ga[e] = c0_rng_normal(&rng);
+	c0_grad_omega(&P, x, g);
+	c0_grad_omega_adjoint(&P, ga, xa);
+	CHECK_REL(dot(g, ga, P.ne), dot(x, xa, P.n), 1e-12);
+	int ok = 1;
+	for (int e = 0; e < P.ne; e++) {
+		int a = P.idx[P.e0[e]], b = P.idx[P.e1[e]];
+		ok &= b - a == 1 || b - a == Nx * r;
+	}
+	CHECK(ok && P.ne > 0);
+	/* ||Psi||^2 bounds ||Psi_Omega x||^2 / ||x||^2 */
+	CHECK(dot(y, y, Ny * Nx) <= c0_psi_norm2(&P) * dot(x, x, P.n) * (1 + 1e-12));
+	c0_covop_free(&op);
+	c0_psi_omega_free(&P);
+	free(m), free(x), free(xa), free(y), free(yy), free(g), free(ga), free(full), free(ref);
+}
+
+/* data made by the model itself: the discrepancy target is reachable */
+static void test_discrepancy(void)
+{
+	const int Ny = 24, Nx = 24, r = 4, L = Ny * r * Nx * r;
+	uint8_t *m = calloc(L, 1);
+	for (int a = 10; a < 86; a++)        /* two lines on the fine grid */
+		m[a * Nx * r + 30] = m[40 * Nx * r + a] = 1;
+	struct c0_psi_omega P;
+	c0_psi_omega_init(&P, Ny, Nx, r, 0.97, m);
+	double *x = malloc(sizeof(double) * P.n), *y = malloc(sizeof(double) * Ny * Nx);
+	for (int k = 0; k < P.n; k++)
+		x[k] = 50 + 20 * sin(k * 0.1);
+	c0_psi_omega_forward(&P, x, y);
+	const double sigma2 = 400;
+	const int T = 100;
+	for (int i = 0; i < Ny * Nx; i++)
+		y[i] += 100 + sqrt(sigma2 / T) * c0_rng_normal(&rng);
+	struct c0_intensity_conf c = C0_INTENSITY_DEFAULTS;
+	c.pixel_nm = 100, c.fwhm_nm = 0.97 * 100 / 0.42466090014400953;
+	struct c0_intensity_result res;
+	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) == C0_OK);
+	CHECK(res.dp_status == 0);
+	CHECK_MSG(fabs(res.residual2 - res.target2) <= 0.01 * res.target2, "residual2 %g target %g", res.residual2, res.target2);
+	CHECK(res.mu > 0);
+	c0_intensity_result_free(&res);
+	/* refusals */
+	memset(m, 0, L);
+	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) != C0_OK && strstr(c0_errmsg(), "empty"));
+	c0_intensity_result_free(&res);
+	m[5] = 1;
+	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, 0, &res) != C0_OK && strstr(c0_errmsg(), "noise variance"));
+	c0_intensity_result_free(&res);
+	c.fwhm_nm = 0;
+	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) != C0_OK && strstr(c0_errmsg(), "--fwhm"));
+	c0_psi_omega_free(&P);
+	free(m), free(x), free(y);
+}
+
+/* simulated blinking data, fixed seed, true support */
+static void test_simulated(void)
+{
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	s.seed = 3, s.nangles = 1, s.frames = 300, s.width = s.height = 48;
+	struct c0_emitter *em;
+	int ne;
+	c0_sim_structure(&s, &em, &ne);
+	struct c0_sim_scene *sc;
+	c0_sim_scene_new(&s, em, ne, 0, &sc);
+	const int Ny = s.height, Nx = s.width, r = s.srf, L = Ny * r * Nx * r, N = Ny * Nx;
+	double *ph = malloc(sizeof(double) * N), *ybar = calloc(N, sizeof(double)), *s1 = calloc(N, sizeof(double));
+	float *adu = malloc(sizeof(float) * N);
+	double s2 = 0;
+	for (int t = 0; t < s.frames; t++) {
+		c0_sim_render(sc, t, ph);
+		c0_sim_camera(&s, 0, t, 8, ph, adu);
+		for (int i = 0; i < N; i++)
+			ybar[i] += adu[i] / s.frames;
+	}
+	/* truth on the fine grid, from the realised on-fractions */
+	const float *on = c0_sim_scene_onfrac(sc);
+	const double *bg = c0_sim_scene_background(sc);
+	float *xt = calloc(L, sizeof(float));
+	uint8_t *m = calloc(L, 1);
+	for (int e = 0; e < ne; e++) {
+		double mo = 0;
+		for (int t = 0; t < s.frames; t++)
+			mo += on[(size_t)e * s.frames + t];
+		int i = (int)(em[e].y / 25) * Nx * r + (int)(em[e].x / 25);
+		double p;
+		c0_tirf_p(&s.tirf, s.angles[0], &p);
+		xt[i] += (float)(em[e].brightness * exp(-p * em[e].z) * mo / s.frames);
+		m[i] |= mo > 0;
+	}
+	for (int i = 0; i < N; i++)
+		s2 += ph[i];
+	(void)s1;
+	struct c0_intensity_conf c = C0_INTENSITY_DEFAULTS;
+	c.pixel_nm = 100, c.fwhm_nm = 229;
+	struct c0_intensity_result res;
+	/* noise variance: read noise + mean Poisson level */
+	double sig2 = 64;
+	for (int i = 0; i < N; i++)
+		sig2 += (ybar[i] - s.offset) / N;
+	CHECK(c0_intensity_solve(&c, ybar, Ny, Nx, s.frames, m, sig2, &res) == C0_OK);
+	/* naive: background-corrected mean image spread evenly over the support pixels of each camera pixel */
+	float *naive = calloc(L, sizeof(float));
+	for (int y = 0; y < Ny; y++)
+		for (int x = 0; x < Nx; x++) {
+			int cnt = 0;
+			for (int a = 0; a < r; a++)
+				for (int b = 0; b < r; b++)
+					cnt += m[(y * r + a) * Nx * r + x * r + b];
+			for (int a = 0; a < r; a++)
+				for (int b = 0; b < r; b++) {
+					int i = (y * r + a) * Nx * r + x * r + b;
+					naive[i] = m[i] ? (float)((ybar[y * Nx + x] - s.offset - bg[y * Nx + x]) / cnt) : 0;
+				}
+		}
+	double pe = c0_psnr(res.x, xt, Ny * r, Nx * r, 12), pn = c0_psnr(naive, xt, Ny * r, Nx * r, 12);
+	fprintf(stderr, "intensity: PSNR %.2f dB, naive %.2f dB, mu %g, dp %d, %.2fs\n", pe, pn, res.mu, res.dp_status, res.seconds);
+	CHECK(pe > pn);
+	/* background within 10 % of the truth (offset included) away from the border */
+	double worst = 0;
+	for (int y = 3; y < Ny - 3; y++)
+		for (int x = 3; x < Nx - 3; x++) {
+			double tb = s.offset + bg[y * Nx + x];
+			worst = fmax(worst, fabs(res.b[y * Nx + x] - tb) / tb);
+		}
+	CHECK_MSG(worst <= 0.1, "background off by %.1f%%", 100 * worst);
+	c0_intensity_result_free(&res);
+	c0_sim_scene_free(sc);
+	free(em), free(ph), free(ybar), free(s1), free(adu), free(xt), free(m), free(naive);
+}
+
+int main(void)
+{
+	c0_rng_init(&rng, 5, 0);
+	RUN(test_operators);
+	RUN(test_discrepancy);
+	RUN(test_simulated);
+	return CHECK_DONE();
+}
