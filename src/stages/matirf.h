@@ -1,0 +1,38 @@
+/* MA-TIRF axial reconstruction (Soubies et al.): from per-angle images x_q,
+ *   min_{f >= 0}  sum_q 1/2 ||W_q f - x_q||^2 + kappa R(f)
+ * with W_q f = sum_j W[q][j] f_j per lateral pixel (optics/tirf.h) and
+ * R = isotropic TV (lateral weight 1, axial weight wz) or the Schatten-1
+ * (nuclear) norm of the Hessian. As in the reference: the images are scaled
+ * by one global maximum (never per angle), W's columns are normalised and the
+ * solver works on u = c f. */
+#pragma once
+#include "optics/tirf.h"
+#include "solve/admm.h"
+
+enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };
+
+struct c0_matirf_conf {
+	struct c0_tirf tirf;
+	double z0_nm, z1_nm, dz_nm;  /* 0, 400, 20: depth bins [z0, z1) */
+	enum c0_reg reg;             /* tv */
+	double kappa;                /* 2e-3: weight of R, for data scaled to max 1 */
+	double wz;                   /* 1: axial weight of R relative to lateral */
+	struct c0_admm_conf admm;    /* 300 iterations, tol 1e-4, rho 1, 10 CG steps */
+};
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 2e-3, 1, C0_ADMM_DEFAULTS }
+
+struct c0_matirf_result {
+	int nz, ny, nx;
+	float *f;                    /* nz x ny x nx, in the images' units per bin */
+	double *z_nm;                /* bin centres */
+	float *depth;                /* ny x nx intensity-weighted mean depth (nm), 0 where empty */
+	float *total;                /* ny x nx sum over depth */
+	int iters, converged;
+	double seconds, scale;
+};
+
+int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles);
+/* x: nq images of ny x nx; gain: nq per-angle gains or NULL. */
+int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
+		    const float *const *x, int ny, int nx, struct c0_matirf_result *res);
+void c0_matirf_result_free(struct c0_matirf_result *r);
