@@ -127,9 +127,8 @@ static void test_simulated(void)
 	struct c0_sim_scene *sc;
 	c0_sim_scene_new(&s, em, ne, 0, &sc);
 	const int Ny = s.height, Nx = s.width, r = s.srf, L = Ny * r * Nx * r, N = Ny * Nx;
-	double *ph = malloc(sizeof(double) * N), *ybar = calloc(N, sizeof(double)), *s1 = calloc(N, sizeof(double));
+	double *ph = malloc(sizeof(double) * N), *ybar = calloc(N, sizeof(double));
 	float *adu = malloc(sizeof(float) * N);
-	double s2 = 0;
 	for (int t = 0; t < s.frames; t++) {
 		c0_sim_render(sc, t, ph);
 		c0_sim_camera(&s, 0, t, 8, ph, adu);
@@ -151,9 +150,6 @@ static void test_simulated(void)
 		xt[i] += (float)(em[e].brightness * exp(-p * em[e].z) * mo / s.frames);
 		m[i] |= mo > 0;
 	}
-	for (int i = 0; i < N; i++)
-		s2 += ph[i];
-	(void)s1;
 	struct c0_intensity_conf c = C0_INTENSITY_DEFAULTS;
 	c.pixel_nm = 100, c.fwhm_nm = 229;
 	struct c0_intensity_result res;
@@ -189,7 +185,7 @@ static void test_simulated(void)
 	CHECK_MSG(worst <= 0.1, "background off by %.1f%%", 100 * worst);
 	c0_intensity_result_free(&res);
 	c0_sim_scene_free(sc);
-	free(em), free(ph), free(ybar), free(s1), free(adu), free(xt), free(m), free(naive);
+	free(em), free(ph), free(ybar), free(adu), free(xt), free(m), free(naive);
 }
 
 int main(void)

@@ -48,6 +48,7 @@ struct ctx {
 	double kappa;
 	double rho;               /* the inverse below is for this rho */
 	double *Minv, *MWty;      /* (W^T W + rho I)^-1 and that times W^T y, per pixel */
+	double *proj;             /* scratch of the dual's size for prox_f */
 };
 
 /* prox of the data term per lateral pixel: (W^T W + rho I)^-1 (W^T y + rho v) */
@@ -173,12 +174,11 @@ static void prox_f(void *vc, double *v, double rho)
 {
 	struct ctx *c = vc;
 	const size_t M = c->np * c->nz * (c->reg == C0_REG_TV ? 3 : 6);
-	double *p = malloc(M * sizeof *p);
+	double *p = c->proj;
 	memcpy(p, v, M * sizeof *p);
 	project_dual(c, p, c->kappa / rho);
 	for (size_t i = 0; i < M; i++)
 		v[i] -= p[i];
-	free(p);
 }
 
 /* inverse of a small SPD matrix by Gauss-Jordan (nz <= 512, once) */
@@ -246,9 +246,9 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		for (size_t p = 0; p < np; p++)
 			y[q * np + p] = x[q][p] / mx;
 	double *A = c0_alloc((size_t)nz * nz, sizeof *A), *Minv = c0_alloc((size_t)nz * nz, sizeof *Minv);
-	double *MWty = c0_alloc(N, sizeof *MWty);
-	if (!A || !Minv || !MWty) {
-		free(A), free(Minv), free(MWty);
+	double *MWty = c0_alloc(N, sizeof *MWty), *proj = c0_alloc(N * ncomp, sizeof *proj);
+	if (!A || !Minv || !MWty || !proj) {
+		free(A), free(Minv), free(MWty), free(proj);
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -272,14 +272,14 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 			}
 			MWty[j * np + p] = s;
 		}
-	struct ctx ctx = { nq, nz, np, W, y, { nx, ny, nz, 1, c->wz }, c->reg, c->kappa, rho, Minv, MWty };
+	struct ctx ctx = { nq, nz, np, W, y, { nx, ny, nz, 1, c->wz }, c->reg, c->kappa, rho, Minv, MWty, proj };
 	struct c0_admm_problem pb = { N, N * ncomp, &ctx, prox_h, prox_f, K, KT };
 	struct c0_admm_info info = { 0, 0, 0 };
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "matirf", 1);
 	if (!st)
 		st = c0_admm_solve(&pb, &c->admm, u, &info);
-	free(A), free(Minv), free(MWty);
+	free(A), free(Minv), free(MWty), free(proj);
 	c0_progress_end(&pr);
 	if (st)
 		goto out;
