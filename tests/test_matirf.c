@@ -2,11 +2,13 @@
  * depth recovery on synthetic volumes. */
 #include "check.h"
 #include "ops/diff3.h"
+#include "ops/grad3m.h"
 #include "optics/tirf.h"
 #include "stages/matirf.h"
 #include "core/rng.h"
 #include "core/err.h"
 
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -49,6 +51,46 @@ static void test_adjoints(void)
 					mx = fmax(mx, fabs(g[c * N + (z * 5 + y) * 7 + x]));
 	CHECK(mx < 1e-12);
 	free(v), free(g), free(h), free(va);
+}
+
+/* the gradient over mask columns: adjoint on a ragged mask, and the plain 3D
+ * gradient when the mask is full */
+static void test_grad3m(void)
+{
+	const int nx = 7, ny = 5, nz = 4, np = nx * ny;
+	uint8_t mask[35];
+	for (int p = 0; p < np; p++)
+		mask[p] = (p * 7 + 3) % 5 != 0;
+	struct c0_grad3m g;
+	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0.7) == C0_OK);
+	size_t N = (size_t)g.M * nz;
+	double v[140], va[140], d[420], e[420];
+	for (size_t i = 0; i < 3 * N; i++)
+		e[i] = c0_rng_normal(&rng);
+	for (size_t i = 0; i < N; i++)
+		v[i] = c0_rng_normal(&rng);
+	c0_grad3m_forward(&g, v, d);
+	c0_grad3m_adjoint(&g, e, va);
+	CHECK(g.M > 0 && g.M < np);
+	CHECK_REL(dot(d, e, 3 * N), dot(v, va, N), 1e-12);
+	c0_grad3m_free(&g);
+	memset(mask, 1, sizeof mask);
+	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0.7) == C0_OK);
+	struct c0_diff3 full = { nx, ny, nz, 1.3, 0.7 };
+	N = (size_t)np * nz;
+	c0_grad3m_forward(&g, v, d);
+	c0_grad3(&full, v, e);
+	double mx = 0;
+	for (size_t i = 0; i < 3 * N; i++)
+		mx = fmax(mx, fabs(d[i] - e[i]));
+	CHECK(mx < 1e-14);
+	c0_grad3m_adjoint(&g, d, va);
+	c0_grad3_adjoint(&full, d, v);
+	mx = 0;
+	for (size_t i = 0; i < N; i++)
+		mx = fmax(mx, fabs(va[i] - v[i]));
+	CHECK(mx < 1e-13);
+	c0_grad3m_free(&g);
 }
 
 static void test_i0_ratios(void)
@@ -130,19 +172,19 @@ static void test_depth(void)
 {
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
 	double res;
-	double e = depth_error(&c, 0.05, &res);
-	fprintf(stderr, "matirf TV, 5 %% noise: median depth error %.1f nm, relative residual %.3f\n", e, res);
-	/* the issue asks for 20 nm; this bar is what the current solver reaches (see the closing note) */
-	CHECK(e <= 35);
+	double e = depth_error(&c, 0.10, &res);
+	fprintf(stderr, "matirf TV, 10 %% noise: median depth error %.1f nm, relative residual %.3f\n", e, res);
+	CHECK(e <= 20);
 	c.reg = C0_REG_HESSIAN;
-	e = depth_error(&c, 0.05, &res);
-	fprintf(stderr, "matirf Hessian, 5 %% noise: median depth error %.1f nm, relative residual %.3f\n", e, res);
-	CHECK(e <= 45);
+	e = depth_error(&c, 0.10, &res);
+	fprintf(stderr, "matirf Hessian, 10 %% noise: median depth error %.1f nm, relative residual %.3f\n", e, res);
+	CHECK(e <= 20);
 	/* no noise, tiny regularisation: the data residual goes to the floor */
 	c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 	c.kappa = 1e-6;
-	c.admm.maxit = 600;
-	c.admm.tol = 1e-7;
+	c.sparsity = 0;
+	c.pdhg.maxit = 20000;
+	c.pdhg.tol = 1e-7;
 	e = depth_error(&c, 0, &res);
 	fprintf(stderr, "matirf noiseless: relative residual %.2e, median depth error %.1f nm\n", res, e);
 	CHECK(res < 1e-2);
@@ -162,6 +204,7 @@ int main(void)
 {
 	c0_rng_init(&rng, 17, 0);
 	RUN(test_adjoints);
+	RUN(test_grad3m);
 	RUN(test_i0_ratios);
 	RUN(test_depth);
 	RUN(test_refusals);

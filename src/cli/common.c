@@ -3,6 +3,8 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "io/png.h"
+#include "stages/depthcode.h"
 
 #include <limits.h>
 #include <stdio.h>
@@ -166,5 +168,99 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 	cJSON_AddNumberToObject(p, "beta", ic->beta);
 	cJSON_AddNumberToObject(p, "nu", ic->nu);
 	cJSON_AddNumberToObject(p, "fixed_mu", ic->mu);
+	return C0_OK;
+}
+
+void c0_matirf_cli_opts(struct c0_matirf_cli *m, struct c0_opt *o)
+{
+	m->reg = m->c.reg == C0_REG_TV ? "tv" : "hessian";
+	const struct c0_opt rows[C0_MATIRF_CLI_OPTS] = {
+		{ "angles", 0, C0_OPT_DOUBLES, m->angles, "DEG,...", "incidence angle in the glass of each stack/image, same order", "none", 64, &m->nangles },
+		{ "n-glass", 0, C0_OPT_DOUBLE, &m->c.tirf.n_glass, "N", "refractive index of the coverslip and immersion", NULL, 0, NULL },
+		{ "n-sample", 0, C0_OPT_DOUBLE, &m->c.tirf.n_sample, "N", "refractive index of the sample", NULL, 0, NULL },
+		{ "wavelength", 0, C0_OPT_DOUBLE, &m->c.tirf.wavelength_nm, "NM", "excitation wavelength in vacuum", NULL, 0, NULL },
+		{ "s-fraction", 0, C0_OPT_DOUBLE, &m->c.tirf.s_fraction, "F", "share of s-polarised excitation in I0", NULL, 0, NULL },
+		{ "gains", 0, C0_OPT_DOUBLES, m->gains, "G,...", "per-angle gain calibration (multiplies I0)", "1 for every angle", 64, &m->ngains },
+		{ "z-range", 0, C0_OPT_DOUBLES, m->zr, "MIN,MAX,STEP", "depth bins in nm", "0,400,20", 3, &m->nzr },
+		{ "reg", 0, C0_OPT_STRING, &m->reg, "tv|hessian", "regulariser: total variation or Hessian-Schatten", NULL, 0, NULL },
+		{ "kappa", 0, C0_OPT_DOUBLE, &m->c.kappa, "K", "regularisation weight (images scaled to a maximum of 1)", NULL, 0, NULL },
+		{ "sparsity", 0, C0_OPT_DOUBLE, &m->c.sparsity, "S", "weight of the l1 term that keeps few depths per pixel", NULL, 0, NULL },
+		{ "axial-weight", 0, C0_OPT_DOUBLE, &m->c.wz, "W", "axial weight of the regulariser relative to lateral", NULL, 0, NULL },
+		{ "matirf-iterations", 0, C0_OPT_INT, &m->c.pdhg.maxit, "N", "maximum primal-dual iterations", NULL, 0, NULL },
+	};
+	memcpy(o, rows, sizeof rows);
+}
+
+int c0_matirf_cli_finish(struct c0_matirf_cli *m, int nimages)
+{
+	if (!strcmp(m->reg, "tv"))
+		m->c.reg = C0_REG_TV;
+	else if (!strcmp(m->reg, "hessian"))
+		m->c.reg = C0_REG_HESSIAN;
+	else
+		return c0_fail(C0_EINVAL, "--reg %s: expected tv or hessian", m->reg);
+	if (m->nzr && m->nzr != 3)
+		return c0_fail(C0_EINVAL, "--z-range: expected MIN,MAX,STEP in nm");
+	if (m->nzr)
+		m->c.z0_nm = m->zr[0], m->c.z1_nm = m->zr[1], m->c.dz_nm = m->zr[2];
+	if (m->nangles != nimages)
+		return c0_fail(C0_EINVAL, "--angles: %d angles for %d stacks (one per stack, same order)", m->nangles, nimages);
+	if (m->ngains && m->ngains != nimages)
+		return c0_fail(C0_EINVAL, "--gains: %d gains for %d stacks", m->ngains, nimages);
+	for (int q = 0; q < m->ngains; q++)
+		if (!(m->gains[q] > 0))
+			return c0_fail(C0_EINVAL, "--gains: gain %d is %g, must be > 0", q + 1, m->gains[q]);
+	return c0_matirf_check(&m->c, m->nangles, m->angles);
+}
+
+int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const float *const *img, int ny, int nx,
+		  double pixel_nm, const char *prefix, const char *key, struct c0_matirf_result *res, cJSON *rep)
+{
+	int st = c0_matirf_solve(&m->c, m->nangles, m->angles, m->ngains ? m->gains : NULL, img, ny, nx, res);
+	if (st)
+		return st;
+	char name[128];
+	struct c0_tiff_wopts o = { .width = nx, .height = ny, .slices = res->nz, .dtype = C0_F32,
+				   .pixel_size_nm = pixel_nm, .z_spacing_nm = m->c.dz_nm, .software = "col0rme" };
+	snprintf(name, sizeof name, "%svolume.tif", prefix);
+	if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, res->f)))
+		return st;
+	o.slices = 1;
+	snprintf(name, sizeof name, "%sdepth.tif", prefix);
+	if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, res->depth)))
+		return st;
+	uint8_t *rgb;
+	int w, h;
+	if ((st = c0_depthcode(res->f, res->nz, ny, nx, m->c.z0_nm, m->c.z0_nm + res->nz * m->c.dz_nm, &rgb, &w, &h)))
+		return st;
+	snprintf(name, sizeof name, "%sdepth.png", prefix);
+	st = c0_png_write_rgb(c0_outdir_file(out, name), w, h, rgb);
+	free(rgb);
+	if (st)
+		return st;
+	cJSON *j = cJSON_AddObjectToObject(rep, key);
+	c0_report_add_array(j, "angles_deg", m->angles, m->nangles);
+	if (m->ngains)
+		c0_report_add_array(j, "gains", m->gains, m->ngains);
+	double pen[64];
+	for (int q = 0; q < m->nangles; q++)
+		c0_tirf_p(&m->c.tirf, m->angles[q], &pen[q]), pen[q] = 1 / pen[q];
+	c0_report_add_array(j, "penetration_depth_nm", pen, m->nangles);
+	cJSON_AddNumberToObject(j, "critical_angle_deg", c0_tirf_critical_deg(&m->c.tirf));
+	cJSON_AddNumberToObject(j, "n_glass", m->c.tirf.n_glass);
+	cJSON_AddNumberToObject(j, "n_sample", m->c.tirf.n_sample);
+	cJSON_AddNumberToObject(j, "wavelength_nm", m->c.tirf.wavelength_nm);
+	cJSON_AddNumberToObject(j, "s_fraction", m->c.tirf.s_fraction);
+	c0_report_add_array(j, "z_nm", res->z_nm, res->nz);
+	if (!cJSON_GetObjectItem(rep, "z_nm"))
+		c0_report_add_array(rep, "z_nm", res->z_nm, res->nz);
+	cJSON_AddStringToObject(j, "regulariser", m->c.reg == C0_REG_TV ? "tv" : "hessian");
+	cJSON_AddNumberToObject(j, "kappa", m->c.kappa);
+	cJSON_AddNumberToObject(j, "axial_weight", m->c.wz);
+	cJSON_AddNumberToObject(j, "sparsity", m->c.sparsity);
+	cJSON_AddNumberToObject(j, "data_scale", res->scale);
+	cJSON_AddNumberToObject(j, "iterations", res->iters);
+	cJSON_AddBoolToObject(j, "converged", res->converged);
+	cJSON_AddNumberToObject(j, "seconds", res->seconds);
 	return C0_OK;
 }

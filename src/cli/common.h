@@ -23,3 +23,24 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
 		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
 		     cJSON *rep);
+
+#include "stages/matirf.h"
+#include "cli/opts.h"
+
+/* The MA-TIRF options shared by 'matirf' and 'run'. */
+struct c0_matirf_cli {
+	struct c0_matirf_conf c;
+	double angles[64], gains[64], zr[3];
+	int nangles, ngains, nzr;
+	const char *reg;
+};
+#define C0_MATIRF_CLI_OPTS 12
+/* Fills C0_MATIRF_CLI_OPTS rows of o from m (which holds the defaults). */
+void c0_matirf_cli_opts(struct c0_matirf_cli *m, struct c0_opt *o);
+/* Turns the parsed strings and lists into m->c; nimages: expected angles. */
+int c0_matirf_cli_finish(struct c0_matirf_cli *m, int nimages);
+/* Reconstructs the volume from nq images (ny x nx, pixel pixel_nm) and writes
+ * PREFIXvolume.tif, PREFIXdepth.tif (mean depth) and PREFIXdepth.png; fills
+ * rep[key]. */
+int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const float *const *img, int ny, int nx,
+		  double pixel_nm, const char *prefix, const char *key, struct c0_matirf_result *res, cJSON *rep);

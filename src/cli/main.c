@@ -16,6 +16,7 @@ static const struct {
 	{ "info", cmd_info, "describe TIFF stacks: size, frames, type, calibration, statistics" },
 	{ "simulate", cmd_simulate, "simulate MA-TIRF blinking stacks with ground truth" },
 	{ "intensity", cmd_intensity, "per-angle intensity and background on a support" },
+	{ "matirf", cmd_matirf, "MA-TIRF axial reconstruction from one image per angle" },
 	{ "support", cmd_support, "COL0RME support estimation from the stacks' covariance" },
 };
 

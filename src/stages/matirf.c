@@ -1,5 +1,7 @@
 #include "stages/matirf.h"
 #include "ops/diff3.h"
+#include "ops/grad3m.h"
+#include "solve/pdhg.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -7,6 +9,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <stdint.h>
 #include <string.h>
 
 #define MAXQ 64
@@ -27,8 +30,8 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 		return c0_fail(C0_EINVAL, "--z-range %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
 		return c0_fail(C0_EINVAL, "--z-range: more than 512 depth bins");
-	if (!(c->kappa >= 0) || !(c->wz >= 0))
-		return c0_fail(C0_EINVAL, "--kappa and --axial-weight must be >= 0");
+	if (!(c->kappa >= 0) || !(c->wz >= 0) || !(c->sparsity >= 0))
+		return c0_fail(C0_EINVAL, "--kappa, --axial-weight and --sparsity must be >= 0");
 	return C0_OK;
 }
 
@@ -39,54 +42,58 @@ void c0_matirf_result_free(struct c0_matirf_result *r)
 }
 
 struct ctx {
-	int nq, nz;
-	size_t np;                /* lateral pixels */
+	int nq, nz, M;            /* columns: the lateral pixels solved for */
+	size_t N;                 /* M * nz voxels */
 	const double *W;          /* nq x nz, column-normalised */
-	const double *y;          /* nq x np, scaled data */
-	struct c0_diff3 d;
+	const double *b;          /* nq x M, scaled data */
 	enum c0_reg reg;
-	double kappa;
-	double rho;               /* the inverse below is for this rho */
-	double *Minv, *MWty;      /* (W^T W + rho I)^-1 and that times W^T y, per pixel */
-	double *proj;             /* scratch of the dual's size for prox_f */
+	struct c0_grad3m g;       /* TV: gradient over the columns */
+	struct c0_diff3 d;        /* Hessian: full grid (M = all pixels) */
+	double kappa, l1;
 };
 
-/* prox of the data term per lateral pixel: (W^T W + rho I)^-1 (W^T y + rho v) */
-static void prox_h(void *vc, const double *v, double rho, double *out)
-{
-	struct ctx *c = vc;
-	(void)rho;     /* Minv was built for c->rho */
-	const int nz = c->nz;
-#pragma omp parallel for if (c->np > 4096)
-	for (size_t p = 0; p < c->np; p++) {
-		double b[512];
-		for (int j = 0; j < nz; j++)
-			b[j] = v[j * c->np + p];
-		for (int j = 0; j < nz; j++) {
-			double s = 0;
-			for (int k = 0; k < nz; k++)
-				s += c->Minv[j * nz + k] * b[k];
-			out[j * c->np + p] = c->MWty[j * c->np + p] + c->rho * s;
-		}
-	}
-}
-
+/* K u = [W u per column; R's operator u] */
 static void K(void *vc, const double *u, double *y)
 {
 	struct ctx *c = vc;
+	const size_t M = (size_t)c->M;
+#pragma omp parallel for schedule(static) if (c->N > 50000)
+	for (size_t k = 0; k < M; k++)
+		for (int q = 0; q < c->nq; q++) {
+			double s = 0;
+			for (int j = 0; j < c->nz; j++)
+				s += c->W[q * c->nz + j] * u[j * M + k];
+			y[q * M + k] = s;
+		}
 	if (c->reg == C0_REG_TV)
-		c0_grad3(&c->d, u, y);
+		c0_grad3m_forward(&c->g, u, y + c->nq * M);
 	else
-		c0_hess3(&c->d, u, y);
+		c0_hess3(&c->d, u, y + c->nq * M);
 }
 
 static void KT(void *vc, const double *y, double *u)
 {
 	struct ctx *c = vc;
+	const size_t M = (size_t)c->M;
 	if (c->reg == C0_REG_TV)
-		c0_grad3_adjoint(&c->d, y, u);
+		c0_grad3m_adjoint(&c->g, y + c->nq * M, u);
 	else
-		c0_hess3_adjoint(&c->d, y, u);
+		c0_hess3_adjoint(&c->d, y + c->nq * M, u);
+#pragma omp parallel for schedule(static) if (c->N > 50000)
+	for (size_t k = 0; k < M; k++)
+		for (int j = 0; j < c->nz; j++) {
+			double s = 0;
+			for (int q = 0; q < c->nq; q++)
+				s += c->W[q * c->nz + j] * y[q * M + k];
+			u[j * M + k] += s;
+		}
+}
+
+static void prox_g(void *vc, double *u, const double *tau)
+{
+	struct ctx *c = vc;
+	for (size_t i = 0; i < c->N; i++)
+		u[i] = fmax(u[i] - tau[i] * c->l1, 0);
 }
 
 /* eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi */
@@ -127,9 +134,9 @@ static void eig3(double a[3][3], double v[3][3])
 
 /* projection onto the radius-k ball of the dual norm (group l2 for TV,
  * spectral for Schatten-1) */
-static void project_dual(struct ctx *c, double *y, double k)
+static void project_dual(const struct ctx *c, double *y, double k)
 {
-	const size_t N = c->np * c->nz;
+	const size_t N = c->N;
 	if (c->reg == C0_REG_TV) {
 #pragma omp parallel for if (N > 100000)
 		for (size_t i = 0; i < N; i++) {
@@ -169,39 +176,15 @@ static void project_dual(struct ctx *c, double *y, double k)
 	}
 }
 
-/* prox of (kappa/rho) R by Moreau: v - projection of v onto the kappa/rho ball */
-static void prox_f(void *vc, double *v, double rho)
+/* F*(y) for F = 1/2 ||. - b||^2 (data rows) + kappa R (regulariser rows):
+ * the data part shrinks, the regulariser part projects on the kappa ball */
+static void prox_fstar(void *vc, double *y, const double *sigma)
 {
 	struct ctx *c = vc;
-	const size_t M = c->np * c->nz * (c->reg == C0_REG_TV ? 3 : 6);
-	double *p = c->proj;
-	memcpy(p, v, M * sizeof *p);
-	project_dual(c, p, c->kappa / rho);
-	for (size_t i = 0; i < M; i++)
-		v[i] -= p[i];
-}
-
-/* inverse of a small SPD matrix by Gauss-Jordan (nz <= 512, once) */
-static int invert(double *A, int n, double *inv)
-{
-	for (int i = 0; i < n; i++)
-		for (int j = 0; j < n; j++)
-			inv[i * n + j] = i == j;
-	for (int c = 0; c < n; c++) {
-		double piv = A[c * n + c];
-		if (!(fabs(piv) > 0))
-			return c0_fail(C0_EINVAL, "matirf: singular depth system");
-		for (int j = 0; j < n; j++)
-			A[c * n + j] /= piv, inv[c * n + j] /= piv;
-		for (int r = 0; r < n; r++) {
-			if (r == c)
-				continue;
-			double f = A[r * n + c];
-			for (int j = 0; j < n; j++)
-				A[r * n + j] -= f * A[c * n + j], inv[r * n + j] -= f * inv[c * n + j];
-		}
-	}
-	return C0_OK;
+	const size_t nd = (size_t)c->nq * c->M;
+	for (size_t i = 0; i < nd; i++)
+		y[i] = (y[i] - sigma[i] * c->b[i]) / (1 + sigma[i]);
+	project_dual(c, y + nd, c->kappa);
 }
 
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
@@ -213,7 +196,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (st)
 		return st;
 	const int nz = (int)ceil((c->z1_nm - c->z0_nm) / c->dz_nm - 1e-9);
-	const size_t np = (size_t)ny * nx, N = np * nz;
+	const size_t np = (size_t)ny * nx;
 	double W[MAXQ * 512], col[512];
 	if ((st = c0_tirf_weights(&c->tirf, nq, angles, gain, nz, c->z0_nm, c->dz_nm, W)))
 		return st;
@@ -232,62 +215,81 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (!(mx > 0))
 		return c0_fail(C0_EINVAL, "the angle images are empty (no positive value)");
 	res->scale = mx;
-	double *y = c0_alloc((size_t)nq * np, sizeof *y), *u = c0_alloc(N, sizeof *u);
-	int ncomp = c->reg == C0_REG_TV ? 3 : 6;
-	res->f = c0_alloc(N, sizeof *res->f);
+	/* TV solves only for the pixels with signal in some image (a pixel that
+	 * is zero at every angle has f = 0); the Hessian works on the full grid */
+	uint8_t *mask = c0_alloc(np, 1);
+	struct ctx ctx = { .nq = nq, .nz = nz, .W = W, .reg = c->reg, .kappa = c->kappa, .l1 = c->sparsity,
+			   .d = { nx, ny, nz, 1, c->wz } };
+	if (!mask)
+		return C0_ENOMEM;
+	for (size_t p = 0; p < np; p++)
+		for (int q = 0; q < nq; q++)
+			mask[p] |= c->reg == C0_REG_HESSIAN || x[q][p] > 0;
+	st = c0_grad3m_init(&ctx.g, mask, ny, nx, nz, 1, c->wz);
+	free(mask);
+	if (st)
+		return st;
+	const size_t M = (size_t)ctx.g.M, N = M * nz, nd = (size_t)nq * M;
+	const int ncomp = c->reg == C0_REG_TV ? 3 : 6;
+	ctx.M = (int)M, ctx.N = N;
+	const size_t m = nd + ncomp * N;
+	double *b = c0_alloc(nd, sizeof *b), *u = c0_alloc(N, sizeof *u), *y = c0_alloc(m, sizeof *y);
+	double *tau = c0_alloc(N, sizeof *tau), *sigma = c0_alloc(m, sizeof *sigma);
+	res->f = c0_alloc(np * nz, sizeof *res->f);
 	res->z_nm = c0_alloc((size_t)nz, sizeof *res->z_nm);
 	res->depth = c0_alloc(np, sizeof *res->depth);
 	res->total = c0_alloc(np, sizeof *res->total);
-	if (!y || !u || !res->f || !res->z_nm || !res->depth || !res->total) {
+	if (!b || !u || !y || !tau || !sigma || !res->f || !res->z_nm || !res->depth || !res->total) {
 		st = C0_ENOMEM;
 		goto out;
 	}
+	ctx.b = b;
 	for (int q = 0; q < nq; q++)
-		for (size_t p = 0; p < np; p++)
-			y[q * np + p] = x[q][p] / mx;
-	double *A = c0_alloc((size_t)nz * nz, sizeof *A), *Minv = c0_alloc((size_t)nz * nz, sizeof *Minv);
-	double *MWty = c0_alloc(N, sizeof *MWty), *proj = c0_alloc(N * ncomp, sizeof *proj);
-	if (!A || !Minv || !MWty || !proj) {
-		free(A), free(Minv), free(MWty), free(proj);
-		st = C0_ENOMEM;
-		goto out;
+		for (size_t k = 0; k < M; k++)
+			b[q * M + k] = x[q][ctx.g.pixel[k]] / mx;
+	/* diagonal steps: 1 / (absolute row or column sums of K) */
+	const double wa[3] = { 1, 1, c->wz };
+	double hcol = 0;
+	for (int a = 0; a < 3; a++)
+		for (int e = a; e < 3; e++)
+			hcol += (a == e ? 4 : 4 * sqrt(2.0)) * wa[a] * wa[e];
+	for (int j = 0; j < nz; j++) {
+		double sw = 0;
+		for (int q = 0; q < nq; q++)
+			sw += W[q * nz + j];
+		for (size_t k = 0; k < M; k++) {
+			double r = c->reg == C0_REG_TV ? c0_grad3m_colsum(&ctx.g, (int)k, j) : hcol;
+			tau[j * M + k] = 1 / (sw + r);
+		}
 	}
-	const double rho = c->admm.rho;
-	for (int j = 0; j < nz; j++)
-		for (int k = 0; k < nz; k++) {
-			double s = j == k ? rho : 0;
-			for (int q = 0; q < nq; q++)
-				s += W[q * nz + j] * W[q * nz + k];
-			A[j * nz + k] = s;
-		}
-	st = invert(A, nz, Minv);
-	for (size_t p = 0; !st && p < np; p++)
-		for (int j = 0; j < nz; j++) {
-			double s = 0;
-			for (int k = 0; k < nz; k++) {
-				double wty = 0;
-				for (int q = 0; q < nq; q++)
-					wty += W[q * nz + k] * y[q * np + p];
-				s += Minv[j * nz + k] * wty;
-			}
-			MWty[j * np + p] = s;
-		}
-	struct ctx ctx = { nq, nz, np, W, y, { nx, ny, nz, 1, c->wz }, c->reg, c->kappa, rho, Minv, MWty, proj };
-	struct c0_admm_problem pb = { N, N * ncomp, &ctx, prox_h, prox_f, K, KT };
-	struct c0_admm_info info = { 0, 0, 0 };
+	for (int q = 0; q < nq; q++) {
+		double sw = 0;
+		for (int j = 0; j < nz; j++)
+			sw += W[q * nz + j];
+		for (size_t k = 0; k < M; k++)
+			sigma[q * M + k] = 1 / sw;
+	}
+	for (int comp = 0; comp < ncomp; comp++) {
+		static const int HA[6] = { 0, 1, 2, 0, 0, 1 }, HB[6] = { 0, 1, 2, 1, 2, 2 };
+		double rs = c->reg == C0_REG_TV ? 2 * wa[comp]
+			  : (comp < 3 ? 4 : 4 * sqrt(2.0)) * wa[HA[comp]] * wa[HB[comp]];
+		double v = rs > 0 ? 1 / rs : 1;
+		for (size_t i = 0; i < N; i++)
+			sigma[nd + comp * N + i] = v;
+	}
+	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, prox_g, prox_fstar, tau, sigma };
+	struct c0_pdhg_info info;
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "matirf", 1);
-	if (!st)
-		st = c0_admm_solve(&pb, &c->admm, u, &info);
-	free(A), free(Minv), free(MWty), free(proj);
+	st = c0_pdhg_solve(&pb, &c->pdhg, u, y, &info);
 	c0_progress_end(&pr);
 	if (st)
 		goto out;
 	res->nz = nz, res->ny = ny, res->nx = nx, res->iters = info.iters, res->converged = info.converged;
 	for (int j = 0; j < nz; j++) {
 		res->z_nm[j] = c->z0_nm + (j + 0.5) * c->dz_nm;
-		for (size_t p = 0; p < np; p++)
-			res->f[j * np + p] = (float)(u[j * np + p] / col[j] * mx);
+		for (size_t k = 0; k < M; k++)
+			res->f[j * np + ctx.g.pixel[k]] = (float)(u[j * M + k] / col[j] * mx);
 	}
 	for (size_t p = 0; p < np; p++) {
 		double s = 0, sz = 0;
@@ -297,7 +299,10 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		res->depth[p] = s > 0 ? (float)(sz / s) : 0;
 	}
 out:
-	free(y), free(u);
+	c0_grad3m_free(&ctx.g);
+	free(b), free(u), free(y), free(tau), free(sigma);
+	if (st)
+		c0_matirf_result_free(res);
 	res->seconds = c0_now() - t0;
 	return st;
 }

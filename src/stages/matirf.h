@@ -1,13 +1,16 @@
 /* MA-TIRF axial reconstruction (Soubies et al.): from per-angle images x_q,
- *   min_{f >= 0}  sum_q 1/2 ||W_q f - x_q||^2 + kappa R(f)
+ *   min_{f >= 0}  sum_q 1/2 ||W_q f - x_q||^2 + kappa R(f) + s sum f
  * with W_q f = sum_j W[q][j] f_j per lateral pixel (optics/tirf.h) and
  * R = isotropic TV (lateral weight 1, axial weight wz) or the Schatten-1
- * (nuclear) norm of the Hessian. As in the reference: the images are scaled
+ * (nuclear) norm of the Hessian. The l1 term s sum f (f >= 0) favours few
+ * depths per pixel: without it TV spreads each emitter over depth and the
+ * mean depth drifts towards the middle of the range (docs/parameters.md).
+ * As in the reference: the images are scaled
  * by one global maximum (never per angle), W's columns are normalised and the
  * solver works on u = c f. */
 #pragma once
 #include "optics/tirf.h"
-#include "solve/admm.h"
+#include "solve/pdhg.h"
 
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };
 
@@ -15,11 +18,12 @@ struct c0_matirf_conf {
 	struct c0_tirf tirf;
 	double z0_nm, z1_nm, dz_nm;  /* 0, 400, 20: depth bins [z0, z1) */
 	enum c0_reg reg;             /* tv */
-	double kappa;                /* 2e-3: weight of R, for data scaled to max 1 */
-	double wz;                   /* 1: axial weight of R relative to lateral */
-	struct c0_admm_conf admm;    /* 300 iterations, tol 1e-4, rho 1, 10 CG steps */
+	double kappa;                /* 3e-2: weight of R, for data scaled to max 1 */
+	double wz;                   /* 0: axial weight of R relative to lateral (0: lateral TV) */
+	double sparsity;             /* 3e-2: weight s of the l1 term, same scale */
+	struct c0_pdhg_conf pdhg;    /* 3000 iterations, tol 1e-4 */
 };
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 2e-3, 1, C0_ADMM_DEFAULTS }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, C0_PDHG_DEFAULTS }
 
 struct c0_matirf_result {
 	int nz, ny, nx;

@@ -1,0 +1,12 @@
+/* Depth colour code of a volume, as Fiji's "temporal color code" does for
+ * time: each depth bin gets a colour (near the glass red, deep blue, through
+ * yellow, green and cyan) and a pixel is the sum of its bins' colours
+ * weighted by intensity, scaled so that the 99.5th percentile of the
+ * per-pixel total is full brightness. A colour bar labelled with the depth
+ * range in nm is drawn on the right. */
+#pragma once
+#include <stdint.h>
+
+/* f: nz x h x w; z0, z1: the depth range the bar spans (nm).
+ * *rgb is allocated (ow x oh x 3 bytes). */
+int c0_depthcode(const float *f, int nz, int h, int w, double z0, double z1, uint8_t **rgb, int *ow, int *oh);
