@@ -57,7 +57,7 @@ int cmd_matirf(int argc, char **argv)
 	}
 	cJSON *rep = c0_report_new("matirf", argc, argv);
 	struct c0_matirf_result res;
-	st = c0_run_matirf(&out, &m, (const float *const *)data, (int)in[0].height, (int)in[0].width, pixel_nm, "",
+	st = c0_run_matirf(&out, &m, (const float *const *)data, NULL, (int)in[0].height, (int)in[0].width, pixel_nm, "",
 			   "matirf", &res, rep);
 	if (!st)
 		st = c0_report_write(rep, c0_outdir_file(&out, "report.json"));

@@ -5,6 +5,7 @@
 #include "core/mem.h"
 #include "io/png.h"
 #include "stages/depthcode.h"
+#include "stages/depthpool.h"
 
 #include <limits.h>
 #include <stdio.h>
@@ -114,7 +115,7 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
 		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
-		     cJSON *rep)
+		     float **corrected, cJSON *rep)
 {
 	cJSON *arr = cJSON_AddArrayToObject(rep, "intensity");
 	for (int i = 0; i < n; i++) {
@@ -132,6 +133,13 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 			st = c0_support_noise(sc, &cov, mask, &s2);
 		if (!st)
 			st = c0_intensity_solve(ic, cov.mean, cov.H, cov.W, cov.frames, mask, s2, &res[i]);
+		if (!st && corrected) {
+			size_t nc = (size_t)cov.H * cov.W;
+			if (!(corrected[i] = malloc(nc * sizeof **corrected)))
+				st = C0_ENOMEM;
+			for (size_t p = 0; !st && p < nc; p++)
+				corrected[i][p] = (float)(cov.mean[p] - res[i].b[p]);
+		}
 		int64_t frames = cov.frames;
 		c0_cov_free(&cov);
 		if (st)
@@ -213,12 +221,22 @@ int c0_matirf_cli_finish(struct c0_matirf_cli *m, int nimages)
 	return c0_matirf_check(&m->c, m->nangles, m->angles);
 }
 
-int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const float *const *img, int ny, int nx,
-		  double pixel_nm, const char *prefix, const char *key, struct c0_matirf_result *res, cJSON *rep)
+int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const float *const *img,
+		  const float *const *own, int ny, int nx, double pixel_nm, const char *prefix, const char *key,
+		  struct c0_matirf_result *res, cJSON *rep)
 {
 	int st = c0_matirf_solve(&m->c, m->nangles, m->angles, m->ngains ? m->gains : NULL, img, ny, nx, res);
 	if (st)
 		return st;
+	if (own) {
+		c0_pool_rescale(res->f, res->nz, ny, nx, m->nangles, own, img);
+		for (size_t p = 0; p < (size_t)ny * nx; p++) {
+			double s = 0;
+			for (int j = 0; j < res->nz; j++)
+				s += res->f[j * (size_t)ny * nx + p];
+			res->total[p] = (float)s;
+		}
+	}
 	char name[128];
 	struct c0_tiff_wopts o = { .width = nx, .height = ny, .slices = res->nz, .dtype = C0_F32,
 				   .pixel_size_nm = pixel_nm, .z_spacing_nm = m->c.dz_nm, .software = "col0rme" };

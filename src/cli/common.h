@@ -19,10 +19,12 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 /* Intensity and background of each stack on the support mask (Ly x Lx):
  * one pass per stack for its mean and covariance; the noise variance comes
  * from sigma2[i] when > 0, else from the covariance restricted to the mask.
- * Writes intensity_qNN.tif and background_qNN.tif, fills rep["intensity"]. */
+ * Writes intensity_qNN.tif and background_qNN.tif, fills rep["intensity"].
+ * corrected (n pointers, or NULL): receives each temporal mean minus its
+ * background (coarse grid, allocated), the standard MA-TIRF input. */
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
 		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
-		     cJSON *rep);
+		     float **corrected, cJSON *rep);
 
 #include "stages/matirf.h"
 #include "cli/opts.h"
@@ -41,6 +43,8 @@ void c0_matirf_cli_opts(struct c0_matirf_cli *m, struct c0_opt *o);
 int c0_matirf_cli_finish(struct c0_matirf_cli *m, int nimages);
 /* Reconstructs the volume from nq images (ny x nx, pixel pixel_nm) and writes
  * PREFIXvolume.tif, PREFIXdepth.tif (mean depth) and PREFIXdepth.png; fills
- * rep[key]. */
-int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const float *const *img, int ny, int nx,
-		  double pixel_nm, const char *prefix, const char *key, struct c0_matirf_result *res, cJSON *rep);
+ * rep[key]. own (or NULL): when img are pooled (stages/depthpool.h), the
+ * pixels' own images, to which the volume is rescaled. */
+int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const float *const *img,
+		  const float *const *own, int ny, int nx, double pixel_nm, const char *prefix, const char *key,
+		  struct c0_matirf_result *res, cJSON *rep);

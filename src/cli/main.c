@@ -13,10 +13,12 @@ static const struct {
 	int (*run)(int, char **);
 	const char *summary;
 } commands[] = {
+	{ "eval", cmd_eval, "accuracy against ground truth: Jaccard, PSNR, depth error" },
 	{ "info", cmd_info, "describe TIFF stacks: size, frames, type, calibration, statistics" },
 	{ "simulate", cmd_simulate, "simulate MA-TIRF blinking stacks with ground truth" },
 	{ "intensity", cmd_intensity, "per-angle intensity and background on a support" },
 	{ "matirf", cmd_matirf, "MA-TIRF axial reconstruction from one image per angle" },
+	{ "run", cmd_run, "the whole method: support, intensities, MA-TIRF volume" },
 	{ "support", cmd_support, "COL0RME support estimation from the stacks' covariance" },
 };
 

@@ -122,7 +122,9 @@ int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *np
 	for (int i = 1; i < argc; i++) {
 		char *a = argv[i];
 		if (only_pos || a[0] != '-' || !a[1]) {
-			pos[np++] = a;
+			if (spec->max_pos < 0 || np < spec->max_pos)
+				pos[np] = a;       /* pos holds max_pos entries; the count is checked below */
+			np++;
 			continue;
 		}
 		if (!strcmp(a, "--")) {

@@ -36,6 +36,7 @@ struct c0_cmd_spec {
 #define C0_NOPTS(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
 /* Returns 0 to go on, 1 when help was printed (exit 0), 2 on error (message
- * already printed). Positional arguments are left in pos[0..*npos). */
+ * already printed). Positional arguments are left in pos[0..*npos); pos
+ * needs room for max_pos of them (argc when max_pos < 0). */
 int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *npos, char **pos);
 void c0_opts_help(const struct c0_cmd_spec *spec);

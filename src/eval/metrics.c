@@ -82,3 +82,51 @@ double c0_psnr(const float *est, const float *truth, int H, int W, int margin)
 		}
 	return n && se > 0 ? 10 * log10(mx * mx / (se / n)) : INFINITY;
 }
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+	qsort(v, (size_t)n, sizeof *v, cmp_double);
+	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+int c0_depth_error(const float *est, int eh, int ew, const float *truth, const uint8_t *truth_mask, int th, int tw,
+		   int margin, struct c0_depth_err *out)
+{
+	if (eh <= 0 || ew <= 0 || th % eh || tw % ew || th / eh != tw / ew)
+		return c0_fail(C0_EINVAL, "depth map %dx%d does not divide the truth's %dx%d", ew, eh, tw, th);
+	const int r = th / eh;
+	double *e = c0_alloc((size_t)th * tw, sizeof *e), *a = c0_alloc((size_t)th * tw, sizeof *a);
+	if (!e || !a) {
+		free(e), free(a);
+		return C0_ENOMEM;
+	}
+	int n = 0, nt = 0;
+	double sum = 0;
+	for (int y = margin; y < th - margin; y++)
+		for (int x = margin; x < tw - margin; x++) {
+			size_t i = (size_t)y * tw + x;
+			if (truth_mask ? !truth_mask[i] : !(truth[i] > 0))
+				continue;
+			nt++;
+			float d = est[(size_t)(y / r) * ew + x / r];
+			if (!(d > 0))
+				continue;
+			e[n] = d - truth[i];
+			a[n] = fabs(e[n]);
+			sum += a[n++];
+		}
+	*out = (struct c0_depth_err){ n, nt, 0, 0, 0 };
+	if (n) {
+		out->mean = sum / n;
+		out->median = median(a, n);
+		out->bias = median(e, n);
+	}
+	free(e), free(a);
+	return C0_OK;
+}

@@ -1,0 +1,44 @@
+#include "stages/depthpool.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <stdlib.h>
+
+int c0_pool_window(const float *x, const uint8_t *mask, int ny, int nx, int h, float *out)
+{
+	/* summed-area table: O(1) per pixel whatever the window */
+	double *S = c0_alloc((size_t)(ny + 1) * (nx + 1), sizeof *S);
+	if (!S)
+		return C0_ENOMEM;
+	for (int y = 0; y < ny; y++)
+		for (int xx = 0; xx < nx; xx++)
+			S[(size_t)(y + 1) * (nx + 1) + xx + 1] = (mask[(size_t)y * nx + xx] ? x[(size_t)y * nx + xx] : 0)
+				+ S[(size_t)y * (nx + 1) + xx + 1] + S[(size_t)(y + 1) * (nx + 1) + xx] - S[(size_t)y * (nx + 1) + xx];
+	for (int y = 0; y < ny; y++)
+		for (int xx = 0; xx < nx; xx++) {
+			size_t p = (size_t)y * nx + xx;
+			if (!mask[p]) {
+				out[p] = 0;
+				continue;
+			}
+			int y0 = y - h < 0 ? 0 : y - h, y1 = y + h + 1 > ny ? ny : y + h + 1;
+			int x0 = xx - h < 0 ? 0 : xx - h, x1 = xx + h + 1 > nx ? nx : xx + h + 1;
+			out[p] = (float)(S[(size_t)y1 * (nx + 1) + x1] - S[(size_t)y0 * (nx + 1) + x1] - S[(size_t)y1 * (nx + 1) + x0]
+					 + S[(size_t)y0 * (nx + 1) + x0]);
+		}
+	free(S);
+	return C0_OK;
+}
+
+void c0_pool_rescale(float *f, int nz, int ny, int nx, int nq, const float *const *x, const float *const *pooled)
+{
+	const size_t np = (size_t)ny * nx;
+	for (size_t p = 0; p < np; p++) {
+		double a = 0, b = 0;
+		for (int q = 0; q < nq; q++)
+			a += x[q][p], b += pooled[q][p];
+		double s = b > 0 ? a / b : 0;
+		for (int j = 0; j < nz; j++)
+			f[j * np + p] = (float)(f[j * np + p] * s);
+	}
+}
