@@ -1,0 +1,181 @@
+"""col0rme run / matirf / eval through the CLI: the output contract, accuracy
+on simulated data against the standard MA-TIRF baseline (two seeds), 2D mode
+on the real MusiJ stacks, and refusals of bad input that leave nothing behind.
+
+usage: test_run.py COL0RME DATA_DIR full|quick
+(quick: a small simulation and no accuracy bars, for the sanitizer build)
+"""
+import json
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+import tifffile
+
+CLI, DATA, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
+passed = failed = 0
+
+
+def check(cond, what):
+    global passed, failed
+    if cond:
+        passed += 1
+    else:
+        failed += 1
+        print("FAIL:", what, file=sys.stderr)
+
+
+def cli(*args):
+    return subprocess.run([CLI, *args], capture_output=True, text=True)
+
+
+def refused(p, *needles):
+    """one error line naming the culprit, non-zero exit, nothing on stdout"""
+    lines = p.stderr.strip().splitlines()
+    return p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
+
+
+def png_size(path):
+    with open(path, "rb") as f:
+        head = f.read(24)
+    if head[:8] != b"\x89PNG\r\n\x1a\n":
+        return None
+    return struct.unpack(">II", head[16:24])
+
+
+def angles_of(sim_dir):
+    return json.load(open(os.path.join(sim_dir, "sim.json")))["parameters"]["angles_deg"]
+
+
+def pipeline(tmp, seed, sim_args):
+    data, out = os.path.join(tmp, "data%d" % seed), os.path.join(tmp, "run%d" % seed)
+    p = cli("simulate", "--seed", str(seed), "-o", data, *sim_args)
+    check(p.returncode == 0, "simulate seed %d: %s" % (seed, p.stderr))
+    ang = ",".join("%.6g" % a for a in angles_of(data))
+    stacks = sorted(os.path.join(data, f) for f in os.listdir(data) if f.startswith("stack_q"))
+    p = cli("run", "--fwhm", "229", "--angles", ang, "--baseline", "-o", out, *stacks)
+    check(p.returncode == 0, "run seed %d: %s" % (seed, p.stderr))
+    p = cli("eval", "--run", out, "--truth", data)
+    check(p.returncode == 0, "eval seed %d: %s" % (seed, p.stderr))
+    return data, out, json.loads(p.stdout) if p.returncode == 0 else None
+
+
+def test_contract(data, out):
+    sim = json.load(open(os.path.join(data, "sim.json")))["parameters"]
+    W, H, r, nq = sim["width"], sim["height"], sim["srf"], len(sim["angles_deg"])
+    sup = tifffile.TiffFile(os.path.join(out, "support.tif"))
+    s = sup.asarray()
+    check(s.shape == (H * r, W * r) and s.dtype == np.uint8 and set(np.unique(s)) <= {0, 1}, "support.tif uint8 0/1 fine grid")
+    xres = sup.pages[0].tags["XResolution"].value
+    check(abs(xres[1] / xres[0] * 1000 - 100 / r) < 1e-3, "support.tif calibrated at the fine pixel (%s)" % (xres,))
+    for q in range(1, nq + 1):
+        x = tifffile.imread(os.path.join(out, "intensity_q%02d.tif" % q))
+        b = tifffile.imread(os.path.join(out, "background_q%02d.tif" % q))
+        check(x.shape == (H * r, W * r) and x.dtype == np.float32 and (x >= 0).all(), "intensity_q%02d" % q)
+        check(np.all(x[s == 0] == 0), "intensity_q%02d is zero off the support" % q)
+        check(b.shape == (H, W) and b.dtype == np.float32, "background_q%02d" % q)
+    vf = tifffile.TiffFile(os.path.join(out, "volume.tif"))
+    v = vf.asarray()
+    rep = json.load(open(os.path.join(out, "report.json")))
+    z = rep.get("z_nm", [])
+    check(v.dtype == np.float32 and v.shape == (len(z), H * r, W * r), "volume.tif Nz x rH x rW float32 %s" % (v.shape,))
+    check(np.allclose(z, np.arange(10, 400, 20)), "z_nm are the default bin centres")
+    md = vf.imagej_metadata
+    nm = {"nm": 1, "um": 1000, "micron": 1000, "\u00b5m": 1000}.get(md.get("unit"), 0)
+    check(abs(md.get("spacing", 0) * nm - 20) < 1e-6, "volume.tif z spacing 20 nm (%s)" % md)
+    check(png_size(os.path.join(out, "depth.png")) is not None and png_size(os.path.join(out, "depth.png"))[0] > W * r,
+          "depth.png is a PNG wider than the image (colour bar)")
+    check(all(k in rep["timings_s"] for k in ("support", "intensity", "matirf")), "per-stage timings in the report")
+    check(rep["parameters"]["support_stacks"] == [1], "default support stack is the smallest angle")
+
+
+def test_accuracy(tmp):
+    for seed in (1, 2):
+        data, out, e = pipeline(tmp, seed, [])
+        if e is None:
+            continue
+        if seed == 1:
+            test_contract(data, out)
+        j, d, b = e["support"]["jaccard"], e["depth"]["median_abs_error_nm"], e["baseline_depth"]["median_abs_error_nm"]
+        print("seed %d: Jaccard %.3f, median depth error %.1f nm (baseline %.1f nm), coverage %.2f"
+              % (seed, j, d, b, e["depth"]["coverage"]), file=sys.stderr)
+        check(j >= 0.5, "seed %d: Jaccard %.3f >= 0.5" % (seed, j))
+        check(d <= 30, "seed %d: median depth error %.1f <= 30 nm" % (seed, d))
+        check(d < b, "seed %d: better than the standard MA-TIRF baseline (%.1f < %.1f)" % (seed, d, b))
+        check(e["depth"]["coverage"] >= 0.6, "seed %d: depth covers %.2f of the true pixels" % (seed, e["depth"]["coverage"]))
+
+
+def test_quick(tmp):
+    data, out, e = pipeline(tmp, 3, ["--width", "24", "--height", "20", "--frames", "120"])
+    if e is not None:
+        test_contract(data, out)
+        check(0 < e["support"]["jaccard"] <= 1 and e["depth"]["pixels"] > 0, "quick run evaluates")
+
+
+# documented parameters (SOURCES.md and the .txt files); 008 ships none, so
+# the common MusiJ sample values are assumed for it (80 nm, NA 1.4, 525 nm)
+MUSIJ = [("CardioMyoblast_Mitochondria_100Frames_NA1.4_80nm_1x_510nmemission.tif", 80, 510),
+         ("014_c00000002-650_775.tif", 80, 525),
+         ("008_z00000001_c00000001-1.tif", 80, 525),
+         ("C3-20180719_H9c2_1_dsRed-mito_KDEL_mC1to2000-20m_T23_1516_m_046C_608nm-1.tif", 80, 608)]
+
+
+def test_musij(tmp):
+    for name, px, em in MUSIJ:
+        out = os.path.join(tmp, "musij_" + name[:6])
+        p = cli("run", "--pixel-size", str(px), "--emission", str(em), "--na", "1.4", "-o", out,
+                os.path.join(DATA, "musij", name))
+        check(p.returncode == 0, "run on %s: %s" % (name, p.stderr))
+        if p.returncode:
+            continue
+        s = tifffile.imread(os.path.join(out, "support.tif"))
+        frac = s.mean()
+        print("musij %s: support %d of %d fine pixels (%.3f)" % (name[:20], s.sum(), s.size, frac), file=sys.stderr)
+        check(0 < frac <= 0.5, "%s: non-trivial support (%.3f)" % (name, frac))
+        check(not os.path.exists(os.path.join(out, "volume.tif")), "%s: 2D mode writes no volume" % name)
+        check(os.path.exists(os.path.join(out, "intensity_q01.tif")), "%s: 2D mode writes the intensity" % name)
+
+
+def test_bad_inputs(tmp):
+    data = os.path.join(tmp, "bad_data")
+    p = cli("simulate", "-o", data, "--width", "16", "--height", "16", "--frames", "30", "--angles", "62,66")
+    check(p.returncode == 0, "small simulation")
+    s1, s2 = os.path.join(data, "stack_q01.tif"), os.path.join(data, "stack_q02.tif")
+    out = os.path.join(tmp, "bad_out")
+    base = ["run", "--fwhm", "229", "-o", out]
+    missing = os.path.join(tmp, "missing.tif")
+    check(refused(cli(*base, "--angles", "62,66", s1, missing), "missing.tif"), "missing stack refused")
+    check(refused(cli(*base, "--angles", "62,66,70", s1, s2), "--angles", "3 angles for 2 stacks"), "angle count mismatch")
+    check(refused(cli(*base, "--angles", "50,66", s1, s2), "--angles", "critical"), "angle below the critical angle")
+    txt = os.path.join(tmp, "notes.tif")
+    with open(txt, "w") as f:
+        f.write("not a TIFF\n")
+    check(refused(cli(*base, "--angles", "62,66", s1, txt), "notes.tif"), "non-TIFF refused")
+    check(refused(cli("run", "--angles", "62,66", "-o", out, s1, s2), "--fwhm"), "missing PSF width refused")
+    check(refused(cli(*base, "--angles", "62,66", "--support-angles", "3", s1, s2), "--support-angles"), "bad support stack")
+    check(not os.path.exists(out), "nothing written for refused runs")
+    os.makedirs(out)
+    keep = os.path.join(out, "keep.txt")
+    with open(keep, "w") as f:
+        f.write("mine\n")
+    check(refused(cli(*base, "--angles", "62,66", s1, s2), "not empty"), "non-empty OUTDIR refused")
+    check(os.listdir(out) == ["keep.txt"] and open(keep).read() == "mine\n", "existing OUTDIR left untouched")
+    check(refused(cli("run", "--fwhm", "229", "--angles", "62,66", "-o", data, s1, s2, "--force"), "input"),
+          "writing next to the inputs refused, even with --force")
+    check(refused(cli("matirf", "--angles", "62", "-o", out + "2", s1, s2), "--angles"), "matirf angle count")
+    check(refused(cli("eval", "--support", s1), "--support-truth"), "eval without truth")
+    check(not os.path.exists(out + "2"), "nothing written by refused matirf")
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    test_bad_inputs(tmp)
+    if MODE == "full":
+        test_accuracy(tmp)
+        test_musij(tmp)
+    else:
+        test_quick(tmp)
+print("%d passed, %d failed" % (passed, failed))
+sys.exit(1 if failed else 0)

@@ -1,0 +1,115 @@
+/* Depth pooling, the depth error metric and the depth colour code: each
+ * against the slow obvious computation on small cases. */
+#include "check.h"
+#include "stages/depthpool.h"
+#include "stages/depthcode.h"
+#include "eval/metrics.h"
+#include "core/rng.h"
+#include "core/err.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+static struct c0_rng rng;
+
+static void test_pool_window(void)
+{
+	enum { NY = 9, NX = 13 };
+	float x[NY * NX], out[NY * NX];
+	uint8_t m[NY * NX];
+	for (int i = 0; i < NY * NX; i++)
+		x[i] = (float)c0_rng_normal(&rng), m[i] = c0_rng_uniform(&rng) < 0.4;
+	for (int h = 0; h <= 3; h++) {
+		CHECK(c0_pool_window(x, m, NY, NX, h, out) == C0_OK);
+		double err = 0;
+		for (int y = 0; y < NY; y++)
+			for (int xx = 0; xx < NX; xx++) {
+				double s = 0;
+				for (int dy = -h; dy <= h; dy++)
+					for (int dx = -h; dx <= h; dx++) {
+						int yy = y + dy, x2 = xx + dx;
+						if (yy >= 0 && yy < NY && x2 >= 0 && x2 < NX && m[yy * NX + x2])
+							s += x[yy * NX + x2];
+					}
+				if (!m[y * NX + xx])
+					s = 0;
+				err = fmax(err, fabs(s - out[y * NX + xx]));
+			}
+		CHECK_MSG(err < 1e-5, "h %d: max error %g", h, err);
+	}
+	/* rescaling keeps the depth profile and restores each pixel's own total */
+	float f[2 * 4], own0[4] = { 1, 2, 0, 4 }, own1[4] = { 1, 1, 0, 2 }, p0[4] = { 2, 2, 3, 4 }, p1[4] = { 2, 1, 3, 0 };
+	for (int i = 0; i < 8; i++)
+		f[i] = (float)(1 + i);
+	const float *own[2] = { own0, own1 }, *pool[2] = { p0, p1 };
+	c0_pool_rescale(f, 2, 2, 2, 2, own, pool);
+	CHECK_CLOSE(f[0], 1 * 2.0 / 4, 1e-6);   /* (1 + 1) / (2 + 2) */
+	CHECK_CLOSE(f[4], 5 * 2.0 / 4, 1e-6);
+	CHECK_CLOSE(f[1], 2 * 3.0 / 3, 1e-6);
+	CHECK_CLOSE(f[2], 0, 0);
+	CHECK_CLOSE(f[7], 8 * 6.0 / 4, 1e-6);
+}
+
+static void test_depth_error(void)
+{
+	/* a 2x2 coarse map against a 4x4 truth: nearest upsampling */
+	float est[4] = { 100, 0, 50, 200 };
+	float truth[16];
+	uint8_t mask[16];
+	for (int i = 0; i < 16; i++)
+		truth[i] = (float)(40 + 10 * i), mask[i] = i % 3 != 0;
+	struct c0_depth_err d;
+	CHECK(c0_depth_error(est, 2, 2, truth, mask, 4, 4, 0, &d) == C0_OK);
+	double a[16];
+	int n = 0, nt = 0;
+	for (int y = 0; y < 4; y++)
+		for (int x = 0; x < 4; x++) {
+			int i = y * 4 + x;
+			if (!mask[i])
+				continue;
+			nt++;
+			float e = est[(y / 2) * 2 + x / 2];
+			if (e > 0)
+				a[n++] = fabs(e - truth[i]);
+		}
+	CHECK(d.pixels == n && d.truth_pixels == nt);
+	double s = 0;
+	for (int i = 0; i < n; i++)
+		s += a[i];
+	CHECK_CLOSE(d.mean, s / n, 1e-9);
+	int below = 0, above = 0;   /* the median splits the errors in half */
+	for (int i = 0; i < n; i++)
+		below += a[i] < d.median, above += a[i] > d.median;
+	CHECK(below <= n / 2 && above <= n / 2);
+	CHECK(c0_depth_error(est, 3, 3, truth, mask, 4, 4, 0, &d) == C0_EINVAL);
+}
+
+static void test_depthcode(void)
+{
+	/* two pixels, one all in the first bin, one all in the last */
+	enum { NZ = 5, H = 1, W = 2 };
+	float f[NZ * H * W] = { 0 };
+	f[0] = 3;                       /* pixel 0, z bin 0 */
+	f[(NZ - 1) * W + 1] = 3;        /* pixel 1, last bin */
+	uint8_t *rgb;
+	int ow, oh;
+	CHECK(c0_depthcode(f, NZ, H, W, 0, 400, &rgb, &ow, &oh) == C0_OK);
+	CHECK(ow > W + 12 && oh >= H);
+	CHECK(rgb[0] == 255 && rgb[1] == 0 && rgb[2] == 0);          /* near the glass: red */
+	CHECK(rgb[3] == 0 && rgb[4] == 0 && rgb[5] == 255);          /* deep: blue */
+	/* the bar runs from red at the top to blue at the bottom */
+	int bx = W + 8 + 6;
+	const uint8_t *top = rgb + ((size_t)2 * ow + bx) * 3, *bot = rgb + ((size_t)(oh - 3 - 10) * ow + bx) * 3;
+	CHECK(top[0] == 255 && top[2] == 0 && bot[0] == 0 && bot[2] == 255);
+	free(rgb);
+}
+
+int main(void)
+{
+	c0_rng_init(&rng, 23, 0);
+	RUN(test_pool_window);
+	RUN(test_depth_error);
+	RUN(test_depthcode);
+	return CHECK_DONE();
+}
