@@ -18,10 +18,12 @@ int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c,
 	}
 	for (int it = 0; it < c->maxit; it++) {
 		p->KT(p->ctx, y, t);
+#pragma omp parallel for schedule(static) if (n > 50000)
 		for (size_t i = 0; i < n; i++)
 			xn[i] = x[i] - p->tau[i] * t[i];
 		p->prox_g(p->ctx, xn, p->tau);
 		double dx = 0, nx = 0;
+#pragma omp parallel for schedule(static) reduction(+ : dx, nx) if (n > 50000)
 		for (size_t i = 0; i < n; i++) {
 			double d = xn[i] - x[i];
 			t[i] = xn[i] + d;          /* the extrapolated point */
@@ -29,10 +31,12 @@ int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c,
 			dx += d * d, nx += xn[i] * xn[i];
 		}
 		p->K(p->ctx, t, s);
+#pragma omp parallel for schedule(static) if (m > 50000)
 		for (size_t i = 0; i < m; i++)
 			s[i] = y[i] + p->sigma[i] * s[i];
 		p->prox_fstar(p->ctx, s, p->sigma);
 		double dy = 0, ny = 0;
+#pragma omp parallel for schedule(static) reduction(+ : dy, ny) if (m > 50000)
 		for (size_t i = 0; i < m; i++) {
 			double d = s[i] - y[i];
 			y[i] = s[i];

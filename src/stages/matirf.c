@@ -58,13 +58,16 @@ static void K(void *vc, const double *u, double *y)
 	struct ctx *c = vc;
 	const size_t M = (size_t)c->M;
 #pragma omp parallel for schedule(static) if (c->N > 50000)
-	for (size_t k = 0; k < M; k++)
-		for (int q = 0; q < c->nq; q++) {
-			double s = 0;
-			for (int j = 0; j < c->nz; j++)
-				s += c->W[q * c->nz + j] * u[j * M + k];
-			y[q * M + k] = s;
+	for (size_t k = 0; k < M; k++) {
+		double s[64] = { 0 };     /* each voxel read once */
+		for (int j = 0; j < c->nz; j++) {
+			double v = u[j * M + k];
+			for (int q = 0; q < c->nq; q++)
+				s[q] += c->W[q * c->nz + j] * v;
 		}
+		for (int q = 0; q < c->nq; q++)
+			y[q * M + k] = s[q];
+	}
 	if (c->reg == C0_REG_TV)
 		c0_grad3m_forward(&c->g, u, y + c->nq * M);
 	else
@@ -138,7 +141,7 @@ static void project_dual(const struct ctx *c, double *y, double k)
 {
 	const size_t N = c->N;
 	if (c->reg == C0_REG_TV) {
-#pragma omp parallel for if (N > 100000)
+#pragma omp parallel for schedule(static) if (N > 50000)
 		for (size_t i = 0; i < N; i++) {
 			double n = sqrt(y[i] * y[i] + y[N + i] * y[N + i] + y[2 * N + i] * y[2 * N + i]);
 			if (n > k) {
