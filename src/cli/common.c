@@ -113,37 +113,66 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 	return st;
 }
 
+/* One stack: covariance pass, noise variance unless given, solve. */
+static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_support_conf *sc, const char *stack,
+			 const uint8_t *mask, double s2, struct c0_intensity_result *res, float **corrected,
+			 int64_t *frames, double *seconds)
+{
+	struct c0_tiff_reader *r;
+	int st = c0_tiff_open(stack, &r);
+	if (st)
+		return st;
+	struct c0_cov cov;
+	st = c0_stack_covariance(sc, r, stack, &cov, seconds);
+	c0_tiff_close(r);
+	if (st)
+		return st;
+	*frames = cov.frames;
+	if (!(s2 > 0))
+		st = c0_support_noise(sc, &cov, mask, &s2);
+	if (!st)
+		st = c0_intensity_solve(ic, cov.mean, cov.H, cov.W, cov.frames, mask, s2, res);
+	if (!st && corrected) {
+		size_t nc = (size_t)cov.H * cov.W;
+		if (!(*corrected = malloc(nc * sizeof **corrected)))
+			st = C0_ENOMEM;
+		for (size_t p = 0; !st && p < nc; p++)
+			(*corrected)[p] = (float)(cov.mean[p] - res->b[p]);
+	}
+	c0_cov_free(&cov);
+	return st;
+}
+
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
 		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
 		     float **corrected, cJSON *rep)
 {
+	/* the stacks are independent: solve them side by side, write in order */
+	int64_t frames[64];
+	double tc[64];
+	int sts[64];
+	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
+	if (!msg || n > 64) {
+		free(msg);
+		return n > 64 ? c0_fail(C0_EINVAL, "at most 64 stacks") : C0_ENOMEM;
+	}
+#pragma omp parallel for schedule(dynamic, 1)
+	for (int i = 0; i < n; i++) {
+		sts[i] = intensity_one(ic, sc, stacks[i], mask, sigma2 ? sigma2[i] : 0, &res[i],
+				       corrected ? &corrected[i] : NULL, &frames[i], &tc[i]);
+		if (sts[i])   /* error messages are per thread */
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+	}
+	for (int i = 0; i < n; i++)
+		if (sts[i]) {
+			int st = c0_fail(sts[i], "%s", msg[i]);
+			free(msg);
+			return st;
+		}
+	free(msg);
 	cJSON *arr = cJSON_AddArrayToObject(rep, "intensity");
 	for (int i = 0; i < n; i++) {
-		struct c0_tiff_reader *r;
-		int st = c0_tiff_open(stacks[i], &r);
-		if (st)
-			return st;
-		struct c0_cov cov;
-		double tc, s2 = sigma2 ? sigma2[i] : 0;
-		st = c0_stack_covariance(sc, r, stacks[i], &cov, &tc);
-		c0_tiff_close(r);
-		if (st)
-			return st;
-		if (!(s2 > 0))
-			st = c0_support_noise(sc, &cov, mask, &s2);
-		if (!st)
-			st = c0_intensity_solve(ic, cov.mean, cov.H, cov.W, cov.frames, mask, s2, &res[i]);
-		if (!st && corrected) {
-			size_t nc = (size_t)cov.H * cov.W;
-			if (!(corrected[i] = malloc(nc * sizeof **corrected)))
-				st = C0_ENOMEM;
-			for (size_t p = 0; !st && p < nc; p++)
-				corrected[i][p] = (float)(cov.mean[p] - res[i].b[p]);
-		}
-		int64_t frames = cov.frames;
-		c0_cov_free(&cov);
-		if (st)
-			return st;
+		int st;
 		const struct c0_intensity_result *s = &res[i];
 		char name[64];
 		struct c0_tiff_wopts o = { .width = s->Lx, .height = s->Ly, .dtype = C0_F32,
@@ -157,7 +186,7 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 			return st;
 		cJSON *j = cJSON_CreateObject();
 		cJSON_AddStringToObject(j, "stack", stacks[i]);
-		cJSON_AddNumberToObject(j, "frames", (double)frames);
+		cJSON_AddNumberToObject(j, "frames", (double)frames[i]);
 		cJSON_AddNumberToObject(j, "noise_variance", s->sigma2);
 		cJSON_AddNumberToObject(j, "mu", s->mu);
 		cJSON_AddNumberToObject(j, "residual2", s->residual2);
@@ -167,7 +196,7 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 		cJSON_AddStringToObject(j, "discrepancy", s->dp_status < 0 ? "fixed mu" : dp[s->dp_status]);
 		cJSON_AddNumberToObject(j, "solves", s->solves);
 		cJSON_AddNumberToObject(j, "cg_iterations", s->cg_iters);
-		cJSON_AddNumberToObject(j, "seconds", s->seconds + tc);
+		cJSON_AddNumberToObject(j, "seconds", s->seconds + tc[i]);
 		cJSON_AddItemToArray(arr, j);
 	}
 	cJSON *p = cJSON_AddObjectToObject(rep, "intensity_parameters");

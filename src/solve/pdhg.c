@@ -27,7 +27,7 @@ int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c,
 		for (size_t i = 0; i < n; i++) {
 			double d = xn[i] - x[i];
 			t[i] = xn[i] + d;          /* the extrapolated point */
-			x[i] = xn[i];
+			x[i] += c->relax * d;
 			dx += d * d, nx += xn[i] * xn[i];
 		}
 		p->K(p->ctx, t, s);
@@ -39,7 +39,7 @@ int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c,
 #pragma omp parallel for schedule(static) reduction(+ : dy, ny) if (m > 50000)
 		for (size_t i = 0; i < m; i++) {
 			double d = s[i] - y[i];
-			y[i] = s[i];
+			y[i] += c->relax * d;
 			dy += d * d, ny += s[i] * s[i];
 		}
 		info->iters = it + 1;

@@ -21,8 +21,9 @@ struct c0_pdhg_problem {
 struct c0_pdhg_conf {
 	int maxit;                   /* 3000 */
 	double tol;                  /* 1e-4: relative change of x and of y per iteration */
+	double relax;                /* 1.8: over-relaxation in (0, 2); 1 is plain PDHG */
 };
-#define C0_PDHG_DEFAULTS { 3000, 1e-4 }
+#define C0_PDHG_DEFAULTS { 3000, 1e-4, 1.8 }
 
 struct c0_pdhg_info { int iters, converged; double dx, dy; };
 
