@@ -3,6 +3,7 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/progress.h"
 #include "io/png.h"
 #include "stages/depthcode.h"
 #include "stages/depthpool.h"
@@ -156,13 +157,19 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 		free(msg);
 		return n > 64 ? c0_fail(C0_EINVAL, "at most 64 stacks") : C0_ENOMEM;
 	}
+	struct c0_progress pr;
+	int done = 0;
+	c0_progress_begin(&pr, "intensity (stacks)", n);
 #pragma omp parallel for schedule(dynamic, 1)
 	for (int i = 0; i < n; i++) {
 		sts[i] = intensity_one(ic, sc, stacks[i], mask, sigma2 ? sigma2[i] : 0, &res[i],
 				       corrected ? &corrected[i] : NULL, &frames[i], &tc[i]);
 		if (sts[i])   /* error messages are per thread */
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+#pragma omp critical(c0_intensity_progress)
+		c0_progress_update(&pr, ++done);
 	}
+	c0_progress_end(&pr);
 	for (int i = 0; i < n; i++)
 		if (sts[i]) {
 			int st = c0_fail(sts[i], "%s", msg[i]);

@@ -1,6 +1,7 @@
 #include "core/progress.h"
 #include "core/clock.h"
 
+#include <omp.h>
 #include <stdio.h>
 
 static int enabled;
@@ -14,7 +15,9 @@ void c0_progress_begin(struct c0_progress *p, const char *stage, double total)
 	p->total = total > 0 ? total : 1;
 	p->start = c0_now();
 	p->last_draw = 0;
-	p->active = enabled;
+	/* inside a parallel region several lines would fight over one terminal
+	 * line: the caller outside the region reports for all of them */
+	p->active = enabled && !omp_in_parallel();
 }
 
 void c0_progress_update(struct c0_progress *p, double done)

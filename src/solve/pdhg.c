@@ -43,6 +43,8 @@ int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c,
 			dy += d * d, ny += s[i] * s[i];
 		}
 		info->iters = it + 1;
+		if (p->iter)
+			p->iter(p->ctx, it + 1);
 		info->dx = sqrt(dx / fmax(nx, 1e-300));
 		info->dy = sqrt(dy / fmax(ny, 1e-300));
 		if (it > 10 && info->dx <= c->tol && info->dy <= c->tol) {

@@ -16,6 +16,7 @@ struct c0_pdhg_problem {
 	void (*prox_g)(void *ctx, double *x, const double *tau);
 	void (*prox_fstar)(void *ctx, double *y, const double *sigma);
 	const double *tau, *sigma;   /* n and m step sizes */
+	void (*iter)(void *ctx, int it);  /* optional, after each iteration (progress) */
 };
 
 struct c0_pdhg_conf {

@@ -50,6 +50,7 @@ struct ctx {
 	struct c0_grad3m g;       /* TV: gradient over the columns */
 	struct c0_diff3 d;        /* Hessian: full grid (M = all pixels) */
 	double kappa, l1;
+	struct c0_progress *pr;
 };
 
 /* K u = [W u per column; R's operator u] */
@@ -90,6 +91,12 @@ static void KT(void *vc, const double *y, double *u)
 				s += c->W[q * c->nz + j] * y[q * M + k];
 			u[j * M + k] += s;
 		}
+}
+
+static void iter(void *vc, int it)
+{
+	struct ctx *c = vc;
+	c0_progress_update(c->pr, it);
 }
 
 static void prox_g(void *vc, double *u, const double *tau)
@@ -280,10 +287,11 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		for (size_t i = 0; i < N; i++)
 			sigma[nd + comp * N + i] = v;
 	}
-	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, prox_g, prox_fstar, tau, sigma };
+	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, prox_g, prox_fstar, tau, sigma, iter };
 	struct c0_pdhg_info info;
 	struct c0_progress pr;
-	c0_progress_begin(&pr, "matirf", 1);
+	c0_progress_begin(&pr, "matirf (iterations, at most)", c->pdhg.maxit);
+	ctx.pr = &pr;
 	st = c0_pdhg_solve(&pb, &c->pdhg, u, y, &info);
 	c0_progress_end(&pr);
 	if (st)
