@@ -19,10 +19,10 @@ struct c0_intensity_conf {
 	double beta;               /* 20: background smoothness (coarse grid) */
 	double nu;                 /* 1; 0 means sqrt(T), the reference's choice (docs/parameters.md) */
 	double mu;                 /* 0: discrepancy principle; > 0: fixed */
-	double tol;                /* 1e-5: CG relative residual */
+	double tol;                /* 1e-3: CG relative residual (docs/parameters.md) */
 	int maxit;                 /* 500 CG steps per active-set round */
 };
-#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-5, 500 }
+#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500 }
 
 struct c0_intensity_result {
 	int Ly, Lx, Ny, Nx;

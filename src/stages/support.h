@@ -53,5 +53,5 @@ void c0_support_result_free(struct c0_support_result *r);
 int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
 			struct c0_cov *cov, double *seconds);
 /* Noise variance of a stack whose support is known: the same model with
- * r_x free on the mask only and no penalty (a few hundred iterations). */
+ * r_x free on the mask only and no penalty (100 iterations). */
 int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2);
