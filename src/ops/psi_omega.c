@@ -64,21 +64,46 @@ void c0_psi_omega_free(struct c0_psi_omega *p)
 	memset(p, 0, sizeof *p);
 }
 
+/* first support pixel whose PSF footprint starts at coarse row >= row
+ * (footprints start at nondecreasing rows: idx is in raster order) */
+static int first_from_row(const struct c0_psi_omega *p, int row)
+{
+	int lo = 0, hi = p->n;
+	while (lo < hi) {
+		int mid = lo + (hi - lo) / 2;
+		if (p->GyT.start[p->idx[mid] / p->Lx] < row)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	return lo;
+}
+
+/* A scatter: support pixels are cut into bands by the first coarse row they
+ * touch. Bands at least as tall as a footprint, taken every other one, never
+ * write the same row, so the even bands run in parallel, then the odd ones. */
 void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double *y)
 {
 	const int wy = p->GyT.w, wx = p->GxT.w;
+	const int B = wy > 8 ? wy : 8, nband = (p->Ny + B - 1) / B;
 	memset(y, 0, sizeof *y * (size_t)p->Ny * p->Nx);
-	for (int k = 0; k < p->n; k++) {
-		if (x[k] == 0)
-			continue;
-		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
-		const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
-		const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
-		for (int i = 0; i < wy; i++) {
-			double c = x[k] * gy[i];
-			double *row = y + (size_t)(i0 + i) * p->Nx + j0;
-			for (int j = 0; j < wx; j++)
-				row[j] += c * gx[j];
+	for (int parity = 0; parity < 2; parity++) {
+#pragma omp parallel for schedule(dynamic, 1) if (p->n > 4096)
+		for (int band = parity; band < nband; band += 2) {
+			const int k1 = first_from_row(p, (band + 1) * B);
+			for (int k = first_from_row(p, band * B); k < k1; k++) {
+				if (x[k] == 0)
+					continue;
+				const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
+				const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
+				const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
+				for (int i = 0; i < wy; i++) {
+					double c = x[k] * gy[i];
+					double *row = y + (size_t)(i0 + i) * p->Nx + j0;
+					for (int j = 0; j < wx; j++)
+						row[j] += c * gx[j];
+				}
+			}
 		}
 	}
 }
