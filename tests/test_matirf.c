@@ -3,6 +3,7 @@
 #include "check.h"
 #include "ops/diff3.h"
 #include "ops/grad3m.h"
+#include "ops/tirfop.h"
 #include "optics/tirf.h"
 #include "stages/matirf.h"
 #include "core/rng.h"
@@ -91,6 +92,29 @@ static void test_grad3m(void)
 		mx = fmax(mx, fabs(va[i] - v[i]));
 	CHECK(mx < 1e-13);
 	c0_grad3m_free(&g);
+}
+
+/* W per column and its adjoint, against the weights it is built from */
+static void test_tirfop(void)
+{
+	struct c0_tirf t = C0_TIRF_DEFAULTS;
+	enum { NQ = 5, NZ = 7, M = 11 };
+	double W[NQ * NZ], u[NZ * M], y[NQ * M], v[NQ * M], ua[NZ * M] = { 0 };
+	const double ang[NQ] = { 61.48, 63.37, 65.39, 67.58, 70.0 };
+	CHECK(c0_tirf_weights(&t, NQ, ang, NULL, NZ, 0, 30, W) == C0_OK);
+	for (int i = 0; i < NZ * M; i++)
+		u[i] = c0_rng_normal(&rng);
+	for (int i = 0; i < NQ * M; i++)
+		v[i] = c0_rng_normal(&rng);
+	const struct c0_tirfop o = { NQ, NZ, M, W };
+	c0_tirfop_forward(&o, u, y);
+	c0_tirfop_adjoint_add(&o, v, ua);
+	CHECK_REL(dot(y, v, NQ * M), dot(u, ua, NZ * M), 1e-12);
+	double s = 0;            /* angle 3, column 4, by hand */
+	for (int j = 0; j < NZ; j++)
+		s += W[3 * NZ + j] * u[j * M + 4];
+	CHECK_REL(y[3 * M + 4], s, 1e-14);
+	CHECK(W[3 * NZ + 6] / W[0 * NZ + 6] < W[3 * NZ] / W[0]);   /* deeper = dimmer at high angles */
 }
 
 static void test_i0_ratios(void)
@@ -205,6 +229,7 @@ int main(void)
 	c0_rng_init(&rng, 17, 0);
 	RUN(test_adjoints);
 	RUN(test_grad3m);
+	RUN(test_tirfop);
 	RUN(test_i0_ratios);
 	RUN(test_depth);
 	RUN(test_refusals);

@@ -1,6 +1,7 @@
 #include "stages/matirf.h"
 #include "ops/diff3.h"
 #include "ops/grad3m.h"
+#include "ops/tirfop.h"
 #include "solve/pdhg.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -57,40 +58,23 @@ struct ctx {
 static void K(void *vc, const double *u, double *y)
 {
 	struct ctx *c = vc;
-	const size_t M = (size_t)c->M;
-#pragma omp parallel for schedule(static) if (c->N > 50000)
-	for (size_t k = 0; k < M; k++) {
-		double s[64] = { 0 };     /* each voxel read once */
-		for (int j = 0; j < c->nz; j++) {
-			double v = u[j * M + k];
-			for (int q = 0; q < c->nq; q++)
-				s[q] += c->W[q * c->nz + j] * v;
-		}
-		for (int q = 0; q < c->nq; q++)
-			y[q * M + k] = s[q];
-	}
+	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
+	c0_tirfop_forward(&w, u, y);
 	if (c->reg == C0_REG_TV)
-		c0_grad3m_forward(&c->g, u, y + c->nq * M);
+		c0_grad3m_forward(&c->g, u, y + c->nq * w.M);
 	else
-		c0_hess3(&c->d, u, y + c->nq * M);
+		c0_hess3(&c->d, u, y + c->nq * w.M);
 }
 
 static void KT(void *vc, const double *y, double *u)
 {
 	struct ctx *c = vc;
-	const size_t M = (size_t)c->M;
+	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
 	if (c->reg == C0_REG_TV)
-		c0_grad3m_adjoint(&c->g, y + c->nq * M, u);
+		c0_grad3m_adjoint(&c->g, y + c->nq * w.M, u);
 	else
-		c0_hess3_adjoint(&c->d, y + c->nq * M, u);
-#pragma omp parallel for schedule(static) if (c->N > 50000)
-	for (size_t k = 0; k < M; k++)
-		for (int j = 0; j < c->nz; j++) {
-			double s = 0;
-			for (int q = 0; q < c->nq; q++)
-				s += c->W[q * c->nz + j] * y[q * M + k];
-			u[j * M + k] += s;
-		}
+		c0_hess3_adjoint(&c->d, y + c->nq * w.M, u);
+	c0_tirfop_adjoint_add(&w, y, u);
 }
 
 static void iter(void *vc, int it)
