@@ -25,8 +25,9 @@ static double dot(const double *a, const double *b, size_t n)
 
 static void test_adjoints(void)
 {
-	struct c0_diff3 d = { 7, 5, 4, 1.3, 0.7 };
 	size_t N = 7 * 5 * 4;
+	double work[2 * 7 * 5 * 4];
+	struct c0_diff3 d = { 7, 5, 4, 1.3, 0.7, work };
 	double *v = malloc(N * sizeof *v), *g = malloc(6 * N * sizeof *g), *h = malloc(6 * N * sizeof *h), *va = malloc(N * sizeof *va);
 	for (size_t i = 0; i < N; i++)
 		v[i] = c0_rng_normal(&rng);
@@ -77,7 +78,8 @@ static void test_grad3m(void)
 	c0_grad3m_free(&g);
 	memset(mask, 1, sizeof mask);
 	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0.7) == C0_OK);
-	struct c0_diff3 full = { nx, ny, nz, 1.3, 0.7 };
+	double work[2 * 140];
+	struct c0_diff3 full = { nx, ny, nz, 1.3, 0.7, work };
 	N = (size_t)np * nz;
 	c0_grad3m_forward(&g, v, d);
 	c0_grad3(&full, v, e);
@@ -180,6 +182,7 @@ static double depth_error(const struct c0_matirf_conf *c, double noise, double *
 		}
 	}
 	*resid = sqrt(rs / ds);
+	fprintf(stderr, "  (%d iterations, %.1f s)\n", r.iters, r.seconds);
 	/* median absolute depth error over the structure */
 	for (int a = 0; a < k; a++)
 		for (int b = a + 1; b < k; b++)
@@ -207,7 +210,7 @@ static void test_depth(void)
 	c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 	c.kappa = 1e-6;
 	c.sparsity = 0;
-	c.pdhg.maxit = 20000;
+	c.pdhg.maxit = 5000;
 	c.pdhg.tol = 1e-7;
 	e = depth_error(&c, 0, &res);
 	fprintf(stderr, "matirf noiseless: relative residual %.2e, median depth error %.1f nm\n", res, e);

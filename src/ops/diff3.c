@@ -2,7 +2,6 @@
 #include "core/mem.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 /* strides and lengths of the three axes: 0 = x, 1 = y, 2 = z */
@@ -63,14 +62,13 @@ void c0_grad3(const struct c0_diff3 *d, const double *v, double *g)
 void c0_grad3_adjoint(const struct c0_diff3 *d, const double *g, double *v)
 {
 	size_t N = (size_t)d->nx * d->ny * d->nz;
-	double *t = malloc(N * sizeof *t);
+	double *t = d->work;
 	memset(v, 0, N * sizeof *v);
 	for (int a = 0; a < 3; a++) {
 		dadj(d, a, g + a * N, t);
 		for (size_t i = 0; i < N; i++)
 			v[i] += w(d, a) * t[i];
 	}
-	free(t);
 }
 
 /* components: xx, yy, zz, xy, xz, yz */
@@ -79,7 +77,7 @@ static const int HA[6] = { 0, 1, 2, 0, 0, 1 }, HB[6] = { 0, 1, 2, 1, 2, 2 };
 void c0_hess3(const struct c0_diff3 *d, const double *v, double *h)
 {
 	size_t N = (size_t)d->nx * d->ny * d->nz;
-	double *t = malloc(N * sizeof *t);
+	double *t = d->work;
 	for (int c = 0; c < 6; c++) {
 		double sc = w(d, HA[c]) * w(d, HB[c]);
 		if (c < 3) {               /* -D^T D */
@@ -94,13 +92,12 @@ void c0_hess3(const struct c0_diff3 *d, const double *v, double *h)
 		for (size_t i = 0; i < N; i++)
 			h[c * N + i] *= sc;
 	}
-	free(t);
 }
 
 void c0_hess3_adjoint(const struct c0_diff3 *d, const double *h, double *v)
 {
 	size_t N = (size_t)d->nx * d->ny * d->nz;
-	double *t = malloc(N * sizeof *t), *u = malloc(N * sizeof *u);
+	double *t = d->work, *u = d->work + N;
 	memset(v, 0, N * sizeof *v);
 	for (int c = 0; c < 6; c++) {
 		double sc = w(d, HA[c]) * w(d, HB[c]);
@@ -116,5 +113,4 @@ void c0_hess3_adjoint(const struct c0_diff3 *d, const double *h, double *v)
 		for (size_t i = 0; i < N; i++)
 			v[i] += sc * u[i];
 	}
-	free(t), free(u);
 }

@@ -7,7 +7,11 @@
 #pragma once
 #include <stddef.h>
 
-struct c0_diff3 { int nx, ny, nz; double wl, wz; };
+struct c0_diff3 {
+	int nx, ny, nz;
+	double wl, wz;
+	double *work;    /* 2 N doubles owned by the caller, for the temporaries */
+};
 
 void c0_grad3(const struct c0_diff3 *d, const double *v, double *g);        /* N -> 3N */
 void c0_grad3_adjoint(const struct c0_diff3 *d, const double *g, double *v);/* 3N -> N */

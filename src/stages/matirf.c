@@ -229,11 +229,13 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	const size_t m = nd + ncomp * N;
 	double *b = c0_alloc(nd, sizeof *b), *u = c0_alloc(N, sizeof *u), *y = c0_alloc(m, sizeof *y);
 	double *tau = c0_alloc(N, sizeof *tau), *sigma = c0_alloc(m, sizeof *sigma);
+	if (c->reg == C0_REG_HESSIAN && !(ctx.d.work = c0_alloc(2 * N, sizeof *ctx.d.work)))
+		st = C0_ENOMEM;
 	res->f = c0_alloc(np * nz, sizeof *res->f);
 	res->z_nm = c0_alloc((size_t)nz, sizeof *res->z_nm);
 	res->depth = c0_alloc(np, sizeof *res->depth);
 	res->total = c0_alloc(np, sizeof *res->total);
-	if (!b || !u || !y || !tau || !sigma || !res->f || !res->z_nm || !res->depth || !res->total) {
+	if (st || !b || !u || !y || !tau || !sigma || !res->f || !res->z_nm || !res->depth || !res->total) {
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -295,7 +297,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	}
 out:
 	c0_grad3m_free(&ctx.g);
-	free(b), free(u), free(y), free(tau), free(sigma);
+	free(b), free(u), free(y), free(tau), free(sigma), free(ctx.d.work);
 	if (st)
 		c0_matirf_result_free(res);
 	res->seconds = c0_now() - t0;
