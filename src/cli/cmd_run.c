@@ -150,8 +150,10 @@ int cmd_run(int argc, char **argv)
 		t = c0_now();
 		for (int q = 0; !st && q < ns; q++) {
 			img[q] = ires[q].x;
-			if (h > 0 && !(st = (pooled[q] = malloc((size_t)Ly * Lx * sizeof(float))) ? C0_OK : C0_ENOMEM))
-				st = c0_pool_window(ires[q].x, mask, Ly, Lx, h, pooled[q]);
+			if (h <= 0)
+				continue;
+			pooled[q] = malloc((size_t)Ly * Lx * sizeof(float));
+			st = pooled[q] ? c0_pool_window(ires[q].x, mask, Ly, Lx, h, pooled[q]) : C0_ENOMEM;
 		}
 		if (!st)
 			st = c0_run_matirf(&out, &m, h > 0 ? (const float *const *)pooled : img, h > 0 ? img : NULL, Ly, Lx,
@@ -173,6 +175,8 @@ int cmd_run(int argc, char **argv)
 		cJSON_AddNumberToObject(p, "fine_pixel_nm", sc.pixel_nm / sc.srf);
 		cJSON_AddNumberToObject(p, "fwhm_nm", sc.fwhm_nm);
 		cJSON_AddNumberToObject(p, "srf", sc.srf);
+		if (three_d)
+			cJSON_AddNumberToObject(p, "depth_pool_nm", pool_nm);
 		double s1[MAXS];
 		for (int k = 0; k < nsup; k++)
 			s1[k] = sup[k] + 1;
