@@ -1,6 +1,7 @@
 """Benchmarks: prints one table (size, time, throughput, peak memory, ratio to
 a baseline measured in the same run). Run from the repository root after
 scripts/setup.sh:  /usr/bin/python3 bench/run.py [--quick]
+(--quick skips the 256x256 cases: support, intensity, dense MA-TIRF)
 
 Each timed command runs in its own process; peak memory is that process's
 maximum resident set size."""
@@ -83,19 +84,21 @@ with tempfile.TemporaryDirectory() as tmp:
 
     # MA-TIRF on 256x256 x 20 bins x 5 angles: dense images (every pixel
     # solved for) vs the pipeline's sparse ones (above)
-    import numpy as np
-    import tifffile
-    rng = np.random.default_rng(1)
-    dense = []
-    for q in range(5):
-        f = os.path.join(tmp, "dense_q%d.tif" % q)
-        tifffile.imwrite(f, (rng.random((256, 256)) * np.exp(-0.3 * q) + 0.1).astype(np.float32))
-        dense.append(f)
-    o = os.path.join(tmp, "mt_dense")
-    dt, mem, _ = timed([CLI, "matirf", "--angles", ang, "-o", o] + dense)
-    rep = json.load(open(os.path.join(o, "report.json")))["matirf"]
-    row("matirf, dense images", "256x256x20 x5", dt, "%d its, %.1f ms/it" % (rep["iterations"], 1e3 * rep["seconds"] / rep["iterations"]),
-        mem, "%.1fx the sparse pipeline case" % (rep["seconds"] / sparse_mt))
+    if not QUICK:
+        import numpy as np
+        import tifffile
+        rng = np.random.default_rng(1)
+        dense = []
+        for q in range(5):
+            f = os.path.join(tmp, "dense_q%d.tif" % q)
+            tifffile.imwrite(f, (rng.random((256, 256)) * np.exp(-0.3 * q) + 0.1).astype(np.float32))
+            dense.append(f)
+        o = os.path.join(tmp, "mt_dense")
+        dt, mem, _ = timed([CLI, "matirf", "--angles", ang, "-o", o] + dense)
+        rep = json.load(open(os.path.join(o, "report.json")))["matirf"]
+        row("matirf, dense images", "256x256x20 x5", dt,
+            "%d its, %.1f ms/it" % (rep["iterations"], 1e3 * rep["seconds"] / rep["iterations"]),
+            mem, "%.1fx the sparse pipeline case" % (rep["seconds"] / sparse_mt))
 
     if not QUICK:
         # intensity of one 256x256 angle on its support
