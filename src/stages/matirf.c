@@ -213,7 +213,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	 * is zero at every angle has f = 0); the Hessian works on the full grid */
 	uint8_t *mask = c0_alloc(np, 1);
 	struct ctx ctx = { .nq = nq, .nz = nz, .W = W, .reg = c->reg, .kappa = c->kappa, .l1 = c->sparsity,
-			   .d = { nx, ny, nz, 1, c->wz } };
+			   .d = { nx, ny, nz, 1, c->wz, NULL } };
 	if (!mask)
 		return C0_ENOMEM;
 	for (size_t p = 0; p < np; p++)
