@@ -33,6 +33,17 @@ static int same_size(const char *a, const struct img *x, const char *b, const st
 	return C0_OK;
 }
 
+/* an estimate and its truth, 2D and of one size */
+static int load_pair(const char *est, struct img *e, const char *truth, struct img *t)
+{
+	int st = load2d(est, e);
+	if (!st)
+		st = load2d(truth, t);
+	if (!st)
+		st = same_size(est, e, truth, t);
+	return st;
+}
+
 static uint8_t *binary(const struct img *m)
 {
 	size_t n = (size_t)m->in.width * m->in.height;
@@ -45,11 +56,7 @@ static uint8_t *binary(const struct img *m)
 static int eval_support(const char *est, const char *truth, double px, double radius, int margin, cJSON *rep)
 {
 	struct img e = { 0 }, t = { 0 };
-	int st = load2d(est, &e);
-	if (!st)
-		st = load2d(truth, &t);
-	if (!st)
-		st = same_size(est, &e, truth, &t);
+	int st = load_pair(est, &e, truth, &t);
 	if (!st && !(px > 0) && !((px = t.in.pixel_size_nm) > 0))
 		st = c0_fail(C0_EINVAL, "--pixel-size: %s has no calibration; give the fine pixel size in nm", truth);
 	uint8_t *a = st ? NULL : binary(&e), *b = st ? NULL : binary(&t);
@@ -74,11 +81,7 @@ static int eval_support(const char *est, const char *truth, double px, double ra
 static int eval_intensity(const char *est, const char *truth, int margin, cJSON *arr)
 {
 	struct img e = { 0 }, t = { 0 };
-	int st = load2d(est, &e);
-	if (!st)
-		st = load2d(truth, &t);
-	if (!st)
-		st = same_size(est, &e, truth, &t);
+	int st = load_pair(est, &e, truth, &t);
 	if (!st) {
 		cJSON *o = cJSON_CreateObject();
 		cJSON_AddStringToObject(o, "estimate", est);

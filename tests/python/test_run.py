@@ -15,17 +15,9 @@ import tempfile
 import numpy as np
 import tifffile
 
+from checks import check, done
+
 CLI, DATA, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
-passed = failed = 0
-
-
-def check(cond, what):
-    global passed, failed
-    if cond:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", what, file=sys.stderr)
 
 
 def cli(*args):
@@ -177,5 +169,4 @@ with tempfile.TemporaryDirectory() as tmp:
         test_musij(tmp)
     else:
         test_quick(tmp)
-print("%d passed, %d failed" % (passed, failed))
-sys.exit(1 if failed else 0)
+done()

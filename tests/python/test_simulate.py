@@ -13,17 +13,9 @@ import tempfile
 import numpy as np
 import tifffile
 
+from checks import check, done
+
 CLI = sys.argv[1]
-passed = failed = 0
-
-
-def check(cond, what):
-    global passed, failed
-    if cond:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", what, file=sys.stderr)
 
 
 def sim(out, *args, threads=None):
@@ -111,5 +103,4 @@ with tempfile.TemporaryDirectory() as tmp:
                         "--emitters", csvp], capture_output=True, text=True)
     check(r.returncode == 0 and json.load(open(os.path.join(d, "sim.json")))["estimates"]["emitters"] == 2, "csv input: %s" % r.stderr)
 
-print("%d passed, %d failed" % (passed, failed))
-sys.exit(1 if failed else 0)
+done()

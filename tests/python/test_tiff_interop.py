@@ -12,17 +12,9 @@ import tempfile
 import numpy as np
 import tifffile
 
+from checks import check, done
+
 TOOL, CLI, DATA = sys.argv[1:4]
-passed = failed = 0
-
-
-def check(cond, what):
-    global passed, failed
-    if cond:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", what, file=sys.stderr)
 
 
 def dump(path):
@@ -198,5 +190,4 @@ with tempfile.TemporaryDirectory() as tmp:
     write_variants(tmp)
     real_data()
     bad_inputs(tmp)
-print("%d passed, %d failed" % (passed, failed))
-sys.exit(1 if failed else 0)
+done()
