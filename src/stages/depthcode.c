@@ -86,14 +86,20 @@ int c0_depthcode(const float *f, int nz, int h, int w, double z0, double z1, uin
 		lut(nz > 1 ? (double)j / (nz - 1) : 0, col[j]);
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++) {
-			double c[3] = { 0, 0, 0 };
+			double c[3] = { 0, 0, 0 }, t = 0;
 			size_t p = (size_t)y * w + x;
-			for (int j = 0; j < nz && j < 512; j++)
+			for (int j = 0; j < nz && j < 512; j++) {
+				double v = fmax(f[j * np + p], 0);
+				t += v;
 				for (int k = 0; k < 3; k++)
-					c[k] += fmax(f[j * np + p], 0) * col[j][k];
+					c[k] += v * col[j][k];
+			}
+			/* the hue is the intensity-weighted mix; the brightness goes as
+			 * the square root of the intensity so that dim structures show */
+			double b = t > 0 ? sqrt(fmin(t / norm, 1)) / t : 0;
 			uint8_t *o = *rgb + ((size_t)y * *ow + x) * 3;
 			for (int k = 0; k < 3; k++)
-				o[k] = (uint8_t)lrint(255 * fmin(c[k] / norm, 1));
+				o[k] = (uint8_t)lrint(255 * fmin(c[k] * b, 1));
 		}
 	/* the bar: z0 at the top, z1 at the bottom, as the labels say */
 	const int bar_top = 2, bar_h = *oh - 4 - 5 * SCALE;

@@ -1,8 +1,8 @@
 /* Depth colour code of a volume, as Fiji's "temporal color code" does for
  * time: each depth bin gets a colour (near the glass red, deep blue, through
- * yellow, green and cyan) and a pixel is the sum of its bins' colours
- * weighted by intensity, scaled so that the 99.5th percentile of the
- * per-pixel total is full brightness. A colour bar labelled with the depth
+ * yellow, green and cyan) and a pixel's hue is its bins' colours mixed
+ * by intensity; its brightness is the square root of its total intensity,
+ * full at the 99.5th percentile. A colour bar labelled with the depth
  * range in nm is drawn on the right. */
 #pragma once
 #include <stdint.h>
