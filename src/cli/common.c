@@ -114,7 +114,8 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 	return st;
 }
 
-/* One stack: covariance pass, noise variance unless given, solve. */
+/* One stack: one streaming pass (the covariance when the noise variance has
+ * to be estimated, else just the mean), then the solve. */
 static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_support_conf *sc, const char *stack,
 			 const uint8_t *mask, double s2, struct c0_intensity_result *res, float **corrected,
 			 int64_t *frames, double *seconds)
@@ -123,24 +124,32 @@ static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_sup
 	int st = c0_tiff_open(stack, &r);
 	if (st)
 		return st;
-	struct c0_cov cov;
-	st = c0_stack_covariance(sc, r, stack, &cov, seconds);
+	const struct c0_tiff_info *in = c0_tiff_get_info(r);
+	const int H = (int)in->height, W = (int)in->width;
+	struct c0_cov cov = { 0 };
+	double *mean = NULL;
+	if (s2 > 0) {
+		st = c0_stack_mean(sc, r, stack, &mean, frames, seconds);
+	} else {
+		st = c0_stack_covariance(sc, r, stack, &cov, seconds);
+		if (!st) {
+			*frames = cov.frames;
+			st = c0_support_noise(sc, &cov, mask, &s2);
+			mean = cov.mean, cov.mean = NULL;
+		}
+		c0_cov_free(&cov);
+	}
 	c0_tiff_close(r);
-	if (st)
-		return st;
-	*frames = cov.frames;
-	if (!(s2 > 0))
-		st = c0_support_noise(sc, &cov, mask, &s2);
 	if (!st)
-		st = c0_intensity_solve(ic, cov.mean, cov.H, cov.W, cov.frames, mask, s2, res);
+		st = c0_intensity_solve(ic, mean, H, W, *frames, mask, s2, res);
 	if (!st && corrected) {
-		size_t nc = (size_t)cov.H * cov.W;
+		size_t nc = (size_t)H * W;
 		if (!(*corrected = malloc(nc * sizeof **corrected)))
 			st = C0_ENOMEM;
 		for (size_t p = 0; !st && p < nc; p++)
-			(*corrected)[p] = (float)(cov.mean[p] - res->b[p]);
+			(*corrected)[p] = (float)(mean[p] - res->b[p]);
 	}
-	c0_cov_free(&cov);
+	free(mean);
 	return st;
 }
 

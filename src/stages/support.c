@@ -215,6 +215,40 @@ int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *
 	return st;
 }
 
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name, double **mean,
+		  int64_t *frames, double *seconds)
+{
+	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
+	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
+	if (st)
+		return st;
+	double t0 = c0_now();
+	const size_t n = (size_t)in->width * in->height;
+	float *frame = c0_alloc(n, sizeof *frame);
+	*mean = c0_alloc(n, sizeof **mean);
+	if (!frame || !*mean) {
+		free(frame), free(*mean), *mean = NULL;
+		return C0_ENOMEM;
+	}
+	struct c0_progress pr;
+	c0_progress_begin(&pr, "mean", (double)in->pages);
+	for (int64_t t = 0; t < in->pages && !st; t++) {
+		st = c0_tiff_read_f32(rd, t, frame);
+		for (size_t i = 0; !st && i < n; i++)
+			(*mean)[i] += frame[i];
+		c0_progress_update(&pr, (double)t + 1);
+	}
+	c0_progress_end(&pr);
+	free(frame);
+	for (size_t i = 0; !st && i < n; i++)
+		(*mean)[i] /= (double)in->pages;
+	if (st)
+		free(*mean), *mean = NULL;
+	*frames = in->pages;
+	*seconds = c0_now() - t0;
+	return st;
+}
+
 int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
 		     struct c0_support_result *res)
 {

@@ -52,6 +52,10 @@ void c0_support_result_free(struct c0_support_result *r);
 /* One streaming pass: banded covariance (lag from the PSF) and temporal mean. */
 int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
 			struct c0_cov *cov, double *seconds);
+/* One streaming pass for the temporal mean only (allocated), when the noise
+ * variance is already known and the covariance is not needed. */
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name, double **mean,
+		  int64_t *frames, double *seconds);
 /* Noise variance of a stack whose support is known: the same model with
  * r_x free on the mask only and no penalty (100 iterations). */
 int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2);
