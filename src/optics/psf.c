@@ -5,6 +5,17 @@
 #include <math.h>
 #include <stddef.h>
 
+int c0_psf_check(double pixel_nm, double fwhm_nm, int srf)
+{
+	if (!(pixel_nm > 0))
+		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm)", pixel_nm);
+	if (!(fwhm_nm > 0))
+		return c0_fail(C0_EINVAL, "--fwhm %g: must be positive (nm)", fwhm_nm);
+	if (srf < 1 || srf > 16)
+		return c0_fail(C0_EINVAL, "--srf %d: must be 1..16", srf);
+	return C0_OK;
+}
+
 double c0_psf_sigma_px(double fwhm_nm, double pixel_nm)
 {
 	return fwhm_nm * C0_FWHM_TO_SIGMA / pixel_nm;

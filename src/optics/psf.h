@@ -3,6 +3,10 @@
 #pragma once
 #include "core/band.h"
 
+/* The parameters every grid shares: pixel size and FWHM positive (nm),
+ * super-resolution factor 1..16; errors name the option. */
+int c0_psf_check(double pixel_nm, double fwhm_nm, int srf);
+
 /* sigma of the Gaussian in camera pixels from FWHM and pixel size (nm) */
 double c0_psf_sigma_px(double fwhm_nm, double pixel_nm);
 

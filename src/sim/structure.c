@@ -1,6 +1,7 @@
 /* Sample structures: worm-like-chain filaments in 3D, or a CSV of emitters. */
 #define _POSIX_C_SOURCE 200809L
 #include "sim/sim.h"
+#include "optics/psf.h"
 #include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -41,16 +42,12 @@ int c0_sim_check(const struct c0_sim_conf *c)
 		return c0_fail(C0_EINVAL, "--size %dx%d: at least 8x8 pixels", c->width, c->height);
 	if (c->frames < 1)
 		return c0_fail(C0_EINVAL, "--frames %d: must be at least 1", c->frames);
-	if (!(c->pixel_nm > 0))
-		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm)", c->pixel_nm);
-	if (!(c->fwhm_nm > 0))
-		return c0_fail(C0_EINVAL, "--fwhm %g: must be positive (nm)", c->fwhm_nm);
-	if (c->srf < 1 || c->srf > 16)
-		return c0_fail(C0_EINVAL, "--srf %d: must be 1..16", c->srf);
+	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
+	if (st)
+		return st;
 	if (c->nangles < 1 || c->nangles > C0_MAX_ANGLES)
 		return c0_fail(C0_EINVAL, "--angles: need 1..%d angles", C0_MAX_ANGLES);
-	int st = c0_tirf_check(&c->tirf);
-	if (st)
+	if ((st = c0_tirf_check(&c->tirf)))
 		return st;
 	for (int q = 0; q < c->nangles; q++) {
 		double p;

@@ -12,12 +12,9 @@
 
 int c0_intensity_check(const struct c0_intensity_conf *c)
 {
-	if (!(c->pixel_nm > 0))
-		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm)", c->pixel_nm);
-	if (!(c->fwhm_nm > 0))
-		return c0_fail(C0_EINVAL, "--fwhm %g: must be positive (nm)", c->fwhm_nm);
-	if (c->srf < 1 || c->srf > 16)
-		return c0_fail(C0_EINVAL, "--srf %d: must be 1..16", c->srf);
+	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
+	if (st)
+		return st;
 	if (!(c->beta >= 0) || !(c->nu >= 0) || !(c->mu >= 0))
 		return c0_fail(C0_EINVAL, "--beta, --nu and --mu must be >= 0");
 	return C0_OK;

@@ -29,10 +29,9 @@ int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t fram
 {
 	if (!(c->pixel_nm > 0))
 		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
-	if (!(c->fwhm_nm > 0))
-		return c0_fail(C0_EINVAL, "--fwhm %g: must be positive (nm)", c->fwhm_nm);
-	if (c->srf < 1 || c->srf > 16)
-		return c0_fail(C0_EINVAL, "--srf %d: must be 1..16", c->srf);
+	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
+	if (st)
+		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
 		return c0_fail(C0_EINVAL, "--lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
 	if (c->fista.maxit < 1 || !(c->fista.tol > 0))
