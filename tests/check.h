@@ -2,6 +2,7 @@
  * line per failed check and a closing "N passed, N failed" line. */
 #pragma once
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 
 static int check_pass, check_fail;
@@ -17,6 +18,15 @@ static int check_pass, check_fail;
 #define CHECK_REL(a, b, tol) do { double a_ = (a), b_ = (b); \
 	double s_ = fmax(fmax(fabs(a_), fabs(b_)), 1e-300); \
 	CHECK_MSG(fabs(a_ - b_) <= (tol) * s_, "%s = %.12g, %s = %.12g, rel tol %g", #a, a_, #b, b_, (double)(tol)); } while (0)
+
+/* inner product, for the adjoint tests: <A x, y> = <x, A^T y> */
+static inline double dot(const double *a, const double *b, size_t n)
+{
+	double s = 0;
+	for (size_t i = 0; i < n; i++)
+		s += a[i] * b[i];
+	return s;
+}
 
 #define RUN(t) do { int f0_ = check_fail; t(); \
 	fprintf(stderr, "%-40s %s\n", #t, check_fail == f0_ ? "ok" : "FAILED"); } while (0)

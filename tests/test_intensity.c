@@ -16,14 +16,6 @@
 
 static struct c0_rng rng;
 
-static double dot(const double *a, const double *b, size_t n)
-{
-	double s = 0;
-	for (size_t i = 0; i < n; i++)
-		s += a[i] * b[i];
-	return s;
-}
-
 static uint8_t *random_mask(int L, double frac)
 {
 	uint8_t *m = malloc((size_t)L);

@@ -15,14 +15,6 @@
 
 static struct c0_rng rng;
 
-static double dot(const double *a, const double *b, size_t n)
-{
-	double s = 0;
-	for (size_t i = 0; i < n; i++)
-		s += a[i] * b[i];
-	return s;
-}
-
 static void test_adjoints(void)
 {
 	size_t N = 7 * 5 * 4;

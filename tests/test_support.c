@@ -30,14 +30,6 @@ static double *rnd(size_t n, double lo)
 	return v;
 }
 
-static double dot(const double *a, const double *b, size_t n)
-{
-	double s = 0;
-	for (size_t i = 0; i < n; i++)
-		s += a[i] * b[i];
-	return s;
-}
-
 static double maxdiff(const double *a, const double *b, size_t n)
 {
 	double d = 0, m = 0;
