@@ -122,7 +122,8 @@ int cmd_run(int argc, char **argv)
 	struct c0_matirf_result vres = { 0 }, bres = { 0 };
 	memset(sres, 0, sizeof sres), memset(ires, 0, sizeof ires);
 	uint8_t *mask = NULL;
-	double sigma2[MAXS] = { 0 }, t = c0_now();
+	const struct c0_support_result *known[MAXS] = { 0 };
+	double t = c0_now();
 	st = c0_run_support(&sc, sstacks, nsup, sres, rep);
 	if (!st)
 		st = c0_write_support(&out, &sc, sres, nsup, rep);
@@ -136,11 +137,11 @@ int cmd_run(int argc, char **argv)
 	if (!st && !any)
 		st = c0_fail(C0_EINVAL, "the support is empty: no emitter found (try a smaller --lambda)");
 	for (int k = 0; !st && k < nsup; k++)
-		sigma2[sup[k]] = sres[k].sigma2;
+		known[sup[k]] = &sres[k];
 	cJSON_AddNumberToObject(times, "support", c0_now() - t);
 	t = c0_now();
 	if (!st)
-		st = c0_run_intensity(&out, &ic, &sc, stacks, ns, mask, sigma2, ires, baseline && three_d ? corr : NULL, rep);
+		st = c0_run_intensity(&out, &ic, &sc, stacks, ns, mask, NULL, known, ires, baseline && three_d ? corr : NULL, rep);
 	cJSON_AddNumberToObject(times, "intensity", c0_now() - t);
 	if (!st && three_d) {
 		const float *img[MAXS];

@@ -114,32 +114,40 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 	return st;
 }
 
-/* One stack: one streaming pass (the covariance when the noise variance has
- * to be estimated, else just the mean), then the solve. */
+/* One stack: its mean from the support step when that ran on it, else one
+ * streaming pass (the covariance when the noise variance has to be
+ * estimated, else just the mean); then the solve. */
 static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_support_conf *sc, const char *stack,
-			 const uint8_t *mask, double s2, struct c0_intensity_result *res, float **corrected,
-			 int64_t *frames, double *seconds)
+			 const uint8_t *mask, double s2, const struct c0_support_result *known,
+			 struct c0_intensity_result *res, float **corrected, int64_t *frames, double *seconds)
 {
-	struct c0_tiff_reader *r;
-	int st = c0_tiff_open(stack, &r);
-	if (st)
-		return st;
-	const struct c0_tiff_info *in = c0_tiff_get_info(r);
-	const int H = (int)in->height, W = (int)in->width;
-	struct c0_cov cov = { 0 };
-	double *mean = NULL;
-	if (s2 > 0) {
-		st = c0_stack_mean(sc, r, stack, &mean, frames, seconds);
+	const double *mean;
+	double *own = NULL;          /* the mean when this function read it */
+	int H, W, st = C0_OK;
+	if (known) {
+		mean = known->mean, *frames = known->frames, s2 = known->sigma2, *seconds = 0;
+		H = known->Ly / sc->srf, W = known->Lx / sc->srf;
 	} else {
-		st = c0_stack_covariance(sc, r, stack, &cov, seconds);
-		if (!st) {
-			*frames = cov.frames;
-			st = c0_support_noise(sc, &cov, mask, &s2);
-			mean = cov.mean, cov.mean = NULL;
+		struct c0_tiff_reader *r;
+		if ((st = c0_tiff_open(stack, &r)))
+			return st;
+		const struct c0_tiff_info *in = c0_tiff_get_info(r);
+		H = (int)in->height, W = (int)in->width;
+		if (s2 > 0) {
+			st = c0_stack_mean(sc, r, stack, &own, frames, seconds);
+		} else {
+			struct c0_cov cov = { 0 };
+			st = c0_stack_covariance(sc, r, stack, &cov, seconds);
+			if (!st) {
+				*frames = cov.frames;
+				st = c0_support_noise(sc, &cov, mask, &s2);
+				own = cov.mean, cov.mean = NULL;
+			}
+			c0_cov_free(&cov);
 		}
-		c0_cov_free(&cov);
+		c0_tiff_close(r);
+		mean = own;
 	}
-	c0_tiff_close(r);
 	if (!st)
 		st = c0_intensity_solve(ic, mean, H, W, *frames, mask, s2, res);
 	if (!st && corrected) {
@@ -149,13 +157,14 @@ static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_sup
 		for (size_t p = 0; !st && p < nc; p++)
 			(*corrected)[p] = (float)(mean[p] - res->b[p]);
 	}
-	free(mean);
+	free(own);
 	return st;
 }
 
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
-		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
-		     float **corrected, cJSON *rep)
+		     char **stacks, int n, const uint8_t *mask, const double *sigma2,
+		     const struct c0_support_result *const *known, struct c0_intensity_result *res, float **corrected,
+		     cJSON *rep)
 {
 	/* the stacks are independent: solve them side by side, write in order */
 	int64_t frames[64];
@@ -171,7 +180,7 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 	c0_progress_begin(&pr, "intensity (stacks)", n);
 #pragma omp parallel for schedule(dynamic, 1)
 	for (int i = 0; i < n; i++) {
-		sts[i] = intensity_one(ic, sc, stacks[i], mask, sigma2 ? sigma2[i] : 0, &res[i],
+		sts[i] = intensity_one(ic, sc, stacks[i], mask, sigma2 ? sigma2[i] : 0, known ? known[i] : NULL, &res[i],
 				       corrected ? &corrected[i] : NULL, &frames[i], &tc[i]);
 		if (sts[i])   /* error messages are per thread */
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());

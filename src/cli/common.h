@@ -16,15 +16,19 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 
 #include "stages/intensity.h"
 
-/* Intensity and background of each stack on the support mask (Ly x Lx):
- * one pass per stack for its mean and covariance; the noise variance comes
- * from sigma2[i] when > 0, else from the covariance restricted to the mask.
+/* Intensity and background of each stack on the support mask (Ly x Lx).
+ * known (n pointers, or NULL): the support result of a stack when the
+ * support step ran on it, whose mean and noise variance are used as they
+ * are; otherwise one pass over the stack, for its mean when sigma2[i] > 0
+ * gives the noise variance, else for its covariance, from which the noise
+ * variance is estimated on the mask.
  * Writes intensity_qNN.tif and background_qNN.tif, fills rep["intensity"].
  * corrected (n pointers, or NULL): receives each temporal mean minus its
  * background (coarse grid, allocated), the standard MA-TIRF input. */
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
-		     char **stacks, int n, const uint8_t *mask, const double *sigma2, struct c0_intensity_result *res,
-		     float **corrected, cJSON *rep);
+		     char **stacks, int n, const uint8_t *mask, const double *sigma2,
+		     const struct c0_support_result *const *known, struct c0_intensity_result *res, float **corrected,
+		     cJSON *rep);
 
 #include "stages/matirf.h"
 #include "cli/opts.h"
