@@ -159,8 +159,8 @@ int cmd_run(int argc, char **argv)
 		if (!st)
 			st = c0_run_matirf(&out, &m, h > 0 ? (const float *const *)pooled : img, h > 0 ? img : NULL, Ly, Lx,
 					   sc.pixel_nm / sc.srf, "", "matirf", &vres, rep);
-		cJSON_AddNumberToObject(cJSON_GetObjectItem(rep, "matirf") ? cJSON_GetObjectItem(rep, "matirf") : rep,
-					"depth_pool_window_px", h > 0 ? 2 * h + 1 : 0);
+		if (!st)
+			cJSON_AddNumberToObject(cJSON_GetObjectItem(rep, "matirf"), "depth_pool_window_px", h > 0 ? 2 * h + 1 : 0);
 		cJSON_AddNumberToObject(times, "matirf", c0_now() - t);
 		if (!st && baseline) {
 			t = c0_now();

@@ -32,7 +32,7 @@ static void text(uint8_t *img, int ow, int oh, int x, int y, const char *s)
 {
 	for (; *s; s++, x += ADV) {
 		const char *g = strchr(glyph_chars, *s);
-		if (!g || !*s)
+		if (!g)
 			continue;
 		const uint8_t *b = glyphs[g - glyph_chars];
 		for (int r = 0; r < 5 * SCALE; r++)
