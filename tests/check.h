@@ -28,6 +28,14 @@ static inline double dot(const double *a, const double *b, size_t n)
 	return s;
 }
 
+static inline double dotf(const float *a, const float *b, size_t n)
+{
+	double s = 0;
+	for (size_t i = 0; i < n; i++)
+		s += (double)a[i] * b[i];
+	return s;
+}
+
 #define RUN(t) do { int f0_ = check_fail; t(); \
 	fprintf(stderr, "%-40s %s\n", #t, check_fail == f0_ ? "ok" : "FAILED"); } while (0)
 #define CHECK_DONE() (printf("%d passed, %d failed\n", check_pass, check_fail), check_fail ? 1 : 0)

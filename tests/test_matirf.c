@@ -18,19 +18,19 @@ static struct c0_rng rng;
 static void test_adjoints(void)
 {
 	size_t N = 7 * 5 * 4;
-	double work[2 * 7 * 5 * 4];
+	float work[2 * 7 * 5 * 4];
 	struct c0_diff3 d = { 7, 5, 4, 1.3, 0.7, work };
-	double *v = malloc(N * sizeof *v), *g = malloc(6 * N * sizeof *g), *h = malloc(6 * N * sizeof *h), *va = malloc(N * sizeof *va);
+	float *v = malloc(N * sizeof *v), *g = malloc(6 * N * sizeof *g), *h = malloc(6 * N * sizeof *h), *va = malloc(N * sizeof *va);
 	for (size_t i = 0; i < N; i++)
-		v[i] = c0_rng_normal(&rng);
+		v[i] = (float)c0_rng_normal(&rng);
 	for (size_t i = 0; i < 6 * N; i++)
-		h[i] = c0_rng_normal(&rng);
+		h[i] = (float)c0_rng_normal(&rng);
 	c0_grad3(&d, v, g);
 	c0_grad3_adjoint(&d, h, va);
-	CHECK_REL(dot(g, h, 3 * N), dot(v, va, N), 1e-12);
+	CHECK_REL(dotf(g, h, 3 * N), dotf(v, va, N), 1e-5);
 	c0_hess3(&d, v, g);
 	c0_hess3_adjoint(&d, h, va);
-	CHECK_REL(dot(g, h, 6 * N), dot(v, va, N), 1e-12);
+	CHECK_REL(dotf(g, h, 6 * N), dotf(v, va, N), 1e-5);
 	/* the Hessian of a linear ramp vanishes away from the borders */
 	for (int z = 0; z < 4; z++)
 		for (int y = 0; y < 5; y++)
@@ -58,19 +58,26 @@ static void test_grad3m(void)
 	struct c0_grad3m g;
 	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0.7) == C0_OK);
 	size_t N = (size_t)g.M * nz;
-	double v[140], va[140], d[420], e[420];
+	float v[140], va[140], d[420], e[420];
 	for (size_t i = 0; i < 420; i++)   /* all of them: the full mask below uses more */
-		e[i] = c0_rng_normal(&rng);
+		e[i] = (float)c0_rng_normal(&rng);
 	for (size_t i = 0; i < 140; i++)
-		v[i] = c0_rng_normal(&rng);
+		v[i] = (float)c0_rng_normal(&rng);
 	c0_grad3m_forward(&g, v, d);
 	c0_grad3m_adjoint(&g, e, va);
 	CHECK(g.M > 0 && g.M < np);
-	CHECK_REL(dot(d, e, 3 * N), dot(v, va, N), 1e-12);
+	CHECK_REL(dotf(d, e, 3 * N), dotf(v, va, N), 1e-5);
+	c0_grad3m_free(&g);
+	/* no axial weight: the axial component is dropped, not stored as zeros */
+	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0) == C0_OK);
+	CHECK(g.nc == 2);
+	c0_grad3m_forward(&g, v, d);
+	c0_grad3m_adjoint(&g, e, va);
+	CHECK_REL(dotf(d, e, 2 * N), dotf(v, va, N), 1e-5);
 	c0_grad3m_free(&g);
 	memset(mask, 1, sizeof mask);
 	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0.7) == C0_OK);
-	double work[2 * 140];
+	float work[2 * 140];
 	struct c0_diff3 full = { nx, ny, nz, 1.3, 0.7, work };
 	N = (size_t)np * nz;
 	c0_grad3m_forward(&g, v, d);
@@ -78,13 +85,13 @@ static void test_grad3m(void)
 	double mx = 0;
 	for (size_t i = 0; i < 3 * N; i++)
 		mx = fmax(mx, fabs(d[i] - e[i]));
-	CHECK(mx < 1e-14);
+	CHECK(mx < 1e-6);
 	c0_grad3m_adjoint(&g, d, va);
 	c0_grad3_adjoint(&full, d, v);
 	mx = 0;
 	for (size_t i = 0; i < N; i++)
 		mx = fmax(mx, fabs(va[i] - v[i]));
-	CHECK(mx < 1e-13);
+	CHECK(mx < 1e-5);
 	c0_grad3m_free(&g);
 }
 
@@ -93,21 +100,22 @@ static void test_tirfop(void)
 {
 	struct c0_tirf t = C0_TIRF_DEFAULTS;
 	enum { NQ = 5, NZ = 7, M = 11 };
-	double W[NQ * NZ], u[NZ * M], y[NQ * M], v[NQ * M], ua[NZ * M] = { 0 };
+	double W[NQ * NZ];
+	float u[NZ * M], y[NQ * M], v[NQ * M], ua[NZ * M] = { 0 };
 	const double ang[NQ] = { 61.48, 63.37, 65.39, 67.58, 70.0 };
 	CHECK(c0_tirf_weights(&t, NQ, ang, NULL, NZ, 0, 30, W) == C0_OK);
 	for (int i = 0; i < NZ * M; i++)
-		u[i] = c0_rng_normal(&rng);
+		u[i] = (float)c0_rng_normal(&rng);
 	for (int i = 0; i < NQ * M; i++)
-		v[i] = c0_rng_normal(&rng);
+		v[i] = (float)c0_rng_normal(&rng);
 	const struct c0_tirfop o = { NQ, NZ, M, W };
 	c0_tirfop_forward(&o, u, y);
 	c0_tirfop_adjoint_add(&o, v, ua);
-	CHECK_REL(dot(y, v, NQ * M), dot(u, ua, NZ * M), 1e-12);
+	CHECK_REL(dotf(y, v, NQ * M), dotf(u, ua, NZ * M), 1e-5);
 	double s = 0;            /* angle 3, column 4, by hand */
 	for (int j = 0; j < NZ; j++)
 		s += W[3 * NZ + j] * u[j * M + 4];
-	CHECK_REL(y[3 * M + 4], s, 1e-14);
+	CHECK_REL(y[3 * M + 4], s, 1e-5);
 	CHECK(W[3 * NZ + 6] / W[0 * NZ + 6] < W[3 * NZ] / W[0]);   /* deeper = dimmer at high angles */
 }
 

@@ -12,7 +12,7 @@ static void axis(const struct c0_diff3 *d, int a, size_t *stride, int *len)
 }
 
 /* out = D_a in (forward difference, zero at the last index) */
-static void dfwd(const struct c0_diff3 *d, int a, const double *in, double *out)
+static void dfwd(const struct c0_diff3 *d, int a, const float *in, float *out)
 {
 	size_t s;
 	int n;
@@ -21,8 +21,8 @@ static void dfwd(const struct c0_diff3 *d, int a, const double *in, double *out)
 	/* the volume is a sequence of blocks of n slabs of s contiguous values */
 	for (size_t b0 = 0; b0 < N; b0 += block)
 		for (int k = 0; k < n; k++) {
-			const double *p = in + b0 + k * s;
-			double *o = out + b0 + k * s;
+			const float *p = in + b0 + k * s;
+			float *o = out + b0 + k * s;
 			if (k < n - 1)
 				for (size_t i = 0; i < s; i++)
 					o[i] = p[i + s] - p[i];
@@ -32,7 +32,7 @@ static void dfwd(const struct c0_diff3 *d, int a, const double *in, double *out)
 }
 
 /* out = D_a^T in */
-static void dadj(const struct c0_diff3 *d, int a, const double *in, double *out)
+static void dadj(const struct c0_diff3 *d, int a, const float *in, float *out)
 {
 	size_t s;
 	int n;
@@ -40,8 +40,8 @@ static void dadj(const struct c0_diff3 *d, int a, const double *in, double *out)
 	const size_t N = (size_t)d->nx * d->ny * d->nz, block = s * n;
 	for (size_t b0 = 0; b0 < N; b0 += block)
 		for (int k = 0; k < n; k++) {
-			const double *p = in + b0 + k * s;
-			double *o = out + b0 + k * s;
+			const float *p = in + b0 + k * s;
+			float *o = out + b0 + k * s;
 			for (size_t i = 0; i < s; i++)
 				o[i] = (k < n - 1 ? -p[i] : 0) + (k > 0 ? p[i - s] : 0);
 		}
@@ -49,35 +49,35 @@ static void dadj(const struct c0_diff3 *d, int a, const double *in, double *out)
 
 static double w(const struct c0_diff3 *d, int a) { return a == 2 ? d->wz : d->wl; }
 
-void c0_grad3(const struct c0_diff3 *d, const double *v, double *g)
+void c0_grad3(const struct c0_diff3 *d, const float *v, float *g)
 {
 	size_t N = (size_t)d->nx * d->ny * d->nz;
 	for (int a = 0; a < 3; a++) {
 		dfwd(d, a, v, g + a * N);
 		for (size_t i = 0; i < N; i++)
-			g[a * N + i] *= w(d, a);
+			g[a * N + i] *= (float)w(d, a);
 	}
 }
 
-void c0_grad3_adjoint(const struct c0_diff3 *d, const double *g, double *v)
+void c0_grad3_adjoint(const struct c0_diff3 *d, const float *g, float *v)
 {
 	size_t N = (size_t)d->nx * d->ny * d->nz;
-	double *t = d->work;
+	float *t = d->work;
 	memset(v, 0, N * sizeof *v);
 	for (int a = 0; a < 3; a++) {
 		dadj(d, a, g + a * N, t);
 		for (size_t i = 0; i < N; i++)
-			v[i] += w(d, a) * t[i];
+			v[i] += (float)w(d, a) * t[i];
 	}
 }
 
 /* components: xx, yy, zz, xy, xz, yz */
 static const int HA[6] = { 0, 1, 2, 0, 0, 1 }, HB[6] = { 0, 1, 2, 1, 2, 2 };
 
-void c0_hess3(const struct c0_diff3 *d, const double *v, double *h)
+void c0_hess3(const struct c0_diff3 *d, const float *v, float *h)
 {
 	size_t N = (size_t)d->nx * d->ny * d->nz;
-	double *t = d->work;
+	float *t = d->work;
 	for (int c = 0; c < 6; c++) {
 		double sc = w(d, HA[c]) * w(d, HB[c]);
 		if (c < 3) {               /* -D^T D */
@@ -90,14 +90,14 @@ void c0_hess3(const struct c0_diff3 *d, const double *v, double *h)
 			sc *= sqrt(2.0);
 		}
 		for (size_t i = 0; i < N; i++)
-			h[c * N + i] *= sc;
+			h[c * N + i] *= (float)sc;
 	}
 }
 
-void c0_hess3_adjoint(const struct c0_diff3 *d, const double *h, double *v)
+void c0_hess3_adjoint(const struct c0_diff3 *d, const float *h, float *v)
 {
 	size_t N = (size_t)d->nx * d->ny * d->nz;
-	double *t = d->work, *u = d->work + N;
+	float *t = d->work, *u = d->work + N;
 	memset(v, 0, N * sizeof *v);
 	for (int c = 0; c < 6; c++) {
 		double sc = w(d, HA[c]) * w(d, HB[c]);
@@ -111,6 +111,6 @@ void c0_hess3_adjoint(const struct c0_diff3 *d, const double *h, double *v)
 			sc *= sqrt(2.0);
 		}
 		for (size_t i = 0; i < N; i++)
-			v[i] += sc * u[i];
+			v[i] += (float)sc * u[i];
 	}
 }

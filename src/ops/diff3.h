@@ -7,13 +7,15 @@
 #pragma once
 #include <stddef.h>
 
+/* Volumes are float: the solvers that use these are bound by memory traffic. */
+
 struct c0_diff3 {
 	int nx, ny, nz;
 	double wl, wz;
-	double *work;    /* 2 N doubles owned by the caller, for the temporaries */
+	float *work;     /* 2 N floats owned by the caller, for the temporaries */
 };
 
-void c0_grad3(const struct c0_diff3 *d, const double *v, double *g);        /* N -> 3N */
-void c0_grad3_adjoint(const struct c0_diff3 *d, const double *g, double *v);/* 3N -> N */
-void c0_hess3(const struct c0_diff3 *d, const double *v, double *h);        /* N -> 6N */
-void c0_hess3_adjoint(const struct c0_diff3 *d, const double *h, double *v);/* 6N -> N */
+void c0_grad3(const struct c0_diff3 *d, const float *v, float *g);        /* N -> 3N */
+void c0_grad3_adjoint(const struct c0_diff3 *d, const float *g, float *v);/* 3N -> N */
+void c0_hess3(const struct c0_diff3 *d, const float *v, float *h);        /* N -> 6N */
+void c0_hess3_adjoint(const struct c0_diff3 *d, const float *h, float *v);/* 6N -> N */

@@ -13,7 +13,7 @@ int c0_grad3m_init(struct c0_grad3m *g, const uint8_t *mask, int ny, int nx, int
 	int M = 0;
 	for (size_t p = 0; p < np; p++)
 		idx[p] = mask[p] ? M++ : -1;
-	*g = (struct c0_grad3m){ M, nz, wl, wz, NULL, NULL, NULL, NULL, NULL };
+	*g = (struct c0_grad3m){ M, nz, wz != 0 ? 3 : 2, wl, wz, NULL, NULL, NULL, NULL, NULL };
 	size_t n = M ? (size_t)M : 1;
 	g->right = malloc(n * sizeof(int)), g->down = malloc(n * sizeof(int));
 	g->left = malloc(n * sizeof(int)), g->up = malloc(n * sizeof(int)), g->pixel = malloc(n * sizeof(int));
@@ -44,44 +44,46 @@ void c0_grad3m_free(struct c0_grad3m *g)
 	g->right = g->down = g->left = g->up = g->pixel = NULL;
 }
 
-void c0_grad3m_forward(const struct c0_grad3m *g, const double *v, double *d)
+void c0_grad3m_forward(const struct c0_grad3m *g, const float *v, float *d)
 {
 	const size_t M = (size_t)g->M, N = M * g->nz;
 #pragma omp parallel for schedule(static) if (N > 50000)
 	for (int j = 0; j < g->nz; j++) {
-		const double *c = v + j * M;
-		double *dx = d + j * M, *dy = d + N + j * M, *dz = d + 2 * N + j * M;
+		const float *c = v + j * M;
+		const float wl = (float)g->wl, wz = (float)g->wz;
+		float *dx = d + j * M, *dy = d + N + j * M;
 		for (size_t k = 0; k < M; k++) {
 			int r = g->right[k], w = g->down[k];
-			dx[k] = r >= 0 ? g->wl * (c[r] - c[k]) : 0;
-			dy[k] = w >= 0 ? g->wl * (c[w] - c[k]) : 0;
-			dz[k] = j + 1 < g->nz ? g->wz * (c[k + M] - c[k]) : 0;
+			dx[k] = r >= 0 ? wl * (c[r] - c[k]) : 0;
+			dy[k] = w >= 0 ? wl * (c[w] - c[k]) : 0;
 		}
+		float *dz = g->nc == 3 ? d + 2 * N + j * M : NULL;
+		for (size_t k = 0; dz && k < M; k++)
+			dz[k] = j + 1 < g->nz ? wz * (c[k + M] - c[k]) : 0;
 	}
 }
 
 /* gather form: each voxel collects the rows it appears in, so no two
  * threads write the same value */
-void c0_grad3m_adjoint(const struct c0_grad3m *g, const double *d, double *v)
+void c0_grad3m_adjoint(const struct c0_grad3m *g, const float *d, float *v)
 {
 	const size_t M = (size_t)g->M, N = M * g->nz;
 #pragma omp parallel for schedule(static) if (N > 50000)
 	for (int j = 0; j < g->nz; j++) {
-		const double *dx = d + j * M, *dy = d + N + j * M, *dz = d + 2 * N + j * M;
-		double *o = v + j * M;
+		const float *dx = d + j * M, *dy = d + N + j * M, wl = (float)g->wl, wz = (float)g->wz;
+		float *o = v + j * M;
 		for (size_t k = 0; k < M; k++) {
 			int l = g->left[k], u = g->up[k];
-			double s = (g->right[k] >= 0 ? -dx[k] : 0) + (g->down[k] >= 0 ? -dy[k] : 0);
+			float s = (g->right[k] >= 0 ? -dx[k] : 0) + (g->down[k] >= 0 ? -dy[k] : 0);
 			if (l >= 0)
 				s += dx[l];
 			if (u >= 0)
 				s += dy[u];
-			s *= g->wl;
-			double z = j + 1 < g->nz ? -dz[k] : 0;
-			if (j > 0)
-				z += dz[k - M];
-			o[k] = s + g->wz * z;
+			o[k] = wl * s;
 		}
+		const float *dz = g->nc == 3 ? d + 2 * N + j * M : NULL;
+		for (size_t k = 0; dz && k < M; k++)
+			o[k] += wz * ((j + 1 < g->nz ? -dz[k] : 0) + (j > 0 ? dz[k - M] : 0));
 	}
 }
 

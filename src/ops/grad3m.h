@@ -3,14 +3,15 @@
  * v[j * M + k]. Lateral differences join 4-neighbour pixels that are both
  * in the mask; axial differences join neighbouring depths of one column.
  * Forward differences scaled by (wl, wl, wz), zero where the neighbour is
- * missing (Neumann), 3 components of M*nz values. With a full mask this is
- * the usual 3D gradient with Neumann borders. */
+ * missing (Neumann), nc components of M*nz values: 3, or 2 when wz = 0 (the
+ * axial one would be zero). With a full mask this is the usual 3D gradient
+ * with Neumann borders. */
 #pragma once
 #include <stddef.h>
 #include <stdint.h>
 
 struct c0_grad3m {
-	int M, nz;
+	int M, nz, nc;
 	double wl, wz;
 	int *right, *down, *left, *up;   /* neighbour column or -1 */
 	int *pixel;                      /* M: raster index of each column */
@@ -19,8 +20,8 @@ struct c0_grad3m {
 /* mask: ny x nx (nonzero = in); M = 0 is allowed. */
 int c0_grad3m_init(struct c0_grad3m *g, const uint8_t *mask, int ny, int nx, int nz, double wl, double wz);
 void c0_grad3m_free(struct c0_grad3m *g);
-void c0_grad3m_forward(const struct c0_grad3m *g, const double *v, double *d);  /* M nz -> 3 M nz */
-void c0_grad3m_adjoint(const struct c0_grad3m *g, const double *d, double *v);  /* 3 M nz -> M nz */
+void c0_grad3m_forward(const struct c0_grad3m *g, const float *v, float *d);   /* M nz -> nc M nz */
+void c0_grad3m_adjoint(const struct c0_grad3m *g, const float *d, float *v);   /* nc M nz -> M nz */
 /* Per voxel, the sum of |entries| of its column of the operator (for
  * diagonal preconditioning): wl (lateral neighbours) + wz (axial neighbours). */
 double c0_grad3m_colsum(const struct c0_grad3m *g, int k, int j);

@@ -5,18 +5,18 @@
  * every angle stays in cache. */
 #define CHUNK 512
 
-void c0_tirfop_forward(const struct c0_tirfop *o, const double *u, double *y)
+void c0_tirfop_forward(const struct c0_tirfop *o, const float *u, float *y)
 {
 	const size_t M = o->M;
 #pragma omp parallel for schedule(static) if (M * o->nz > 50000)
 	for (size_t k0 = 0; k0 < M; k0 += CHUNK) {
 		const size_t k1 = k0 + CHUNK < M ? k0 + CHUNK : M;
 		for (int q = 0; q < o->nq; q++) {
-			double *yq = y + q * M;
+			float *yq = y + q * M;
 			for (size_t k = k0; k < k1; k++)
 				yq[k] = 0;
 			for (int j = 0; j < o->nz; j++) {
-				const double w = o->W[q * o->nz + j], *uj = u + j * M;
+				const float w = (float)o->W[q * o->nz + j], *uj = u + j * M;
 				for (size_t k = k0; k < k1; k++)
 					yq[k] += w * uj[k];
 			}
@@ -24,16 +24,16 @@ void c0_tirfop_forward(const struct c0_tirfop *o, const double *u, double *y)
 	}
 }
 
-void c0_tirfop_adjoint_add(const struct c0_tirfop *o, const double *y, double *u)
+void c0_tirfop_adjoint_add(const struct c0_tirfop *o, const float *y, float *u)
 {
 	const size_t M = o->M;
 #pragma omp parallel for schedule(static) if (M * o->nz > 50000)
 	for (size_t k0 = 0; k0 < M; k0 += CHUNK) {
 		const size_t k1 = k0 + CHUNK < M ? k0 + CHUNK : M;
 		for (int j = 0; j < o->nz; j++) {
-			double *uj = u + j * M;
+			float *uj = u + j * M;
 			for (int q = 0; q < o->nq; q++) {
-				const double w = o->W[q * o->nz + j], *yq = y + q * M;
+				const float w = (float)o->W[q * o->nz + j], *yq = y + q * M;
 				for (size_t k = k0; k < k1; k++)
 					uj[k] += w * yq[k];
 			}

@@ -6,6 +6,6 @@
 
 struct c0_tirfop { int nq, nz; size_t M; const double *W; };
 
-void c0_tirfop_forward(const struct c0_tirfop *o, const double *u, double *y);
+void c0_tirfop_forward(const struct c0_tirfop *o, const float *u, float *y);
 /* u += W^T y (adds, so that a regulariser's adjoint can go first) */
-void c0_tirfop_adjoint_add(const struct c0_tirfop *o, const double *y, double *u);
+void c0_tirfop_adjoint_add(const struct c0_tirfop *o, const float *y, float *u);

@@ -1,21 +1,27 @@
-/* Diagonally preconditioned primal-dual hybrid gradient (Chambolle-Pock,
- * Pock-Chambolle 2011 with alpha = 1) for
+/* Over-relaxed primal-dual hybrid gradient (Chambolle-Pock 2011; Condat
+ * 2013) for
  *   min_x  G(x) + F(K x)
- * given the proximal maps of G and of F* (the convex conjugate), both in
- * place with per-entry steps. Steps tau_j <= 1 / sum_i |K_ij| and
- * sigma_i <= 1 / sum_j |K_ij| converge without knowing ||K||.
- * Knows nothing about the problem. */
+ * The problem supplies K, K^T and the two proximal steps with its own
+ * (e.g. diagonal, Pock-Chambolle 2011) step sizes tau and sigma, each step
+ * fused with its relaxed update so that it is one pass over memory:
+ *   primal_step: with t = K^T y on entry, xn = prox_{tau G}(x - tau t),
+ *                then c0_pdhg_primal_entry for every entry;
+ *   dual_step:   with s = K xbar, yn = prox_{sigma F*}(y + sigma s),
+ *                then c0_pdhg_dual_entry for every entry.
+ * Diagonal steps tau_j <= 1 / sum_i |K_ij|, sigma_i <= 1 / sum_j |K_ij|
+ * converge without knowing ||K||. Iterates are float (the solver is bound
+ * by memory traffic), sums are double. Knows nothing about the problem. */
 #pragma once
+#include <math.h>
 #include <stddef.h>
 
 struct c0_pdhg_problem {
 	size_t n, m;                 /* primal and dual sizes */
 	void *ctx;
-	void (*K)(void *ctx, const double *x, double *y);
-	void (*KT)(void *ctx, const double *y, double *x);
-	void (*prox_g)(void *ctx, double *x, const double *tau);
-	void (*prox_fstar)(void *ctx, double *y, const double *sigma);
-	const double *tau, *sigma;   /* n and m step sizes */
+	void (*K)(void *ctx, const float *x, float *y);
+	void (*KT)(void *ctx, const float *y, float *x);
+	void (*primal_step)(void *ctx, float *x, float *t, float rho, double sums[2]);
+	void (*dual_step)(void *ctx, float *y, const float *s, float rho, double sums[2]);
 	void (*iter)(void *ctx, int it);  /* optional, after each iteration (progress) */
 };
 
@@ -26,8 +32,30 @@ struct c0_pdhg_conf {
 };
 #define C0_PDHG_DEFAULTS { 3000, 1e-4, 1.8 }
 
+/* The relaxed updates of one entry, given its new value: x moves by rho
+ * times the step, t receives the extrapolated point 2 xn - x, and sums
+ * collect ||xn - x||^2 and ||xn||^2 for the stopping test. Over-relaxation
+ * makes an entry whose prox is 0 decay as (1 - rho)^k; it is flushed to 0
+ * before it turns subnormal, where float arithmetic is many times slower. */
+#define C0_PDHG_TINY 1e-30f
+
+static inline void c0_pdhg_primal_entry(float *x, float *t, float xn, float rho, double *d2, double *n2)
+{
+	float d = xn - *x, v = *x + rho * d;
+	*t = xn + d;
+	*x = fabsf(v) < C0_PDHG_TINY ? 0 : v;
+	*d2 += (double)d * d, *n2 += (double)xn * xn;
+}
+
+static inline void c0_pdhg_dual_entry(float *y, float yn, float rho, double *d2, double *n2)
+{
+	float d = yn - *y, v = *y + rho * d;
+	*y = fabsf(v) < C0_PDHG_TINY ? 0 : v;
+	*d2 += (double)d * d, *n2 += (double)yn * yn;
+}
+
 struct c0_pdhg_info { int iters, converged; double dx, dy; };
 
 /* x (n) and y (m) hold the start and receive the result. */
-int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c, double *x, double *y,
+int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c, float *x, float *y,
 		  struct c0_pdhg_info *info);

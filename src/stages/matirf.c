@@ -44,9 +44,12 @@ void c0_matirf_result_free(struct c0_matirf_result *r)
 
 struct ctx {
 	int nq, nz, M;            /* columns: the lateral pixels solved for */
+	int ncomp;                /* components of the regulariser's operator */
 	size_t N;                 /* M * nz voxels */
 	const double *W;          /* nq x nz, column-normalised */
-	const double *b;          /* nq x M, scaled data */
+	const float *b;           /* nq x M, scaled data */
+	const float *tau;         /* N primal steps */
+	double sig_d[MAXQ], sig_r[6];  /* dual steps: per angle, per regulariser component */
 	enum c0_reg reg;
 	struct c0_grad3m g;       /* TV: gradient over the columns */
 	struct c0_diff3 d;        /* Hessian: full grid (M = all pixels) */
@@ -55,7 +58,7 @@ struct ctx {
 };
 
 /* K u = [W u per column; R's operator u] */
-static void K(void *vc, const double *u, double *y)
+static void K(void *vc, const float *u, float *y)
 {
 	struct ctx *c = vc;
 	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
@@ -66,7 +69,7 @@ static void K(void *vc, const double *u, double *y)
 		c0_hess3(&c->d, u, y + c->nq * w.M);
 }
 
-static void KT(void *vc, const double *y, double *u)
+static void KT(void *vc, const float *y, float *u)
 {
 	struct ctx *c = vc;
 	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
@@ -83,11 +86,19 @@ static void iter(void *vc, int it)
 	c0_progress_update(c->pr, it);
 }
 
-static void prox_g(void *vc, double *u, const double *tau)
+/* G = l1 sum u + indicator(u >= 0) */
+static void primal_step(void *vc, float *x, float *t, float rho, double sums[2])
 {
 	struct ctx *c = vc;
-	for (size_t i = 0; i < c->N; i++)
-		u[i] = fmax(u[i] - tau[i] * c->l1, 0);
+	const float l1 = (float)c->l1, *tau = c->tau;
+	const size_t N = c->N;
+	double d2 = 0, n2 = 0;
+#pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) firstprivate(x, t, tau) if (N > 50000)
+	for (size_t i = 0; i < N; i++) {
+		float v = x[i] - tau[i] * (t[i] + l1);
+		c0_pdhg_primal_entry(&x[i], &t[i], 0.5f * (v + fabsf(v)), rho, &d2, &n2);   /* max(v, 0) without a branch */
+	}
+	sums[0] += d2, sums[1] += n2;
 }
 
 /* eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi */
@@ -126,59 +137,86 @@ static void eig3(double a[3][3], double v[3][3])
 	}
 }
 
-/* projection onto the radius-k ball of the dual norm (group l2 for TV,
- * spectral for Schatten-1) */
-static void project_dual(const struct ctx *c, double *y, double k)
+/* h (xx, yy, zz, sqrt2 xy, sqrt2 xz, sqrt2 yz) <- the symmetric matrix with
+ * its eigenvalues clipped to [-k, k]: the projection on the spectral-norm
+ * ball, Schatten-1's dual. */
+static void spectral_clip(double h[6], double k)
 {
-	const size_t N = c->N;
-	if (c->reg == C0_REG_TV) {
-#pragma omp parallel for schedule(static) if (N > 50000)
-		for (size_t i = 0; i < N; i++) {
-			double n = sqrt(y[i] * y[i] + y[N + i] * y[N + i] + y[2 * N + i] * y[2 * N + i]);
-			if (n > k) {
-				double s = k / n;
-				y[i] *= s, y[N + i] *= s, y[2 * N + i] *= s;
-			}
-		}
-		return;
-	}
-	/* Schatten-1's dual is the spectral norm: clip the eigenvalues to [-kappa, kappa] */
 	const double r2 = sqrt(2.0);
-#pragma omp parallel for if (N > 20000)
-	for (size_t i = 0; i < N; i++) {
-		double a[3][3] = { { y[i], y[3 * N + i] / r2, y[4 * N + i] / r2 },
-				   { y[3 * N + i] / r2, y[N + i], y[5 * N + i] / r2 },
-				   { y[4 * N + i] / r2, y[5 * N + i] / r2, y[2 * N + i] } };
-		if (fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]) + fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]) <= k)
-			continue;   /* spectral norm <= sum of |entries| <= kappa: already inside */
-		double v[3][3], e[3];
-		eig3(a, v);
-		int clip = 0;
-		for (int j = 0; j < 3; j++) {
-			e[j] = a[j][j];
-			if (e[j] > k) e[j] = k, clip = 1;
-			if (e[j] < -k) e[j] = -k, clip = 1;
-		}
-		if (!clip)
-			continue;
-		double m[3][3];
-		for (int p = 0; p < 3; p++)
-			for (int q = 0; q < 3; q++)
-				m[p][q] = v[p][0] * e[0] * v[q][0] + v[p][1] * e[1] * v[q][1] + v[p][2] * e[2] * v[q][2];
-		y[i] = m[0][0], y[N + i] = m[1][1], y[2 * N + i] = m[2][2];
-		y[3 * N + i] = r2 * m[0][1], y[4 * N + i] = r2 * m[0][2], y[5 * N + i] = r2 * m[1][2];
+	double a[3][3] = { { h[0], h[3] / r2, h[4] / r2 }, { h[3] / r2, h[1], h[5] / r2 }, { h[4] / r2, h[5] / r2, h[2] } };
+	double v[3][3], e[3];
+	eig3(a, v);
+	int clip = 0;
+	for (int j = 0; j < 3; j++) {
+		e[j] = a[j][j];
+		if (e[j] > k) e[j] = k, clip = 1;
+		if (e[j] < -k) e[j] = -k, clip = 1;
 	}
+	if (!clip)
+		return;
+	double m[3][3];
+	for (int p = 0; p < 3; p++)
+		for (int q = 0; q < 3; q++)
+			m[p][q] = v[p][0] * e[0] * v[q][0] + v[p][1] * e[1] * v[q][1] + v[p][2] * e[2] * v[q][2];
+	h[0] = m[0][0], h[1] = m[1][1], h[2] = m[2][2];
+	h[3] = r2 * m[0][1], h[4] = r2 * m[0][2], h[5] = r2 * m[1][2];
 }
 
-/* F*(y) for F = 1/2 ||. - b||^2 (data rows) + kappa R (regulariser rows):
- * the data part shrinks, the regulariser part projects on the kappa ball */
-static void prox_fstar(void *vc, double *y, const double *sigma)
+/* F = 1/2 ||. - b||^2 on the data rows and kappa R on the regulariser rows.
+ * prox of sigma F*: the data part shrinks towards -b, the regulariser part
+ * projects on the kappa ball of the dual norm (group l2 for TV, spectral for
+ * Schatten-1; the sum of |entries| bounds the spectral norm, so most voxels
+ * skip the eigen-decomposition). */
+static void dual_step(void *vc, float *y, const float *s, float rho, double sums[2])
 {
 	struct ctx *c = vc;
-	const size_t nd = (size_t)c->nq * c->M;
-	for (size_t i = 0; i < nd; i++)
-		y[i] = (y[i] - sigma[i] * c->b[i]) / (1 + sigma[i]);
-	project_dual(c, y + nd, c->kappa);
+	const size_t M = c->M, N = c->N, nd = (size_t)c->nq * M;
+	const float k = (float)c->kappa;
+	double d2 = 0, n2 = 0;
+	for (int q = 0; q < c->nq; q++) {
+		const float sg = (float)c->sig_d[q], *bq = c->b + q * M, *sq = s + q * M;
+		float *yq = y + q * M;
+#pragma omp simd reduction(+ : d2, n2)
+		for (size_t i = 0; i < M; i++)
+			c0_pdhg_dual_entry(&yq[i], (yq[i] + sg * (sq[i] - bq[i])) / (1 + sg), rho, &d2, &n2);
+	}
+	y += nd, s += nd;
+	const float s0 = (float)c->sig_r[0], s1 = (float)c->sig_r[1], s2 = (float)c->sig_r[2];
+	if (c->reg == C0_REG_TV && !(k > 0)) {   /* no regulariser: its dual goes to 0 */
+		for (size_t i = 0; i < c->ncomp * N; i++)
+			c0_pdhg_dual_entry(&y[i], 0, rho, &d2, &n2);
+	} else if (c->reg == C0_REG_TV && c->ncomp == 2) {
+#pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) if (N > 50000)
+		for (size_t i = 0; i < N; i++) {
+			float a = y[i] + s0 * s[i], b = y[N + i] + s1 * s[N + i];
+			float n = sqrtf(a * a + b * b), f = k / (n > k ? n : k);
+			c0_pdhg_dual_entry(&y[i], f * a, rho, &d2, &n2);
+			c0_pdhg_dual_entry(&y[N + i], f * b, rho, &d2, &n2);
+		}
+	} else if (c->reg == C0_REG_TV) {
+#pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) if (N > 50000)
+		for (size_t i = 0; i < N; i++) {
+			float a = y[i] + s0 * s[i], b = y[N + i] + s1 * s[N + i], z = y[2 * N + i] + s2 * s[2 * N + i];
+			float n = sqrtf(a * a + b * b + z * z), f = k / (n > k ? n : k);
+			c0_pdhg_dual_entry(&y[i], f * a, rho, &d2, &n2);
+			c0_pdhg_dual_entry(&y[N + i], f * b, rho, &d2, &n2);
+			c0_pdhg_dual_entry(&y[2 * N + i], f * z, rho, &d2, &n2);
+		}
+	} else {
+		/* Schatten-1's dual is the spectral norm: clip the eigenvalues to [-kappa, kappa] */
+		const double r2 = sqrt(2.0);
+#pragma omp parallel for schedule(static) reduction(+ : d2, n2) if (N > 20000)
+		for (size_t i = 0; i < N; i++) {
+			double h[6];
+			for (int e = 0; e < 6; e++)
+				h[e] = y[e * N + i] + (float)c->sig_r[e] * s[e * N + i];
+			if (fabs(h[0]) + fabs(h[1]) + fabs(h[2]) + (fabs(h[3]) + fabs(h[4]) + fabs(h[5])) / r2 > k)
+				spectral_clip(h, k);
+			for (int e = 0; e < 6; e++)
+				c0_pdhg_dual_entry(&y[e * N + i], (float)h[e], rho, &d2, &n2);
+		}
+	}
+	sums[0] += d2, sums[1] += n2;
 }
 
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
@@ -224,25 +262,25 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (st)
 		return st;
 	const size_t M = (size_t)ctx.g.M, N = M * nz, nd = (size_t)nq * M;
-	const int ncomp = c->reg == C0_REG_TV ? 3 : 6;
-	ctx.M = (int)M, ctx.N = N;
+	const int ncomp = c->reg == C0_REG_TV ? ctx.g.nc : 6;
+	ctx.M = (int)M, ctx.N = N, ctx.ncomp = ncomp;
 	const size_t m = nd + ncomp * N;
-	double *b = c0_alloc(nd, sizeof *b), *u = c0_alloc(N, sizeof *u), *y = c0_alloc(m, sizeof *y);
-	double *tau = c0_alloc(N, sizeof *tau), *sigma = c0_alloc(m, sizeof *sigma);
+	float *b = c0_alloc(nd, sizeof *b), *u = c0_alloc(N, sizeof *u), *y = c0_alloc(m, sizeof *y);
+	float *tau = c0_alloc(N, sizeof *tau);
 	if (c->reg == C0_REG_HESSIAN && !(ctx.d.work = c0_alloc(2 * N, sizeof *ctx.d.work)))
 		st = C0_ENOMEM;
 	res->f = c0_alloc(np * nz, sizeof *res->f);
 	res->z_nm = c0_alloc((size_t)nz, sizeof *res->z_nm);
 	res->depth = c0_alloc(np, sizeof *res->depth);
 	res->total = c0_alloc(np, sizeof *res->total);
-	if (st || !b || !u || !y || !tau || !sigma || !res->f || !res->z_nm || !res->depth || !res->total) {
+	if (st || !b || !u || !y || !tau || !res->f || !res->z_nm || !res->depth || !res->total) {
 		st = C0_ENOMEM;
 		goto out;
 	}
-	ctx.b = b;
+	ctx.b = b, ctx.tau = tau;
 	for (int q = 0; q < nq; q++)
 		for (size_t k = 0; k < M; k++)
-			b[q * M + k] = x[q][ctx.g.pixel[k]] / mx;
+			b[q * M + k] = (float)(x[q][ctx.g.pixel[k]] / mx);
 	/* diagonal steps: 1 / (absolute row or column sums of K) */
 	const double wa[3] = { 1, 1, c->wz };
 	double hcol = 0;
@@ -255,25 +293,22 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 			sw += W[q * nz + j];
 		for (size_t k = 0; k < M; k++) {
 			double r = c->reg == C0_REG_TV ? c0_grad3m_colsum(&ctx.g, (int)k, j) : hcol;
-			tau[j * M + k] = 1 / (sw + r);
+			tau[j * M + k] = (float)(1 / (sw + r));
 		}
 	}
 	for (int q = 0; q < nq; q++) {
 		double sw = 0;
 		for (int j = 0; j < nz; j++)
 			sw += W[q * nz + j];
-		for (size_t k = 0; k < M; k++)
-			sigma[q * M + k] = 1 / sw;
+		ctx.sig_d[q] = 1 / sw;
 	}
 	for (int comp = 0; comp < ncomp; comp++) {
 		static const int HA[6] = { 0, 1, 2, 0, 0, 1 }, HB[6] = { 0, 1, 2, 1, 2, 2 };
 		double rs = c->reg == C0_REG_TV ? 2 * wa[comp]
 			  : (comp < 3 ? 4 : 4 * sqrt(2.0)) * wa[HA[comp]] * wa[HB[comp]];
-		double v = rs > 0 ? 1 / rs : 1;
-		for (size_t i = 0; i < N; i++)
-			sigma[nd + comp * N + i] = v;
+		ctx.sig_r[comp] = rs > 0 ? 1 / rs : 1;
 	}
-	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, prox_g, prox_fstar, tau, sigma, iter };
+	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, primal_step, dual_step, iter };
 	struct c0_pdhg_info info;
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "matirf (iterations, at most)", c->pdhg.maxit);
@@ -297,7 +332,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	}
 out:
 	c0_grad3m_free(&ctx.g);
-	free(b), free(u), free(y), free(tau), free(sigma), free(ctx.d.work);
+	free(b), free(u), free(y), free(tau), free(ctx.d.work);
 	if (st)
 		c0_matirf_result_free(res);
 	res->seconds = c0_now() - t0;
