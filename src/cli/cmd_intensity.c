@@ -27,6 +27,7 @@ int cmd_intensity(int argc, char **argv)
 		{ "nu", 0, C0_OPT_DOUBLE, &ic.nu, "F", "discrepancy factor: residual^2 = nu^2 HW sigma2 / T (0: sqrt(T))", NULL, 0, NULL },
 		{ "mu", 0, C0_OPT_DOUBLE, &ic.mu, "M", "fixed smoothness weight instead of the discrepancy principle", "0 (discrepancy)", 0, NULL },
 		{ "tol", 0, C0_OPT_DOUBLE, &ic.tol, "F", "CG stopping tolerance (relative residual)", NULL, 0, NULL },
+		{ "graph-radius", 0, C0_OPT_DOUBLE, &ic.graph_radius, "PX", "smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL },
 		{ "noise-variance", 0, C0_OPT_DOUBLES, s2, "V,...", "per-stack noise variance (camera units^2)", "estimated on the support", 64, &ns2 },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },

@@ -44,7 +44,8 @@ int cmd_run(int argc, char **argv)
 	const char *outdir = NULL, *pen = "l1";
 	double emission = 0, na = 0, pool_nm = -1;
 	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0;
-	struct c0_opt opts[14 + C0_MATIRF_CLI_OPTS] = {
+	enum { NOWN = 15 };   /* rows of its own, then the MA-TIRF ones */
+	struct c0_opt opts[NOWN + C0_MATIRF_CLI_OPTS] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &sc.pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, NULL },
 		{ "fwhm", 0, C0_OPT_DOUBLE, &sc.fwhm_nm, "NM", "PSF full width at half maximum", "0.51 emission / NA", 0, NULL },
@@ -55,12 +56,13 @@ int cmd_run(int argc, char **argv)
 		{ "penalty", 0, C0_OPT_STRING, &pen, "l1|cel0", "support sparsity penalty", NULL, 0, NULL },
 		{ "lambda", 0, C0_OPT_DOUBLE, &sc.lambda_rel, "F", "support regularisation relative to lambda_max", "1e-2 for l1, 3e-5 for cel0", 0, NULL },
 		{ "nu", 0, C0_OPT_DOUBLE, &ic.nu, "F", "intensity discrepancy factor (0: sqrt(T))", NULL, 0, NULL },
+		{ "graph-radius", 0, C0_OPT_DOUBLE, &ic.graph_radius, "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL },
 		{ "depth-pool", 0, C0_OPT_DOUBLE, &pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "the FWHM", 0, NULL },
 		{ "baseline", 0, C0_OPT_FLAG, &baseline, NULL, "also reconstruct the standard MA-TIRF volume from the background-corrected means (baseline_*)", NULL, 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
-	c0_matirf_cli_opts(&m, opts + 14);
+	c0_matirf_cli_opts(&m, opts + NOWN);
 	const struct c0_cmd_spec spec = { "run", "[options] -o OUTDIR STACK1.tif [STACK2.tif ...]",
 		"3D-COL0RME: the support (from the --support-angles stacks), each stack's intensity\n"
 		"and background, and with --angles the MA-TIRF volume. Without --angles: 2D COL0RME.\n"

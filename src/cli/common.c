@@ -230,6 +230,7 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 	cJSON_AddNumberToObject(p, "beta", ic->beta);
 	cJSON_AddNumberToObject(p, "nu", ic->nu);
 	cJSON_AddNumberToObject(p, "fixed_mu", ic->mu);
+	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
 	return C0_OK;
 }
 

@@ -3,10 +3,13 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma, const uint8_t *mask)
+#define MAXOFF 64   /* offsets within radius 4 number 24 */
+
+int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma, const uint8_t *mask, double radius)
 {
 	memset(p, 0, sizeof *p);
 	p->Ny = Ny, p->Nx = Nx, p->Ly = Ny * r, p->Lx = Nx * r;
@@ -20,11 +23,19 @@ int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigm
 		free(pos);
 		return c0_fail(C0_EINVAL, "the support is empty: no fine pixel to estimate");
 	}
+	/* the graph: offsets to the later pixels (raster order) within the radius */
+	int no = 0, ox[MAXOFF], oy[MAXOFF];
+	const int R = (int)radius;
+	for (int dy = 0; dy <= R; dy++)
+		for (int dx = -R; dx <= R; dx++)
+			if ((dy > 0 || dx > 0) && dx * dx + dy * dy <= radius * radius && no < MAXOFF)
+				ox[no] = dx, oy[no++] = dy;
 	p->idx = c0_alloc((size_t)p->n, sizeof *p->idx);
-	p->e0 = c0_alloc((size_t)p->n * 2, sizeof *p->e0);
-	p->e1 = c0_alloc((size_t)p->n * 2, sizeof *p->e1);
+	p->e0 = c0_alloc((size_t)p->n * no, sizeof *p->e0);
+	p->e1 = c0_alloc((size_t)p->n * no, sizeof *p->e1);
+	p->ew = c0_alloc((size_t)p->n * no, sizeof *p->ew);
 	struct c0_band Gy, Gx;
-	int st = !p->idx || !p->e0 || !p->e1 ? C0_ENOMEM : C0_OK;
+	int st = !p->idx || !p->e0 || !p->e1 || !p->ew ? C0_ENOMEM : C0_OK;
 	if (!st)
 		st = c0_psf_factor(Ny, r, sigma, &Gy);
 	if (!st) {
@@ -48,10 +59,13 @@ int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigm
 			if (k < 0)
 				continue;
 			p->idx[k] = y * p->Lx + x;
-			if (x + 1 < p->Lx && pos[(size_t)y * p->Lx + x + 1] >= 0)
-				p->e0[p->ne] = k, p->e1[p->ne++] = pos[(size_t)y * p->Lx + x + 1];
-			if (y + 1 < p->Ly && pos[(size_t)(y + 1) * p->Lx + x] >= 0)
-				p->e0[p->ne] = k, p->e1[p->ne++] = pos[(size_t)(y + 1) * p->Lx + x];
+			for (int o = 0; o < no; o++) {
+				const int xx = x + ox[o], yy = y + oy[o];
+				if (xx < 0 || xx >= p->Lx || yy >= p->Ly || pos[(size_t)yy * p->Lx + xx] < 0)
+					continue;
+				p->e0[p->ne] = k, p->e1[p->ne] = pos[(size_t)yy * p->Lx + xx];
+				p->ew[p->ne++] = 1 / sqrt((double)(ox[o] * ox[o] + oy[o] * oy[o]));
+			}
 		}
 	free(pos);
 	return C0_OK;
@@ -59,7 +73,7 @@ int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigm
 
 void c0_psi_omega_free(struct c0_psi_omega *p)
 {
-	free(p->idx), free(p->e0), free(p->e1);
+	free(p->idx), free(p->e0), free(p->e1), free(p->ew);
 	c0_band_free(&p->GyT), c0_band_free(&p->GxT);
 	memset(p, 0, sizeof *p);
 }
@@ -131,15 +145,15 @@ void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double 
 void c0_grad_omega(const struct c0_psi_omega *p, const double *x, double *g)
 {
 	for (int e = 0; e < p->ne; e++)
-		g[e] = x[p->e1[e]] - x[p->e0[e]];
+		g[e] = p->ew[e] * (x[p->e1[e]] - x[p->e0[e]]);
 }
 
 void c0_grad_omega_adjoint(const struct c0_psi_omega *p, const double *g, double *x)
 {
 	memset(x, 0, sizeof *x * (size_t)p->n);
 	for (int e = 0; e < p->ne; e++) {
-		x[p->e1[e]] += g[e];
-		x[p->e0[e]] -= g[e];
+		x[p->e1[e]] += p->ew[e] * g[e];
+		x[p->e0[e]] -= p->ew[e] * g[e];
 	}
 }
 

@@ -2,8 +2,9 @@
  * Omega map to the coarse image sum_a x_a gy_a (x) gx_a, where gy_a, gx_a are
  * the columns of the separable PSF factors (optics/psf.h). Stored as the
  * columns themselves, so it costs n (PSF width)^2, whatever the field size.
- * Also the graph gradient on Omega: differences across each pair of
- * 4-neighbour pixels both in Omega. */
+ * Also the graph gradient on Omega: one difference per pair of pixels of
+ * Omega at most radius fine pixels apart (1: 4-neighbours), divided by
+ * their distance. */
 #pragma once
 #include "core/band.h"
 
@@ -14,9 +15,10 @@ struct c0_psi_omega {
 	int *idx;                   /* n fine indices (row-major) */
 	struct c0_band GyT, GxT;    /* L x N: row a is column a of G */
 	int ne, *e0, *e1;           /* graph edges as positions in 0..n-1 */
+	double *ew;                 /* edge weights */
 };
 
-int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma_px, const uint8_t *mask);
+int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma_px, const uint8_t *mask, double radius);
 void c0_psi_omega_free(struct c0_psi_omega *p);
 void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double *y);  /* n -> Ny*Nx */
 void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x);  /* Ny*Nx -> n */

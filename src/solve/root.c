@@ -23,7 +23,7 @@ int c0_root_increasing(c0_scalar_fn g, void *ctx, double t0, double tmin, double
 		}
 		a = b, fa = fb;
 		b = fa > 0 ? a - step : a + step;
-		if (b < tmin || b > tmax) {
+		if (b < tmin - 1e-9 || b > tmax + 1e-9) {   /* the ends themselves are in range */
 			*t = a, *evals = n;
 			return fa > 0 ? C0_ROOT_BELOW : C0_ROOT_ABOVE;
 		}

@@ -17,6 +17,8 @@ int c0_intensity_check(const struct c0_intensity_conf *c)
 		return st;
 	if (!(c->beta >= 0) || !(c->nu >= 0) || !(c->mu >= 0))
 		return c0_fail(C0_EINVAL, "--beta, --nu and --mu must be >= 0");
+	if (!(c->graph_radius >= 1 && c->graph_radius <= 4))
+		return c0_fail(C0_EINVAL, "--graph-radius %g: must be in [1, 4] fine pixels", c->graph_radius);
 	return C0_OK;
 }
 
@@ -38,7 +40,7 @@ struct prob {
 	uint8_t *fixed;           /* n + nb */
 	double *dinv;             /* Jacobi preconditioner */
 	double *psi2;             /* ||psi_k||^2 on the support */
-	int *deg;                 /* graph degree of each support pixel */
+	double *deg;              /* weighted graph degree of each support pixel */
 	double *y, *g, *v, *rhs;  /* workspaces */
 	int cg_iters, solves, rounds;
 };
@@ -158,6 +160,9 @@ static double discrepancy(void *ctx, double t)
 {
 	struct dp *d = ctx;
 	d->p->mu = exp(t);
+	/* from zero each time: a warm start that already meets the CG tolerance
+	 * would not move, and the residual would step instead of rising with mu */
+	memset(d->sol, 0, sizeof *d->sol * (size_t)(d->p->n + d->p->nb));
 	if (solve(d->p, d->sol))
 		d->fail = 1;
 	return residual2(d->p, d->sol) - d->target;
@@ -174,7 +179,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 	if (c->mu == 0 && !(sigma2 > 0))
 		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give --mu)", sigma2);
 	struct prob p = { .c = c, .ybar = ybar, .NN = Ny * Nx };
-	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), mask)))
+	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), mask, c->graph_radius)))
 		return st;
 	p.n = p.P.n;
 	p.nb = c->background == C0_BG_SMOOTH ? p.NN : c->background == C0_BG_CONSTANT ? 1 : 0;
@@ -206,7 +211,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 		p.psi2[k] = sy * sx;
 	}
 	for (int e = 0; e < p.P.ne; e++)
-		p.deg[p.P.e0[e]]++, p.deg[p.P.e1[e]]++;
+		p.deg[p.P.e0[e]] += p.P.ew[e] * p.P.ew[e], p.deg[p.P.e1[e]] += p.P.ew[e] * p.P.ew[e];
 	res->Ly = p.P.Ly, res->Lx = p.P.Lx, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2;
 	double nu = c->nu > 0 ? c->nu : sqrt((double)T);
 	res->target2 = nu * nu * p.NN * sigma2 / (double)T;

@@ -3,7 +3,10 @@
  *                                 + mu/2 ||grad_Omega x||^2 + beta/2 ||grad b||^2
  * ybar is the stack's temporal mean (camera units), x the mean intensity per
  * fine pixel (camera units per frame, total over the PSF), b the background
- * including the camera offset. mu by the discrepancy principle:
+ * including the camera offset. grad_Omega couples the support pixels closer
+ * than graph_radius fine pixels, each difference weighted by 1/distance: with
+ * only 4-neighbours a diagonal filament falls apart into single pixels that
+ * nothing smooths (docs/parameters.md). mu by the discrepancy principle:
  *   ||Psi x + b - ybar||^2 = nu^2 H W sigma2 / T. */
 #pragma once
 #include "solve/cg.h"
@@ -21,8 +24,9 @@ struct c0_intensity_conf {
 	double mu;                 /* 0: discrepancy principle; > 0: fixed */
 	double tol;                /* 1e-3: CG relative residual (docs/parameters.md) */
 	int maxit;                 /* 500 CG steps per active-set round */
+	double graph_radius;       /* 2.25 fine pixels: smoothness neighbourhood (docs/parameters.md) */
 };
-#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500 }
+#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25 }
 
 struct c0_intensity_result {
 	int Ly, Lx, Ny, Nx;
