@@ -154,15 +154,18 @@ static double residual2(struct prob *p, const double *sol)
 	return s;
 }
 
-struct dp { struct prob *p; double *sol, target; int fail; };
+struct dp { struct prob *p; double *sol, target, tprev; int fail; };
 
 static double discrepancy(void *ctx, double t)
 {
 	struct dp *d = ctx;
 	d->p->mu = exp(t);
-	/* from zero each time: a warm start that already meets the CG tolerance
-	 * would not move, and the residual would step instead of rising with mu */
-	memset(d->sol, 0, sizeof *d->sol * (size_t)(d->p->n + d->p->nb));
+	/* Warm start from the last mu only when it is far (a factor e or more):
+	 * from a near one the start may already meet the CG tolerance and not
+	 * move, and the residual would step instead of rising with mu. */
+	if (!(fabs(t - d->tprev) >= 1))
+		memset(d->sol, 0, sizeof *d->sol * (size_t)(d->p->n + d->p->nb));
+	d->tprev = t;
 	if (solve(d->p, d->sol))
 		d->fail = 1;
 	return residual2(d->p, d->sol) - d->target;
@@ -220,7 +223,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 		st = solve(&p, sol);
 		res->dp_status = -1;
 	} else {
-		struct dp d = { &p, sol, res->target2, 0 };
+		struct dp d = { &p, sol, res->target2, NAN, 0 };
 		double t;
 		int evals;
 		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), log(1e-3), log(1e8), 0.01 * res->target2, 40, &t, &evals);
