@@ -13,7 +13,12 @@
 struct c0_grad3m {
 	int M, nz, nc;
 	double wl, wz;
-	int *right, *down, *left, *up;   /* neighbour column or -1 */
+	/* Per column: 1 or 0 for whether the right, lower and upper neighbours
+	 * exist (the right one is always column k + 1, the left one k - 1 when
+	 * column k - 1 has a right neighbour), and the lower and upper neighbour
+	 * columns, k itself where missing: the loops then have no branches. */
+	float *hr, *hd, *hu;
+	int *down, *up;
 	int *pixel;                      /* M: raster index of each column */
 };
 
