@@ -160,6 +160,16 @@ def test_bad_inputs(tmp):
     check(refused(cli("matirf", "--angles", "62", "-o", out + "2", s1, s2), "--angles"), "matirf angle count")
     check(refused(cli("eval", "--support", s1), "--support-truth"), "eval without truth")
     check(not os.path.exists(out + "2"), "nothing written by refused matirf")
+    # intensity: a support that does not match the stack, an empty one, a bad graph radius
+    sup = os.path.join(tmp, "sup_small.tif")
+    tifffile.imwrite(sup, np.ones((32, 32), np.uint8))
+    ib = ["intensity", "--fwhm", "229", "--pixel-size", "100", "-o", out + "3"]
+    check(refused(cli(*ib, "--support", sup, s1), "sup_small.tif", "does not cover"), "support of the wrong size")
+    tifffile.imwrite(sup, np.zeros((64, 64), np.uint8))
+    check(refused(cli(*ib, "--support", sup, s1), "sup_small.tif", "empty"), "empty support")
+    tifffile.imwrite(sup, np.ones((64, 64), np.uint8))
+    check(refused(cli(*ib, "--support", sup, "--graph-radius", "0.5", s1), "--graph-radius"), "graph radius below 1")
+    check(not os.path.exists(out + "3"), "nothing written by refused intensity")
 
 
 with tempfile.TemporaryDirectory() as tmp:
