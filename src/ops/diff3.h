@@ -7,7 +7,7 @@
 #pragma once
 #include <stddef.h>
 
-/* Volumes are float: the solvers that use these are bound by memory traffic. */
+/* Volumes are float, as the iterates of solve/pdhg.h. */
 
 struct c0_diff3 {
 	int nx, ny, nz;

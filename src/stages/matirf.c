@@ -93,6 +93,7 @@ static void primal_step(void *vc, float *x, float *t, float rho, double sums[2])
 	const float l1 = (float)c->l1, *tau = c->tau;
 	const size_t N = c->N;
 	double d2 = 0, n2 = 0;
+	/* firstprivate: private copies of the pointers let the loop vectorise */
 #pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) firstprivate(x, t, tau) if (N > 50000)
 	for (size_t i = 0; i < N; i++) {
 		float v = x[i] - tau[i] * (t[i] + l1);
