@@ -11,18 +11,26 @@ int c0_pdhg_solve(const struct c0_pdhg_problem *p, const struct c0_pdhg_conf *c,
 {
 	const size_t n = p->n, m = p->m;
 	const float rho = (float)c->relax;
-	float *t = c0_alloc(n, sizeof *t), *s = c0_alloc(m, sizeof *s);
+	float *t = c0_alloc(n, sizeof *t), *s = p->dual_fused ? NULL : c0_alloc(m, sizeof *s);
 	memset(info, 0, sizeof *info);
-	if (!t || !s) {
+	if (!t || (!s && !p->dual_fused)) {
 		free(t), free(s);
 		return C0_ENOMEM;
 	}
 	for (int it = 0; it < c->maxit; it++) {
 		double px[2] = { 0, 0 }, py[2] = { 0, 0 };
-		p->KT(p->ctx, y, t);
-		p->primal_step(p->ctx, x, t, rho, px);   /* t: the extrapolated point */
-		p->K(p->ctx, t, s);
-		p->dual_step(p->ctx, y, s, rho, py);
+		if (p->primal_fused)
+			p->primal_fused(p->ctx, y, x, t, rho, px);
+		else {
+			p->KT(p->ctx, y, t);
+			p->primal_step(p->ctx, x, t, rho, px);
+		}                                        /* t: the extrapolated point */
+		if (p->dual_fused)
+			p->dual_fused(p->ctx, t, y, rho, py);
+		else {
+			p->K(p->ctx, t, s);
+			p->dual_step(p->ctx, y, s, rho, py);
+		}
 		info->iters = it + 1;
 		if (p->iter)
 			p->iter(p->ctx, it + 1);

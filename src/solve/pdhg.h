@@ -10,8 +10,10 @@
  *                then c0_pdhg_dual_entry for every entry.
  * Diagonal steps tau_j <= 1 / sum_i |K_ij|, sigma_i <= 1 / sum_j |K_ij|
  * converge without knowing ||K||. Iterates are float (half the memory
- * traffic of double and twice the SIMD width), sums are double. Knows
- * nothing about the problem. */
+ * traffic of double and twice the SIMD width). The stopping test's sums are
+ * float within a thread's share (vectorised; good to about 1e-4 relative,
+ * plenty for a test on the relative change) and double across threads.
+ * Knows nothing about the problem. */
 #pragma once
 #include <math.h>
 #include <stddef.h>
@@ -24,6 +26,10 @@ struct c0_pdhg_problem {
 	void (*primal_step)(void *ctx, float *x, float *t, float rho, double sums[2]);
 	void (*dual_step)(void *ctx, float *y, const float *s, float rho, double sums[2]);
 	void (*iter)(void *ctx, int it);  /* optional, after each iteration (progress) */
+	/* optional, used instead of KT + primal_step and K + dual_step: the same
+	 * with the operator applied on the fly, when that saves a pass */
+	void (*primal_fused)(void *ctx, const float *y, float *x, float *t, float rho, double sums[2]);
+	void (*dual_fused)(void *ctx, const float *t, float *y, float rho, double sums[2]);
 };
 
 struct c0_pdhg_conf {
@@ -40,19 +46,19 @@ struct c0_pdhg_conf {
  * before it turns subnormal, where float arithmetic is many times slower. */
 #define C0_PDHG_TINY 1e-30f
 
-static inline void c0_pdhg_primal_entry(float *x, float *t, float xn, float rho, double *d2, double *n2)
+static inline void c0_pdhg_primal_entry(float *x, float *t, float xn, float rho, float *d2, float *n2)
 {
 	float d = xn - *x, v = *x + rho * d;
 	*t = xn + d;
 	*x = fabsf(v) < C0_PDHG_TINY ? 0 : v;
-	*d2 += (double)d * d, *n2 += (double)xn * xn;
+	*d2 += d * d, *n2 += xn * xn;
 }
 
-static inline void c0_pdhg_dual_entry(float *y, float yn, float rho, double *d2, double *n2)
+static inline void c0_pdhg_dual_entry(float *y, float yn, float rho, float *d2, float *n2)
 {
 	float d = yn - *y, v = *y + rho * d;
 	*y = fabsf(v) < C0_PDHG_TINY ? 0 : v;
-	*d2 += (double)d * d, *n2 += (double)yn * yn;
+	*d2 += d * d, *n2 += yn * yn;
 }
 
 struct c0_pdhg_info { int iters, converged; double dx, dy; };

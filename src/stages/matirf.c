@@ -92,7 +92,7 @@ static void primal_step(void *vc, float *x, float *t, float rho, double sums[2])
 	struct ctx *c = vc;
 	const float l1 = (float)c->l1, *tau = c->tau;
 	const size_t N = c->N;
-	double d2 = 0, n2 = 0;
+	float d2 = 0, n2 = 0;   /* per thread; sums is double */
 	/* firstprivate: private copies of the pointers let the loop vectorise */
 #pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) firstprivate(x, t, tau) if (N > 50000)
 	for (size_t i = 0; i < N; i++) {
@@ -173,7 +173,7 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 	struct ctx *c = vc;
 	const size_t M = c->M, N = c->N, nd = (size_t)c->nq * M;
 	const float k = (float)c->kappa;
-	double d2 = 0, n2 = 0;
+	float d2 = 0, n2 = 0;   /* per thread; sums is double */
 	for (int q = 0; q < c->nq; q++) {
 		const float sg = (float)c->sig_d[q], *bq = c->b + q * M, *sq = s + q * M;
 		float *yq = y + q * M;
@@ -215,6 +215,106 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 				spectral_clip(h, k);
 			for (int e = 0; e < 6; e++)
 				c0_pdhg_dual_entry(&y[e * N + i], (float)h[e], rho, &d2, &n2);
+		}
+	}
+	sums[0] += d2, sums[1] += n2;
+}
+
+/* TV without axial weight (the default) has its two steps fused with the
+ * operator into one pass over memory each: KT then primal_step, and K then
+ * dual_step, written out per chunk of columns (tests/test_matirf.c checks
+ * them against that sequence). All depths of a chunk go in turn, so that
+ * the chunk's per-column tables and data rows stay in cache; the gathers
+ * from the lower and upper neighbours have loops of their own so that the
+ * rest vectorises. */
+#define FCHUNK 256
+
+static void primal_fused(void *vc, const float *y, float *x, float *t, float rho, double sums[2])
+{
+	struct ctx *c = vc;
+	const struct c0_grad3m *g = &c->g;
+	const size_t M = c->M, N = c->N;
+	const int nq = c->nq, nz = c->nz;
+	const float wl = (float)g->wl, l1 = (float)c->l1;
+	const float *yd = y, *dx = y + nq * M, *dy = dx + N;
+	float d2 = 0, n2 = 0;   /* per thread; sums is double */
+#pragma omp parallel for schedule(static) reduction(+ : d2, n2) if (N > 50000)
+	for (size_t k0 = 0; k0 < M; k0 += FCHUNK) {
+		const size_t k1 = k0 + FCHUNK < M ? k0 + FCHUNK : M, n = k1 - k0;
+		float a[FCHUNK];                    /* K^T y of the chunk at one depth */
+		for (int j = 0; j < nz; j++) {
+			const float *dxj = dx + j * M + k0, *dyj = dy + j * M, *hr = g->hr + k0, *hd = g->hd + k0;
+			for (size_t i = 0; i < n; i++)
+				a[i] = -hr[i] * dxj[i] - hd[i] * dyj[k0 + i];
+			if (k0 > 0)
+				a[0] += hr[-1] * dxj[-1];
+			for (size_t i = 1; i < n; i++)
+				a[i] += hr[i - 1] * dxj[i - 1];
+			for (size_t i = 0; i < n; i++)       /* gather: from the upper neighbour */
+				a[i] += g->hu[k0 + i] * dyj[g->up[k0 + i]];
+			for (size_t i = 0; i < n; i++)
+				a[i] *= wl;
+			for (int q = 0; q < nq; q++) {
+				const float w = (float)c->W[q * nz + j], *yq = yd + q * M + k0;
+				for (size_t i = 0; i < n; i++)
+					a[i] += w * yq[i];
+			}
+			float *xj = x + j * M + k0, *tj = t + j * M + k0;
+			const float *tau = c->tau + j * M + k0;
+#pragma omp simd reduction(+ : d2, n2)
+			for (size_t i = 0; i < n; i++) {
+				float v = xj[i] - tau[i] * (a[i] + l1);
+				c0_pdhg_primal_entry(&xj[i], &tj[i], 0.5f * (v + fabsf(v)), rho, &d2, &n2);
+			}
+		}
+	}
+	sums[0] += d2, sums[1] += n2;
+}
+
+static void dual_fused(void *vc, const float *t, float *y, float rho, double sums[2])
+{
+	struct ctx *c = vc;
+	const struct c0_grad3m *g = &c->g;
+	const size_t M = c->M, N = c->N;
+	const int nq = c->nq, nz = c->nz;
+	const float k = (float)c->kappa, s0 = (float)(c->sig_r[0] * g->wl), s1 = (float)(c->sig_r[1] * g->wl);
+	float *yd = y, *gx = y + nq * M, *gy = gx + N;
+	float d2 = 0, n2 = 0;   /* per thread; sums is double */
+#pragma omp parallel for schedule(static) reduction(+ : d2, n2) if (N > 50000)
+	for (size_t k0 = 0; k0 < M; k0 += FCHUNK) {
+		const size_t k1 = k0 + FCHUNK < M ? k0 + FCHUNK : M, n = k1 - k0;
+		float acc[MAXQ * FCHUNK], ex[FCHUNK], ey[FCHUNK];
+		for (size_t i = 0; i < (size_t)nq * FCHUNK; i++)
+			acc[i] = 0;
+		for (int j = 0; j < nz; j++) {
+			const float *tj = t + j * M;
+			for (int q = 0; q < nq; q++) {      /* W t, summed over depth */
+				const float w = (float)c->W[q * nz + j];
+				for (size_t i = 0; i < n; i++)
+					acc[q * FCHUNK + i] += w * tj[k0 + i];
+			}
+			const size_t nr = k1 < M ? n : n - 1;   /* the last column has no right neighbour */
+			for (size_t i = 0; i < nr; i++)
+				ex[i] = g->hr[k0 + i] * (tj[k0 + i + 1] - tj[k0 + i]);
+			if (nr < n)
+				ex[nr] = 0;
+			for (size_t i = 0; i < n; i++)       /* gather: from the lower neighbour */
+				ey[i] = tj[g->down[k0 + i]] - tj[k0 + i];
+			float *gxj = gx + j * M + k0, *gyj = gy + j * M + k0;
+#pragma omp simd reduction(+ : d2, n2)
+			for (size_t i = 0; i < n; i++) {
+				float a = gxj[i] + s0 * ex[i], b = gyj[i] + s1 * ey[i];
+				float r = sqrtf(a * a + b * b), f = k / (r > k ? r : k);
+				c0_pdhg_dual_entry(&gxj[i], f * a, rho, &d2, &n2);
+				c0_pdhg_dual_entry(&gyj[i], f * b, rho, &d2, &n2);
+			}
+		}
+		for (int q = 0; q < nq; q++) {
+			const float sg = (float)c->sig_d[q], *bq = c->b + q * M + k0, *aq = acc + q * FCHUNK;
+			float *yq = yd + q * M + k0;
+#pragma omp simd reduction(+ : d2, n2)
+			for (size_t i = 0; i < n; i++)
+				c0_pdhg_dual_entry(&yq[i], (yq[i] + sg * (aq[i] - bq[i])) / (1 + sg), rho, &d2, &n2);
 		}
 	}
 	sums[0] += d2, sums[1] += n2;
@@ -309,7 +409,9 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 			  : (comp < 3 ? 4 : 4 * sqrt(2.0)) * wa[HA[comp]] * wa[HB[comp]];
 		ctx.sig_r[comp] = rs > 0 ? 1 / rs : 1;
 	}
-	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, primal_step, dual_step, iter };
+	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, primal_step, dual_step, iter, NULL, NULL };
+	if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused)
+		pb.primal_fused = primal_fused, pb.dual_fused = dual_fused;
 	struct c0_pdhg_info info;
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "matirf (iterations, at most)", c->pdhg.maxit);

@@ -22,8 +22,9 @@ struct c0_matirf_conf {
 	double wz;                   /* 0: axial weight of R relative to lateral (0: lateral TV) */
 	double sparsity;             /* 3e-2: weight s of the l1 term, same scale */
 	struct c0_pdhg_conf pdhg;    /* 3000 iterations, tol 1e-4 */
+	int fused;                   /* 1: TV's steps in one pass each; 0: the operator sequence (tests) */
 };
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, C0_PDHG_DEFAULTS }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, C0_PDHG_DEFAULTS, 1 }
 
 struct c0_matirf_result {
 	int nz, ny, nx;
