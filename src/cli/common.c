@@ -178,7 +178,7 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 	struct c0_progress pr;
 	int done = 0;
 	c0_progress_begin(&pr, "intensity (stacks)", n);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)   /* one stack: its own loops get the threads */
 	for (int i = 0; i < n; i++) {
 		sts[i] = intensity_one(ic, sc, stacks[i], mask, sigma2 ? sigma2[i] : 0, known ? known[i] : NULL, &res[i],
 				       corrected ? &corrected[i] : NULL, &frames[i], &tc[i]);
