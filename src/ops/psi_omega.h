@@ -15,7 +15,7 @@ struct c0_psi_omega {
 	int *idx;                   /* n fine indices (row-major) */
 	struct c0_band GyT, GxT;    /* L x N: row a is column a of G */
 	int ne, *e0, *e1;           /* graph edges as positions in 0..n-1 */
-	double *ew;                 /* edge weights */
+	double *ew;                 /* edge weights: 1 / distance */
 };
 
 int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma_px, const uint8_t *mask, double radius);
