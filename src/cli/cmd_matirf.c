@@ -7,6 +7,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 int cmd_matirf(int argc, char **argv)
 {
@@ -14,13 +15,16 @@ int cmd_matirf(int argc, char **argv)
 	const char *outdir = NULL;
 	double pixel_nm = 0;
 	int force = 0, verbose = 0;
-	struct c0_opt opts[4 + C0_MATIRF_CLI_OPTS] = {
+	const struct c0_opt own[] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &pixel_nm, "NM", "pixel size of the images (calibration of the outputs)", "from the TIFF calibration", 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
-	c0_matirf_cli_opts(&m, opts + 4);
+	enum { NOWN = sizeof own / sizeof *own };   /* its own rows, then the MA-TIRF ones */
+	struct c0_opt opts[NOWN + C0_MATIRF_CLI_OPTS];
+	memcpy(opts, own, sizeof own);
+	c0_matirf_cli_opts(&m, opts + NOWN);
 	const struct c0_cmd_spec spec = { "matirf", "--angles DEG,... [options] -o OUTDIR IMAGE...",
 		"Multi-angle TIRF axial reconstruction from one 2D image per angle (e.g. the\n"
 		"intensity_qNN.tif of 'col0rme intensity', or background-corrected means). Writes\n"

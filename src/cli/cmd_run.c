@@ -44,8 +44,7 @@ int cmd_run(int argc, char **argv)
 	const char *outdir = NULL, *pen = "l1";
 	double emission = 0, na = 0, pool_nm = -1;
 	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0;
-	enum { NOWN = 15 };   /* rows of its own, then the MA-TIRF ones */
-	struct c0_opt opts[NOWN + C0_MATIRF_CLI_OPTS] = {
+	const struct c0_opt own[] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &sc.pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, NULL },
 		{ "fwhm", 0, C0_OPT_DOUBLE, &sc.fwhm_nm, "NM", "PSF full width at half maximum", "0.51 emission / NA", 0, NULL },
@@ -62,6 +61,9 @@ int cmd_run(int argc, char **argv)
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
+	enum { NOWN = sizeof own / sizeof *own };   /* its own rows, then the MA-TIRF ones */
+	struct c0_opt opts[NOWN + C0_MATIRF_CLI_OPTS];
+	memcpy(opts, own, sizeof own);
 	c0_matirf_cli_opts(&m, opts + NOWN);
 	const struct c0_cmd_spec spec = { "run", "[options] -o OUTDIR STACK1.tif [STACK2.tif ...]",
 		"3D-COL0RME: the support (from the --support-angles stacks), each stack's intensity\n"
