@@ -86,6 +86,29 @@ static void iter(void *vc, int it)
 	c0_progress_update(c->pr, it);
 }
 
+/* The proximal maps per entry, shared by the plain and the fused steps.
+ * Primal, G = l1 sum u + indicator(u >= 0): from x and (K^T y)_i = a. */
+static inline void prox_g_entry(float *x, float *t, float tau, float a, float l1, float rho, float *d2, float *n2)
+{
+	float v = *x - tau * (a + l1);
+	c0_pdhg_primal_entry(x, t, 0.5f * (v + fabsf(v)), rho, d2, n2);   /* max(v, 0) without a branch */
+}
+
+/* Dual of a data row, F = 1/2 (. - b)^2: from y and (K xbar)_i = s. */
+static inline void prox_data_entry(float *y, float s, float b, float sg, float rho, float *d2, float *n2)
+{
+	c0_pdhg_dual_entry(y, (*y + sg * (s - b)) / (1 + sg), rho, d2, n2);
+}
+
+/* Dual of lateral TV (k > 0): (a, b) = y + sigma K xbar, projected on the
+ * radius-k disc. */
+static inline void prox_tv2_entry(float *yx, float *yy, float a, float b, float k, float rho, float *d2, float *n2)
+{
+	float r = sqrtf(a * a + b * b), f = k / (r > k ? r : k);
+	c0_pdhg_dual_entry(yx, f * a, rho, d2, n2);
+	c0_pdhg_dual_entry(yy, f * b, rho, d2, n2);
+}
+
 /* G = l1 sum u + indicator(u >= 0) */
 static void primal_step(void *vc, float *x, float *t, float rho, double sums[2])
 {
@@ -95,10 +118,8 @@ static void primal_step(void *vc, float *x, float *t, float rho, double sums[2])
 	float d2 = 0, n2 = 0;   /* per thread; sums is double */
 	/* firstprivate: private copies of the pointers let the loop vectorise */
 #pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) firstprivate(x, t, tau) if (N > 50000)
-	for (size_t i = 0; i < N; i++) {
-		float v = x[i] - tau[i] * (t[i] + l1);
-		c0_pdhg_primal_entry(&x[i], &t[i], 0.5f * (v + fabsf(v)), rho, &d2, &n2);   /* max(v, 0) without a branch */
-	}
+	for (size_t i = 0; i < N; i++)
+		prox_g_entry(&x[i], &t[i], tau[i], t[i], l1, rho, &d2, &n2);
 	sums[0] += d2, sums[1] += n2;
 }
 
@@ -179,7 +200,7 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 		float *yq = y + q * M;
 #pragma omp simd reduction(+ : d2, n2)
 		for (size_t i = 0; i < M; i++)
-			c0_pdhg_dual_entry(&yq[i], (yq[i] + sg * (sq[i] - bq[i])) / (1 + sg), rho, &d2, &n2);
+			prox_data_entry(&yq[i], sq[i], bq[i], sg, rho, &d2, &n2);
 	}
 	y += nd, s += nd;
 	const float s0 = (float)c->sig_r[0], s1 = (float)c->sig_r[1], s2 = (float)c->sig_r[2];
@@ -188,12 +209,8 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 			c0_pdhg_dual_entry(&y[i], 0, rho, &d2, &n2);
 	} else if (c->reg == C0_REG_TV && c->ncomp == 2) {
 #pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) if (N > 50000)
-		for (size_t i = 0; i < N; i++) {
-			float a = y[i] + s0 * s[i], b = y[N + i] + s1 * s[N + i];
-			float n = sqrtf(a * a + b * b), f = k / (n > k ? n : k);
-			c0_pdhg_dual_entry(&y[i], f * a, rho, &d2, &n2);
-			c0_pdhg_dual_entry(&y[N + i], f * b, rho, &d2, &n2);
-		}
+		for (size_t i = 0; i < N; i++)
+			prox_tv2_entry(&y[i], &y[N + i], y[i] + s0 * s[i], y[N + i] + s1 * s[N + i], k, rho, &d2, &n2);
 	} else if (c->reg == C0_REG_TV) {
 #pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) if (N > 50000)
 		for (size_t i = 0; i < N; i++) {
@@ -262,10 +279,8 @@ static void primal_fused(void *vc, const float *y, float *x, float *t, float rho
 			float *xj = x + j * M + k0, *tj = t + j * M + k0;
 			const float *tau = c->tau + j * M + k0;
 #pragma omp simd reduction(+ : d2, n2)
-			for (size_t i = 0; i < n; i++) {
-				float v = xj[i] - tau[i] * (a[i] + l1);
-				c0_pdhg_primal_entry(&xj[i], &tj[i], 0.5f * (v + fabsf(v)), rho, &d2, &n2);
-			}
+			for (size_t i = 0; i < n; i++)
+				prox_g_entry(&xj[i], &tj[i], tau[i], a[i], l1, rho, &d2, &n2);
 		}
 	}
 	sums[0] += d2, sums[1] += n2;
@@ -302,19 +317,15 @@ static void dual_fused(void *vc, const float *t, float *y, float rho, double sum
 				ey[i] = tj[g->down[k0 + i]] - tj[k0 + i];
 			float *gxj = gx + j * M + k0, *gyj = gy + j * M + k0;
 #pragma omp simd reduction(+ : d2, n2)
-			for (size_t i = 0; i < n; i++) {
-				float a = gxj[i] + s0 * ex[i], b = gyj[i] + s1 * ey[i];
-				float r = sqrtf(a * a + b * b), f = k / (r > k ? r : k);
-				c0_pdhg_dual_entry(&gxj[i], f * a, rho, &d2, &n2);
-				c0_pdhg_dual_entry(&gyj[i], f * b, rho, &d2, &n2);
-			}
+			for (size_t i = 0; i < n; i++)
+				prox_tv2_entry(&gxj[i], &gyj[i], gxj[i] + s0 * ex[i], gyj[i] + s1 * ey[i], k, rho, &d2, &n2);
 		}
 		for (int q = 0; q < nq; q++) {
 			const float sg = (float)c->sig_d[q], *bq = c->b + q * M + k0, *aq = acc + q * FCHUNK;
 			float *yq = yd + q * M + k0;
 #pragma omp simd reduction(+ : d2, n2)
 			for (size_t i = 0; i < n; i++)
-				c0_pdhg_dual_entry(&yq[i], (yq[i] + sg * (aq[i] - bq[i])) / (1 + sg), rho, &d2, &n2);
+				prox_data_entry(&yq[i], aq[i], bq[i], sg, rho, &d2, &n2);
 		}
 	}
 	sums[0] += d2, sums[1] += n2;
