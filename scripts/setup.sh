@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-PKGS=(build-essential cmake pkg-config libtiff-dev libtiff-tools libcjson-dev libpng-dev
+PKGS=(build-essential cmake pkg-config libtiff-dev libtiff-tools libcjson-dev libpng-dev libfftw3-dev
       python3-numpy python3-tifffile clang libclang-rt-14-dev libomp-14-dev)
 
 missing=()

@@ -92,7 +92,7 @@ int cmd_intensity(int argc, char **argv)
 	}
 	struct c0_intensity_result *res = c0_alloc((size_t)ns, sizeof *res);
 	cJSON *rep = c0_report_new("intensity", argc, argv);
-	st = res ? c0_run_intensity(&out, &ic, &sc, stacks, ns, mask, ns2 ? s2 : NULL, NULL, res, NULL, rep) : C0_ENOMEM;
+	st = res ? c0_run_intensity(&out, &ic, &sc, stacks, ns, NULL, mask, ns2 ? s2 : NULL, NULL, res, NULL, rep) : C0_ENOMEM;
 	if (!st)
 		st = c0_report_write(rep, c0_outdir_file(&out, "report.json"));
 	for (int i = 0; res && i < ns; i++)

@@ -41,9 +41,9 @@ int cmd_run(int argc, char **argv)
 	struct c0_support_conf sc = C0_SUPPORT_DEFAULTS;
 	struct c0_intensity_conf ic = C0_INTENSITY_DEFAULTS;
 	struct c0_matirf_cli m = { .c = C0_MATIRF_DEFAULTS };
-	const char *outdir = NULL, *pen = "l1";
+	const char *outdir = NULL, *pen = "l1", *drift = "on";
 	double emission = 0, na = 0, pool_nm = -1;
-	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0;
+	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0, no_drift = 0, drift_on = 1;
 	const struct c0_opt own[] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &sc.pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, NULL },
@@ -53,7 +53,9 @@ int cmd_run(int argc, char **argv)
 		{ "srf", 0, C0_OPT_INT, &sc.srf, "R", "super-resolution factor: fine pixel = pixel size / R", NULL, 0, NULL },
 		{ "support-angles", 0, C0_OPT_INTS, sel, "I,J", "1-based stack numbers whose supports are joined", "the smallest angle", MAXS, &nsel },
 		{ "penalty", 0, C0_OPT_STRING, &pen, "l1|cel0", "support sparsity penalty", NULL, 0, NULL },
-		{ "lambda", 0, C0_OPT_DOUBLE, &sc.lambda_rel, "F", "support regularisation relative to lambda_max", "1e-2 for l1, 3e-5 for cel0", 0, NULL },
+		{ "lambda", 0, C0_OPT_DOUBLE, &sc.lambda_rel, "F", "support regularisation relative to lambda_max", "automatic (see the guide)", 0, NULL },
+		{ "drift", 0, C0_OPT_STRING, &drift, "on|off", "estimate lateral drift from block means and undo it before the covariance and the means", NULL, 0, NULL },
+		{ "no-drift", 0, C0_OPT_FLAG, &no_drift, NULL, "the same as --drift off", NULL, 0, NULL },
 		{ "nu", 0, C0_OPT_DOUBLE, &ic.nu, "F", "intensity discrepancy factor (0: sqrt(T))", NULL, 0, NULL },
 		{ "graph-radius", 0, C0_OPT_DOUBLE, &ic.graph_radius, "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL },
 		{ "depth-pool", 0, C0_OPT_DOUBLE, &pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "the FWHM", 0, NULL },
@@ -90,6 +92,8 @@ int cmd_run(int argc, char **argv)
 	}
 	if (!st && three_d)
 		st = c0_matirf_cli_finish(&m, ns);
+	if (!st)
+		st = c0_drift_option(drift, no_drift, &drift_on);
 	if (pool_nm < 0)
 		pool_nm = sc.fwhm_nm;
 	int sup[MAXS], nsup = 0;
@@ -127,8 +131,18 @@ int cmd_run(int argc, char **argv)
 	memset(sres, 0, sizeof sres), memset(ires, 0, sizeof ires);
 	uint8_t *mask = NULL;
 	const struct c0_support_result *known[MAXS] = { 0 };
+	struct c0_drift *dr = NULL;
+	void *hooks[MAXS] = { 0 }, *shooks[MAXS] = { 0 };
 	double t = c0_now();
-	st = c0_run_support(&sc, sstacks, nsup, sres, rep);
+	if (drift_on && !(st = c0_run_drift(&out, stacks, ns, sc.pixel_nm, &dr, rep)))
+		for (int q = 0; q < ns; q++)
+			hooks[q] = c0_drift_hook(dr, q);
+	for (int k = 0; k < nsup; k++)
+		shooks[k] = hooks[sup[k]];
+	cJSON_AddNumberToObject(times, "drift", c0_now() - t);
+	t = c0_now();
+	if (!st)
+		st = c0_run_support(&sc, sstacks, nsup, drift_on ? shooks : NULL, sres, rep);
 	if (!st)
 		st = c0_write_support(&out, &sc, sres, nsup, rep);
 	const size_t L = (size_t)sres[0].Ly * sres[0].Lx;
@@ -145,7 +159,7 @@ int cmd_run(int argc, char **argv)
 	cJSON_AddNumberToObject(times, "support", c0_now() - t);
 	t = c0_now();
 	if (!st)
-		st = c0_run_intensity(&out, &ic, &sc, stacks, ns, mask, NULL, known, ires, baseline && three_d ? corr : NULL, rep);
+		st = c0_run_intensity(&out, &ic, &sc, stacks, ns, drift_on ? hooks : NULL, mask, NULL, known, ires, baseline && three_d ? corr : NULL, rep);
 	cJSON_AddNumberToObject(times, "intensity", c0_now() - t);
 	if (!st && three_d) {
 		const float *img[MAXS];
@@ -194,6 +208,7 @@ int cmd_run(int argc, char **argv)
 		c0_intensity_result_free(&ires[q]), free(corr[q]), free(pooled[q]);
 	c0_matirf_result_free(&vres), c0_matirf_result_free(&bres);
 	free(mask);
+	c0_drift_free(dr);
 	cJSON_Delete(rep);
 	if (st) {
 		c0_outdir_rollback(&out);

@@ -38,6 +38,8 @@ static void report(const struct c0_sim_conf *c, const struct c0_sim_result *r, c
 	cJSON_AddNumberToObject(p, "tau_off_ms", c->tau_off_ms);
 	cJSON_AddNumberToObject(p, "tau_bleach_s", c->tau_bleach_s);
 	cJSON_AddNumberToObject(p, "fps", c->fps);
+	c0_report_add_array(p, "drift_nm", c->drift_nm, 2);
+	cJSON_AddStringToObject(p, "drift", c->drift_walk ? "random walk" : "linear");
 	cJSON_AddNumberToObject(p, "brightness_photons", c->brightness);
 	cJSON_AddNumberToObject(p, "brightness_cv", c->brightness_cv);
 	cJSON_AddNumberToObject(p, "background_photons", c->background);
@@ -67,7 +69,7 @@ int cmd_simulate(int argc, char **argv)
 	struct c0_sim_conf c;
 	c0_sim_defaults(&c);
 	const char *outdir = NULL;
-	int force = 0, verbose = 0, nangles = c.nangles, nz = 2;
+	int force = 0, verbose = 0, nangles = c.nangles, nz = 2, ndrift = 0;
 	long long seed = (long long)c.seed;
 	double zr[2] = { c.z_min_nm, c.z_max_nm };
 	const struct c0_opt opts[] = {
@@ -102,13 +104,16 @@ int cmd_simulate(int argc, char **argv)
 		{ "gain", 0, C0_OPT_DOUBLE, &c.gain, "G", "ADU per photon", NULL, 0, NULL },
 		{ "read-noise", 0, C0_OPT_DOUBLE, &c.read_noise, "ADU", "Gaussian read noise sd (used with --snr 0)", NULL, 0, NULL },
 		{ "snr", 0, C0_OPT_DOUBLE, &c.snr_db, "DB", "set the read noise to reach this SNR (0: use --read-noise)", NULL, 0, NULL },
+		{ "drift-nm", 0, C0_OPT_DOUBLES, c.drift_nm, "X,Y", "stage drift over the whole acquisition (all angles in order): displacement at the last frame", "0,0", 2, &ndrift },
+		{ "drift-walk", 0, C0_OPT_FLAG, &c.drift_walk, NULL, "drift as a Gaussian random walk (per-axis step sd |X|/sqrt(frames), |Y|/...) instead of linear", NULL, 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
 	const struct c0_cmd_spec spec = { "simulate", "[options] -o OUTDIR",
 		"Simulate one blinking TIRF stack per angle (uint16, calibrated) with ground truth:\n"
 		"stack_qNN.tif, truth_intensity_qNN.tif (ADU/frame, fine grid), truth_background_qNN.tif,\n"
-		"truth_depth.tif (nm), truth_support.tif, emitters.csv and sim.json.",
+		"truth_depth.tif (nm), truth_support.tif (positions at the first frame), emitters.csv,\n"
+		"drift_truth.csv (with --drift-nm) and sim.json.",
 		opts, C0_NOPTS(opts), 0, 0 };
 	char **pos = malloc(sizeof(char *) * (size_t)argc);
 	int np, rc = c0_opts_parse(&spec, argc, argv, &np, pos);
@@ -119,6 +124,8 @@ int cmd_simulate(int argc, char **argv)
 	c.z_min_nm = zr[0];
 	c.z_max_nm = nz > 1 ? zr[1] : zr[0];
 	c.nangles = nangles;
+	if (ndrift == 1)
+		return c0_fail(C0_EINVAL, "--drift-nm: expected X,Y in nm"), c0_cli_error("simulate");
 	struct c0_outdir out;
 	if (c0_sim_check(&c) || c0_outdir_open(&out, outdir, force))
 		return c0_cli_error("simulate");

@@ -16,19 +16,21 @@
 int cmd_support(int argc, char **argv)
 {
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	const char *outdir = NULL, *pen = "l1";
-	int force = 0, verbose = 0;
+	const char *outdir = NULL, *pen = "l1", *drift = "on";
+	int force = 0, verbose = 0, no_drift = 0, drift_on = 1;
 	const struct c0_opt opts[] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &c.pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, NULL },
 		{ "fwhm", 0, C0_OPT_DOUBLE, &c.fwhm_nm, "NM", "PSF full width at half maximum (required)", "none", 0, NULL },
 		{ "srf", 0, C0_OPT_INT, &c.srf, "R", "super-resolution factor: fine pixel = pixel size / R", NULL, 0, NULL },
 		{ "penalty", 0, C0_OPT_STRING, &pen, "l1|cel0", "sparsity penalty", NULL, 0, NULL },
-		{ "lambda", 0, C0_OPT_DOUBLE, &c.lambda_rel, "F", "regularisation relative to lambda_max (the smallest that gives an empty support)", "1e-2 for l1, 3e-5 for cel0", 0, NULL },
+		{ "lambda", 0, C0_OPT_DOUBLE, &c.lambda_rel, "F", "regularisation relative to lambda_max (the smallest that gives an empty support)", "automatic (see the guide)", 0, NULL },
 		{ "iterations", 0, C0_OPT_INT, &c.fista.maxit, "N", "maximum FISTA iterations (per reweighting for cel0)", NULL, 0, NULL },
 		{ "tol", 0, C0_OPT_DOUBLE, &c.fista.tol, "F", "stop when the relative change of the iterate falls below this", NULL, 0, NULL },
 		{ "reweightings", 0, C0_OPT_INT, &c.cel0_outer, "N", "CEL0 reweighting steps", NULL, 0, NULL },
 		{ "lag", 0, C0_OPT_INT, &c.lag, "PX", "covariance lag radius in pixels", "ceil(6 sigma / pixel)", 0, NULL },
+		{ "drift", 0, C0_OPT_STRING, &drift, "on|off", "estimate lateral drift from block means and undo it before the covariance and the means", NULL, 0, NULL },
+		{ "no-drift", 0, C0_OPT_FLAG, &no_drift, NULL, "the same as --drift off", NULL, 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
@@ -36,7 +38,8 @@ int cmd_support(int argc, char **argv)
 		"Estimate the emitters' support on the fine grid from each stack's spatial covariance\n"
 		"(COL0RME); with several stacks the support is the union. Writes OUTDIR/support.tif\n"
 		"(uint8 0/1; fine pixel (i, j) covers [i p/r, (i+1) p/r) nm from the top-left corner),\n"
-		"OUTDIR/rx.tif (float32 emitter variance, one plane per stack) and OUTDIR/report.json.",
+		"OUTDIR/rx.tif (float32 emitter variance, one plane per stack), OUTDIR/report.json and,\n"
+		"with drift correction (the default), OUTDIR/drift.csv and OUTDIR/drift.png.",
 		opts, C0_NOPTS(opts), 1, -1 };
 	char **stacks = malloc(sizeof(char *) * (size_t)argc);
 	int ns, rc = c0_opts_parse(&spec, argc, argv, &ns, stacks);
@@ -56,14 +59,32 @@ int cmd_support(int argc, char **argv)
 	struct c0_outdir out;
 	struct c0_support_result *res = c0_alloc((size_t)ns, sizeof *res);
 	cJSON *rep = c0_report_new("support", argc, argv);
-	int st = c0_check_inputs(stacks, ns, outdir);
+	int st = c0_drift_option(drift, no_drift, &drift_on);
+	if (!st)
+		st = c0_check_inputs(stacks, ns, outdir);
+	if (!st && !(c.pixel_nm > 0)) {
+		struct c0_tiff_reader *r;
+		if (!(st = c0_tiff_open(stacks[0], &r))) {
+			c.pixel_nm = c0_tiff_get_info(r)->pixel_size_nm;
+			c0_tiff_close(r);
+			if (!(c.pixel_nm > 0))
+				st = c0_fail(C0_EINVAL, "--pixel-size: %s has no pixel calibration; give the camera pixel size in nm", stacks[0]);
+		}
+	}
 	if (!st)
 		st = c0_outdir_open(&out, outdir, force);
 	if (st) {
 		free(stacks), free(res), cJSON_Delete(rep);
 		return c0_cli_error("support");
 	}
-	st = c0_run_support(&c, stacks, ns, res, rep);
+	struct c0_drift *dr = NULL;
+	void **hooks = drift_on ? c0_alloc((size_t)ns, sizeof *hooks) : NULL;
+	st = drift_on && !hooks ? C0_ENOMEM : C0_OK;
+	if (!st && drift_on && !(st = c0_run_drift(&out, stacks, ns, c.pixel_nm, &dr, rep)))
+		for (int i = 0; i < ns; i++)
+			hooks[i] = c0_drift_hook(dr, i);
+	if (!st)
+		st = c0_run_support(&c, stacks, ns, hooks, res, rep);
 	if (!st)
 		st = c0_write_support(&out, &c, res, ns, rep);
 	if (!st)
@@ -71,7 +92,8 @@ int cmd_support(int argc, char **argv)
 	for (int i = 0; i < ns; i++)
 		c0_support_result_free(&res[i]);
 	free(res), cJSON_Delete(rep);
-	free(stacks);
+	free(stacks), free(hooks);
+	c0_drift_free(dr);
 	if (st) {
 		c0_outdir_rollback(&out);
 		return c0_cli_error("support");

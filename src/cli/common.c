@@ -36,7 +36,55 @@ int c0_check_inputs(char **stacks, int n, const char *outdir)
 	return C0_OK;
 }
 
-int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_support_result *res, cJSON *rep)
+int c0_drift_option(const char *drift, int no_drift, int *on)
+{
+	if (strcmp(drift, "on") && strcmp(drift, "off"))
+		return c0_fail(C0_EINVAL, "--drift %s: expected on or off", drift);
+	*on = !no_drift && !strcmp(drift, "on");
+	return C0_OK;
+}
+
+int c0_run_drift(struct c0_outdir *out, char **stacks, int n, double pixel_nm, struct c0_drift **d, cJSON *rep)
+{
+	const struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
+	int st = c0_drift_estimate(&dc, stacks, n, d);
+	if (st)
+		return st;
+	char *csv;
+	size_t len;
+	if ((st = c0_drift_csv(*d, pixel_nm, &csv, &len)))
+		return st;
+	st = c0_write_file_named(out, "drift.csv", csv, len);
+	free(csv);
+	uint8_t *rgb;
+	int w, h;
+	if (!st && !(st = c0_drift_plot(*d, pixel_nm, &rgb, &w, &h))) {
+		st = c0_png_write_rgb(c0_outdir_file(out, "drift.png"), w, h, rgb);
+		free(rgb);
+	}
+	if (st)
+		return st;
+	struct c0_drift_info in;
+	c0_drift_get_info(*d, &in);
+	cJSON *j = cJSON_AddObjectToObject(rep, "drift");
+	cJSON_AddStringToObject(j, "method", "cross-correlation of block means with the first block of the first stack, sub-pixel peak; Fourier shift per frame");
+	cJSON_AddNumberToObject(j, "block_frames", in.block);
+	cJSON_AddNumberToObject(j, "blocks", in.blocks);
+	cJSON_AddNumberToObject(j, "max_nm", in.max_px * pixel_nm);
+	double bt[4096], bx[4096], by[4096];
+	int nb = in.blocks < 4096 ? in.blocks : 4096;
+	for (int k = 0; k < nb; k++)
+		bt[k] = in.bt[k] + 1, bx[k] = in.bx[k] * pixel_nm, by[k] = in.by[k] * pixel_nm;
+	c0_report_add_array(j, "block_centre_frame", bt, nb);
+	c0_report_add_array(j, "block_dx_nm", bx, nb);
+	c0_report_add_array(j, "block_dy_nm", by, nb);
+	cJSON_AddStringToObject(j, "trajectory", "drift.csv");
+	cJSON_AddNumberToObject(j, "seconds", in.seconds);
+	return C0_OK;
+}
+
+int c0_run_support(struct c0_support_conf *c, char **stacks, int n, void *const *hooks, struct c0_support_result *res,
+		   cJSON *rep)
 {
 	cJSON *arr = cJSON_AddArrayToObject(rep, "support");
 	for (int i = 0; i < n; i++) {
@@ -47,7 +95,9 @@ int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_su
 		const struct c0_tiff_info *in = c0_tiff_get_info(r);
 		if (!(c->pixel_nm > 0) && in->pixel_size_nm > 0)
 			c->pixel_nm = in->pixel_size_nm;
+		c->frame_fn = hooks ? c0_drift_frame_fn : NULL, c->frame_ctx = hooks ? hooks[i] : NULL;
 		st = c0_support_stack(c, r, stacks[i], &res[i]);
+		c->frame_fn = NULL, c->frame_ctx = NULL;
 		c0_tiff_close(r);
 		if (st)
 			return st;
@@ -63,6 +113,7 @@ int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_su
 		cJSON_AddNumberToObject(o, "lambda", s->lambda);
 		cJSON_AddNumberToObject(o, "lambda_max", s->lambda_max);
 		cJSON_AddNumberToObject(o, "lambda_relative", s->lambda_max > 0 ? s->lambda / s->lambda_max : 0);
+		cJSON_AddStringToObject(o, "lambda_rule", s->lambda_auto ? "automatic" : "given");
 		cJSON_AddNumberToObject(o, "normalisation", s->norm);
 		cJSON_AddNumberToObject(o, "noise_variance", s->sigma2);
 		cJSON_AddNumberToObject(o, "iterations", s->iters);
@@ -72,6 +123,17 @@ int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_su
 		cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);
 		cJSON_AddNumberToObject(o, "solve_s", s->t_solve);
 		c0_report_add_array(o, "objective", s->hist, s->nhist);
+		if (s->lambda_auto) {
+			const struct c0_lambda_result *v = &s->cv;
+			cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
+			cJSON_AddStringToObject(l, "rule", "max(floor_relative lambda_max, kappa sigma_C); sigma_C from interleaved frame halves");
+			cJSON_AddNumberToObject(l, "chosen_relative", v->chosen_rel);
+			cJSON_AddNumberToObject(l, "floor_relative", v->floor_rel);
+			cJSON_AddNumberToObject(l, "kappa", v->kappa);
+			cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
+			cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "floor");
+			cJSON_AddNumberToObject(l, "seconds", v->seconds);
+		}
 		cJSON_AddItemToArray(arr, o);
 	}
 	cJSON *p = cJSON_AddObjectToObject(rep, "support_parameters");
@@ -117,12 +179,15 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
 /* One stack: its mean from the support step when that ran on it, else one
  * streaming pass (the covariance when the noise variance has to be
  * estimated, else just the mean); then the solve. */
-static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_support_conf *sc, const char *stack,
+static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_support_conf *sc0, void *hook, const char *stack,
 			 const uint8_t *mask, double s2, const struct c0_support_result *known,
 			 struct c0_intensity_result *res, float **corrected, int64_t *frames, double *seconds)
 {
 	const double *mean;
 	double *own = NULL;          /* the mean when this function read it */
+	struct c0_support_conf scc = *sc0;
+	const struct c0_support_conf *sc = &scc;
+	scc.frame_fn = hook ? c0_drift_frame_fn : NULL, scc.frame_ctx = hook;
 	int H, W, st = C0_OK;
 	if (known) {
 		mean = known->mean, *frames = known->frames, s2 = known->sigma2, *seconds = 0;
@@ -162,7 +227,7 @@ static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_sup
 }
 
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
-		     char **stacks, int n, const uint8_t *mask, const double *sigma2,
+		     char **stacks, int n, void *const *hooks, const uint8_t *mask, const double *sigma2,
 		     const struct c0_support_result *const *known, struct c0_intensity_result *res, float **corrected,
 		     cJSON *rep)
 {
@@ -180,7 +245,7 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 	c0_progress_begin(&pr, "intensity (stacks)", n);
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)   /* one stack: its own loops get the threads */
 	for (int i = 0; i < n; i++) {
-		sts[i] = intensity_one(ic, sc, stacks[i], mask, sigma2 ? sigma2[i] : 0, known ? known[i] : NULL, &res[i],
+		sts[i] = intensity_one(ic, sc, hooks ? hooks[i] : NULL, stacks[i], mask, sigma2 ? sigma2[i] : 0, known ? known[i] : NULL, &res[i],
 				       corrected ? &corrected[i] : NULL, &frames[i], &tc[i]);
 		if (sts[i])   /* error messages are per thread */
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());

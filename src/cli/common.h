@@ -7,9 +7,17 @@
 
 /* Every stack opens as a TIFF, and OUTDIR is not where an input lives. */
 int c0_check_inputs(char **stacks, int n, const char *outdir);
+#include "stages/drift.h"
+/* --drift on|off and --no-drift: *on = 1 or 0. */
+int c0_drift_option(const char *drift, int no_drift, int *on);
+/* Drift over the stacks in their order (stages/drift.h): writes drift.csv
+ * and drift.png, fills rep["drift"]. */
+int c0_run_drift(struct c0_outdir *out, char **stacks, int n, double pixel_nm, struct c0_drift **d, cJSON *rep);
 /* Support of each stack (pixel size from the first stack's calibration when
- * c->pixel_nm is 0); fills rep["support"]. */
-int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_support_result *res, cJSON *rep);
+ * c->pixel_nm is 0); fills rep["support"]. hooks (n, or NULL): each stack's
+ * drift correction (c0_drift_hook). */
+int c0_run_support(struct c0_support_conf *c, char **stacks, int n, void *const *hooks, struct c0_support_result *res,
+		   cJSON *rep);
 /* support.tif (union of the masks) and rx.tif (one plane per stack). */
 int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, const struct c0_support_result *res,
 		     int n, cJSON *rep);
@@ -24,9 +32,10 @@ int c0_write_support(struct c0_outdir *out, const struct c0_support_conf *c, con
  * variance is estimated on the mask.
  * Writes intensity_qNN.tif and background_qNN.tif, fills rep["intensity"].
  * corrected (n pointers, or NULL): receives each temporal mean minus its
- * background (coarse grid, allocated), the standard MA-TIRF input. */
+ * background (coarse grid, allocated), the standard MA-TIRF input.
+ * hooks (n, or NULL): each stack's drift correction. */
 int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
-		     char **stacks, int n, const uint8_t *mask, const double *sigma2,
+		     char **stacks, int n, void *const *hooks, const uint8_t *mask, const double *sigma2,
 		     const struct c0_support_result *const *known, struct c0_intensity_result *res, float **corrected,
 		     cJSON *rep);
 

@@ -9,7 +9,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* stream ids: 0 structure, 1<<56 blinking, 2<<56 background, 3<<56 camera */
+/* stream ids: 0 structure, 1<<56 blinking, 2<<56 background, 3<<56 camera, 4<<56 drift */
 #define STREAM(kind, q, i) (((uint64_t)(kind) << 56) | ((uint64_t)(q) << 40) | (uint64_t)(i))
 
 struct c0_sim_scene {
@@ -20,6 +20,9 @@ struct c0_sim_scene {
 	double *amp;         /* photons per frame when on */
 	float *on;           /* nem x frames */
 	double *bg;          /* H x W photons */
+	double *ddx, *ddy;   /* drift per frame (pixels), NULL without */
+	double sig;
+	const struct c0_emitter *em;
 };
 
 static void background(const struct c0_sim_conf *c, int q, double scale, double *bg)
@@ -50,6 +53,7 @@ void c0_sim_scene_free(struct c0_sim_scene *s)
 	if (!s)
 		return;
 	free(s->x0), free(s->y0), free(s->wx), free(s->wy), free(s->amp), free(s->on), free(s->bg);
+	free(s->ddx), free(s->ddy);
 	free(s);
 }
 
@@ -91,6 +95,22 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 		c0_sim_blink(c, STREAM(1, q, e), c->frames, s->on + (size_t)e * c->frames);
 	}
 	background(c, q, rel, s->bg);
+	s->sig = sig, s->em = em;
+	if ((c->drift_nm[0] != 0 || c->drift_nm[1] != 0) && s->K > 64) {
+		c0_sim_scene_free(s);
+		return c0_fail(C0_EINVAL, "--drift-nm: the PSF spans %d pixels; drift is simulated up to 64", s->K);
+	}
+	if (c->drift_nm[0] != 0 || c->drift_nm[1] != 0) {
+		s->ddx = c0_alloc((size_t)c->frames, sizeof(double));
+		s->ddy = c0_alloc((size_t)c->frames, sizeof(double));
+		if (!s->ddx || !s->ddy) {
+			c0_sim_scene_free(s);
+			return C0_ENOMEM;
+		}
+		c0_sim_drift(c, q, s->ddx, s->ddy);
+		for (int t = 0; t < c->frames; t++)
+			s->ddx[t] /= c->pixel_nm, s->ddy[t] /= c->pixel_nm;
+	}
 	*out = s;
 	return C0_OK;
 }
@@ -104,18 +124,27 @@ void c0_sim_render(const struct c0_sim_scene *s, int t, double *ph)
 	const int W = c->width, H = c->height, K = s->K;
 	for (int i = 0; i < W * H; i++)
 		ph[i] = s->bg[i];
+	double dwx[64], dwy[64];   /* K <= 2 ceil(cutoff sigma) + 2 (checked by c0_psf_check) */
 	for (int e = 0; e < s->nem; e++) {
 		double a = s->amp[e] * s->on[(size_t)e * c->frames + t];
 		if (a == 0)
 			continue;
 		const double *wx = s->wx + (size_t)e * K, *wy = s->wy + (size_t)e * K;
+		int x0 = s->x0[e], y0 = s->y0[e];
+		if (s->ddx) {   /* drifted: this frame's own pixel weights */
+			double ex = s->em[e].x / c->pixel_nm + s->ddx[t], ey = s->em[e].y / c->pixel_nm + s->ddy[t];
+			x0 = (int)floor(ex) - (K - 2) / 2, y0 = (int)floor(ey) - (K - 2) / 2;
+			c0_psf_pixel_weights(ex, s->sig, x0, K, dwx);
+			c0_psf_pixel_weights(ey, s->sig, y0, K, dwy);
+			wx = dwx, wy = dwy;
+		}
 		for (int j = 0; j < K; j++) {
-			int y = s->y0[e] + j;
+			int y = y0 + j;
 			if (y < 0 || y >= H)
 				continue;
 			double ay = a * wy[j];
 			for (int k = 0; k < K; k++) {
-				int x = s->x0[e] + k;
+				int x = x0 + k;
 				if (x >= 0 && x < W)
 					ph[y * W + x] += ay * wx[k];
 			}
@@ -133,5 +162,29 @@ void c0_sim_camera(const struct c0_sim_conf *c, int q, int t, double read_noise,
 			v += read_noise * c0_rng_normal(&r);
 		v = nearbyint(v);
 		adu[i] = (float)(v < 0 ? 0 : v > 65535 ? 65535 : v);
+	}
+}
+
+void c0_sim_drift(const struct c0_sim_conf *c, int q, double *dx, double *dy)
+{
+	const double G = (double)c->nangles * c->frames;
+	const int64_t g0 = (int64_t)q * c->frames;
+	if (!c->drift_walk) {
+		for (int t = 0; t < c->frames; t++) {
+			double u = G > 1 ? (double)(g0 + t) / (G - 1) : 0;
+			dx[t] = c->drift_nm[0] * u, dy[t] = c->drift_nm[1] * u;
+		}
+		return;
+	}
+	/* the walk from the first frame of the acquisition, one stream */
+	struct c0_rng r;
+	c0_rng_init(&r, c->seed, STREAM(4, 0, 0));
+	const double sx = fabs(c->drift_nm[0]) / sqrt(G), sy = fabs(c->drift_nm[1]) / sqrt(G);
+	double x = 0, y = 0;
+	for (int64_t g = 0; g < g0 + c->frames; g++) {
+		if (g > 0)
+			x += sx * c0_rng_normal(&r), y += sy * c0_rng_normal(&r);
+		if (g >= g0)
+			dx[g - g0] = x, dy[g - g0] = y;
 	}
 }

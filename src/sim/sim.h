@@ -51,6 +51,9 @@ struct c0_sim_conf {
 	double gain;               /* 1 ADU per photon */
 	double read_noise;         /* ADU sd; used when snr_db <= 0 */
 	double snr_db;             /* 14.75 */
+	/* stage drift over the whole acquisition (the angles one after another) */
+	double drift_nm[2];        /* 0,0: x, y displacement of the sample at the last frame */
+	int drift_walk;            /* 0: linear; 1: Gaussian random walk (per-axis step sd |drift|/sqrt(frames)) */
 };
 
 void c0_sim_defaults(struct c0_sim_conf *c);
@@ -95,4 +98,7 @@ void c0_sim_scene_free(struct c0_sim_scene *s);
 const float *c0_sim_scene_onfrac(const struct c0_sim_scene *s);   /* nem x frames */
 const double *c0_sim_scene_background(const struct c0_sim_scene *s); /* photons, H x W */
 void c0_sim_render(const struct c0_sim_scene *s, int t, double *photons);
+/* Drift of the sample at frame t of angle q (nm), for every frame of that
+ * angle: dx[t], dy[t] (t < frames). */
+void c0_sim_drift(const struct c0_sim_conf *c, int q, double *dx, double *dy);
 void c0_sim_camera(const struct c0_sim_conf *c, int q, int t, double read_noise, const double *photons, float *adu);

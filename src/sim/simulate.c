@@ -178,6 +178,26 @@ static int write_csv(const struct c0_sim_conf *c, struct c0_outdir *out, const s
 	return st;
 }
 
+/* drift_truth.csv: the sample's displacement per frame (nm) */
+static int write_drift(const struct c0_sim_conf *c, struct c0_outdir *out)
+{
+	size_t cap = (size_t)c->nangles * c->frames * 64 + 64, k = 0;
+	char *buf = c0_alloc(cap, 1);
+	double *dx = c0_alloc((size_t)c->frames, sizeof *dx), *dy = c0_alloc((size_t)c->frames, sizeof *dy);
+	int st = buf && dx && dy ? C0_OK : C0_ENOMEM;
+	if (!st) {
+		k += (size_t)snprintf(buf + k, cap - k, "stack,frame,dx_nm,dy_nm\n");
+		for (int q = 0; q < c->nangles; q++) {
+			c0_sim_drift(c, q, dx, dy);
+			for (int t = 0; t < c->frames; t++)
+				k += (size_t)snprintf(buf + k, cap - k, "%d,%d,%.3f,%.3f\n", q + 1, t + 1, dx[t], dy[t]);
+		}
+		st = k < cap ? c0_write_file_named(out, "drift_truth.csv", buf, k) : c0_fail(C0_ENOMEM, "drift_truth.csv: buffer too small");
+	}
+	free(buf), free(dx), free(dy);
+	return st;
+}
+
 int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_sim_result *res)
 {
 	memset(res, 0, sizeof *res);
@@ -234,6 +254,8 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 		st = write_truth(c, out, res, bg);
 	if (!st)
 		st = write_csv(c, out, res);
+	if (!st && (c->drift_nm[0] != 0 || c->drift_nm[1] != 0))
+		st = write_drift(c, out);
 	for (int q = 0; q < C0_MAX_ANGLES; q++)
 		free(bg[q]);
 	res->seconds = c0_now() - t0;

@@ -1,5 +1,6 @@
 #include "stages/support.h"
 #include "ops/covop.h"
+#include "ops/covpool.h"
 #include "optics/psf.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -179,39 +180,57 @@ out:
 	return st;
 }
 
-int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-			struct c0_cov *cov, double *seconds)
+/* One pass; frames alternate between the nacc accumulators (1 or 2). */
+static int stream_cov(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name, int nacc,
+		      struct c0_cov *cov, double *seconds)
 {
 	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
 	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
+	if (!st && nacc == 2 && in->pages < 6)
+		st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
+			     "give lambda)", name, (long long)in->pages);
 	if (st)
 		return st;
 	double t0 = c0_now();
-	struct c0_cov_acc *acc;
-	if ((st = c0_cov_acc_new((int)in->width, (int)in->height, c0_support_lag(c), &acc)))
-		return st;
-	float *frame = c0_alloc((size_t)in->width * in->height, sizeof *frame);
-	if (!frame) {
-		c0_cov_acc_free(acc);
-		return C0_ENOMEM;
-	}
+	struct c0_cov_acc *acc[2] = { NULL, NULL };
+	for (int k = 0; k < nacc && !st; k++)
+		st = c0_cov_acc_new((int)in->width, (int)in->height, c0_support_lag(c), &acc[k]);
+	float *frame = st ? NULL : c0_alloc((size_t)in->width * in->height, sizeof *frame);
+	if (!st && !frame)
+		st = C0_ENOMEM;
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "covariance", (double)in->pages);
 	for (int64_t t = 0; t < in->pages && !st; t++) {
 		st = c0_tiff_read_f32(rd, t, frame);
+		if (!st && c->frame_fn)
+			st = c->frame_fn(c->frame_ctx, t, frame, (int)in->height, (int)in->width);
 		if (!st)
-			st = c0_cov_acc_add(acc, frame);
+			st = c0_cov_acc_add(acc[t % nacc], frame);
 		c0_progress_update(&pr, (double)t + 1);
 	}
 	c0_progress_end(&pr);
 	free(frame);
-	if (st) {
-		c0_cov_acc_free(acc);
-		return st;
+	for (int k = 0; k < nacc; k++) {
+		if (st)
+			c0_cov_acc_free(acc[k]);
+		else if ((st = c0_cov_acc_finish(acc[k], &cov[k])))
+			for (int j = k + 1; j < nacc; j++)
+				c0_cov_acc_free(acc[j]);
 	}
-	st = c0_cov_acc_finish(acc, cov);
 	*seconds = c0_now() - t0;
 	return st;
+}
+
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
+			struct c0_cov *cov, double *seconds)
+{
+	return stream_cov(c, rd, name, 1, cov, seconds);
+}
+
+int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
+			       struct c0_cov half[2], double *seconds)
+{
+	return stream_cov(c, rd, name, 2, half, seconds);
 }
 
 int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name, double **mean,
@@ -233,6 +252,8 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 	c0_progress_begin(&pr, "mean", (double)in->pages);
 	for (int64_t t = 0; t < in->pages && !st; t++) {
 		st = c0_tiff_read_f32(rd, t, frame);
+		if (!st && c->frame_fn)
+			st = c->frame_fn(c->frame_ctx, t, frame, (int)in->height, (int)in->width);
 		for (size_t i = 0; !st && i < n; i++)
 			(*mean)[i] += frame[i];
 		c0_progress_update(&pr, (double)t + 1);
@@ -252,14 +273,23 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd,
 		     struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
-	struct c0_cov cov;
+	struct c0_cov cov = { 0 }, half[2] = { { 0 } };
+	struct c0_support_conf cc = *c;
+	const int automatic = !(c->lambda_rel > 0);
 	double tc;
-	int st = c0_stack_covariance(c, rd, name, &cov, &tc);
-	if (st)
-		return st;
+	int st = automatic ? c0_stack_covariance_halves(c, rd, name, half, &tc) : c0_stack_covariance(c, rd, name, &cov, &tc);
+	if (!st && automatic) {
+		double t0 = c0_now();
+		st = c0_cov_pool(&half[0], &half[1], &cov);
+		tc += c0_now() - t0;
+	}
 	struct c0_progress ps;
 	c0_progress_begin(&ps, "support", 1);
-	st = c0_support_solve(c, &cov, res);
+	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
+		cc.lambda_rel = res->cv.chosen_rel, res->lambda_auto = 1;
+	c0_cov_free(&half[0]), c0_cov_free(&half[1]);
+	if (!st)
+		st = c0_support_solve(&cc, &cov, res);
 	c0_progress_end(&ps);
 	res->t_cov = tc;
 	if (!st) {

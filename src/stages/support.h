@@ -5,23 +5,31 @@
 #pragma once
 #include "ops/covariance.h"
 #include "solve/fista.h"
+#include "stages/lambda.h"
 #include "io/tiff.h"
 
 #include <stdint.h>
 
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };
 
+/* Per-frame preprocessing in the streaming passes (drift correction): frame
+ * t (0-based in its stack, H x W) is changed in place before it is used. */
+typedef int (*c0_frame_fn)(void *ctx, int64_t t, float *frame, int H, int W);
+
 struct c0_support_conf {
 	double pixel_nm;           /* camera pixel size (required) */
 	double fwhm_nm;            /* PSF FWHM (required) */
 	int srf;                   /* 4: fine grid factor r */
 	enum c0_penalty penalty;   /* l1 */
-	double lambda_rel;         /* lambda / lambda_max; 0: the penalty's default (c0_support_default_lambda) */
+	double lambda_rel;         /* lambda / lambda_max; 0: automatic (stages/lambda.h) when the stack is
+				    * streamed, else the penalty's fixed default (c0_support_default_lambda) */
 	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
 	struct c0_fista_conf fista;/* 2000 iterations, tol 1e-5 */
 	int cel0_outer;            /* 10 reweightings */
+	c0_frame_fn frame_fn;      /* NULL: frames as read */
+	void *frame_ctx;
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10 }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, NULL, NULL }
 
 struct c0_support_result {
 	int Ly, Lx, lag, nlag;
@@ -36,6 +44,8 @@ struct c0_support_result {
 	double *hist;              /* objective per iteration */
 	int nhist;
 	double t_cov, t_solve;     /* seconds */
+	int lambda_auto;           /* lambda chosen from the data (stages/lambda.h): */
+	struct c0_lambda_result cv;/* its inputs and time */
 };
 
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name);
@@ -43,7 +53,8 @@ int c0_support_lag(const struct c0_support_conf *c);
 /* Measured on simulated filaments (docs/parameters.md): l1 1e-2, cel0 3e-5.
  * The two differ because CEL0's lambda_max is on the l0 scale. */
 double c0_support_default_lambda(enum c0_penalty p);
-/* Streams the stack once for its covariance, then solves. */
+/* Streams the stack once for its covariance (and its two interleaved
+ * halves when lambda is automatic), then solves. */
 int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
 		     struct c0_support_result *res);
 /* Solves from a finished covariance (which is left unchanged). */
@@ -52,6 +63,9 @@ void c0_support_result_free(struct c0_support_result *r);
 /* One streaming pass: banded covariance (lag from the PSF) and temporal mean. */
 int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
 			struct c0_cov *cov, double *seconds);
+/* The same pass, even frames into half[0], odd into half[1]. */
+int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
+			       struct c0_cov half[2], double *seconds);
 /* One streaming pass for the temporal mean only (allocated), when the noise
  * variance is already known and the covariance is not needed. */
 int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name, double **mean,

@@ -1,0 +1,47 @@
+#include "ops/covpool.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int c0_cov_pool(const struct c0_cov *a, const struct c0_cov *b, struct c0_cov *out)
+{
+	memset(out, 0, sizeof *out);
+	if (a->W != b->W || a->H != b->H || a->d != b->d || a->frames < 2 || b->frames < 2)
+		return c0_fail(C0_EINVAL, "covariance pooling: the two sets differ in size or lag, or hold < 2 frames");
+	const int W = a->W, H = a->H;
+	const size_t n = (size_t)W * H;
+	*out = *a;
+	out->dy = c0_alloc((size_t)a->nlag, sizeof(int));
+	out->dx = c0_alloc((size_t)a->nlag, sizeof(int));
+	out->r = c0_alloc((size_t)a->nlag * n, sizeof(double));
+	out->mean = c0_alloc(n, sizeof(double));
+	if (!out->dy || !out->dx || !out->r || !out->mean) {
+		c0_cov_free(out);
+		return C0_ENOMEM;
+	}
+	memcpy(out->dy, a->dy, (size_t)a->nlag * sizeof(int));
+	memcpy(out->dx, a->dx, (size_t)a->nlag * sizeof(int));
+	const double na = (double)a->frames, nb = (double)b->frames, N = na + nb;
+	out->frames = a->frames + b->frames;
+	for (size_t i = 0; i < n; i++)
+		out->mean[i] = (na * a->mean[i] + nb * b->mean[i]) / N;
+	const double between = na * nb / N;
+#pragma omp parallel for collapse(2) schedule(static)
+	for (int l = 0; l < a->nlag; l++)
+		for (int y = 0; y < H; y++) {
+			const int dy = a->dy[l], dx = a->dx[l];
+			for (int x = 0; x < W; x++) {
+				size_t i = (size_t)l * n + (size_t)y * W + x;
+				int y2 = y + dy, x2 = x + dx;
+				if (y2 >= H || x2 < 0 || x2 >= W)
+					continue;   /* partner outside: stays 0 */
+				size_t p = (size_t)y * W + x, q = (size_t)y2 * W + x2;
+				double s = (na - 1) * a->r[i] + (nb - 1) * b->r[i] +
+					   between * (a->mean[p] - b->mean[p]) * (a->mean[q] - b->mean[q]);
+				out->r[i] = s / (N - 1);
+			}
+		}
+	return C0_OK;
+}

@@ -1,0 +1,390 @@
+#include "stages/drift.h"
+#include "ops/fshift.h"
+#include "io/tiff.h"
+#include "core/clock.h"
+#include "core/err.h"
+#include "core/mem.h"
+#include "core/progress.h"
+
+#include <complex.h>
+#include <fftw3.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAXQ 64
+#define REFINE 2   /* rounds of refinement against the mean of all blocks */
+
+struct hook {
+	struct c0_drift *d;
+	int q;
+};
+
+struct c0_drift {
+	int nq, nb, block, H, W;
+	int64_t frames[MAXQ], start[MAXQ];   /* per stack: frames, global index of its first frame */
+	double *bt, *bx, *by;
+	float **bm;                          /* block means, while estimating */
+	double max_px, seconds;
+	struct hook hooks[MAXQ];
+	struct c0_fshift *sh;
+};
+
+void c0_drift_free(struct c0_drift *d)
+{
+	if (!d)
+		return;
+	for (int k = 0; d->bm && k < d->nb; k++)
+		free(d->bm[k]);
+	free(d->bm);
+	free(d->bt), free(d->bx), free(d->by);
+	c0_fshift_free(d->sh);
+	free(d);
+}
+
+/* The correlation set-up: the reference block's spectrum, and the window
+ * that keeps the image edges from correlating. */
+struct xcorr {
+	int H, W;
+	double *win, *re;
+	fftw_complex *ref, *sp;
+	fftw_plan f, b;
+};
+
+static void xcorr_free(struct xcorr *x)
+{
+	if (x->f) fftw_destroy_plan(x->f);
+	if (x->b) fftw_destroy_plan(x->b);
+	free(x->win), fftw_free(x->re), fftw_free(x->ref), fftw_free(x->sp);
+}
+
+static int xcorr_init(struct xcorr *x, int H, int W)
+{
+	memset(x, 0, sizeof *x);
+	x->H = H, x->W = W;
+	const size_t n = (size_t)H * W, ns = (size_t)H * (W / 2 + 1);
+	x->win = c0_alloc(n, sizeof *x->win);
+	x->re = fftw_malloc(n * sizeof(double));
+	x->ref = fftw_malloc(ns * sizeof(fftw_complex));
+	x->sp = fftw_malloc(ns * sizeof(fftw_complex));
+	if (!x->win || !x->re || !x->ref || !x->sp)
+		return C0_ENOMEM;
+#pragma omp critical(c0_fftw_plan)
+	{
+		x->f = fftw_plan_dft_r2c_2d(H, W, x->re, x->sp, FFTW_ESTIMATE);
+		x->b = fftw_plan_dft_c2r_2d(H, W, x->sp, x->re, FFTW_ESTIMATE);
+	}
+	if (!x->f || !x->b)
+		return c0_fail(C0_ENOMEM, "drift: cannot plan the FFTs of %dx%d", W, H);
+	for (int y = 0; y < H; y++)
+		for (int i = 0; i < W; i++)   /* Hann */
+			x->win[(size_t)y * W + i] = (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (y + 0.5) / H)) *
+						    (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (i + 0.5) / W));
+	return C0_OK;
+}
+
+/* windowed, mean-removed spectrum of img into x->sp */
+static void spectrum(struct xcorr *x, const double *img)
+{
+	const size_t n = (size_t)x->H * x->W;
+	double m = 0, w = 0;
+	for (size_t i = 0; i < n; i++)
+		m += img[i] * x->win[i], w += x->win[i];
+	m /= w;
+	for (size_t i = 0; i < n; i++)
+		x->re[i] = (img[i] - m) * x->win[i];
+	fftw_execute(x->f);
+}
+
+/* sub-pixel peak offset from three samples: Gaussian (log-parabola) when all
+ * positive, else parabola */
+static double peak3(double a, double b, double c)
+{
+	if (a > 0 && b > 0 && c > 0) {
+		double la = log(a), lb = log(b), lc = log(c), den = la - 2 * lb + lc;
+		if (den < 0)
+			return 0.5 * (la - lc) / den;
+	}
+	double den = a - 2 * b + c;
+	return den < 0 ? 0.5 * (a - c) / den : 0;
+}
+
+/* shift (px) of the content of img relative to the reference; 1 if the
+ * peak lies beyond a quarter of the field */
+static int shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
+{
+	const int H = x->H, W = x->W, Wc = W / 2 + 1;
+	spectrum(x, img);
+	for (size_t i = 0; i < (size_t)H * Wc; i++)
+		x->sp[i] = x->sp[i] * conj(x->ref[i]);
+	fftw_execute(x->b);   /* x->re: circular cross-correlation, lag (0, 0) at index 0 */
+	int by = 0, bx = 0;
+	double best = -INFINITY;
+	for (int y = 0; y < H; y++)
+		for (int i = 0; i < W; i++) {
+			int ly = y <= H / 2 ? y : y - H, lx = i <= W / 2 ? i : i - W;
+			double v = x->re[(size_t)y * W + i];
+			if (v > best)
+				best = v, by = ly, bx = lx;
+		}
+#define AT(ly, lx) x->re[(size_t)(((ly) % H + H) % H) * W + (((lx) % W + W) % W)]
+	*dx = bx + peak3(AT(by, bx - 1), AT(by, bx), AT(by, bx + 1));
+	*dy = by + peak3(AT(by - 1, bx), AT(by, bx), AT(by + 1, bx));
+#undef AT
+	return fabs(*dx) > W / 4.0 || fabs(*dy) > H / 4.0;
+}
+
+/* The first estimates correlate each block with the first, one noisy block
+ * mean. Refined: the reference becomes the mean of all blocks moved back by
+ * their shifts, and each block is re-measured after its own shift has been
+ * undone, so that the sub-pixel fit works near zero where it is unbiased.
+ * The trajectory stays relative to the first block. */
+static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
+{
+	const size_t n = (size_t)d->H * d->W;
+	int st = C0_OK;
+	for (int round = 0; round < REFINE && d->nb > 1 && !st; round++) {
+		memset(ref, 0, n * sizeof *ref);
+		for (int k = 0; k < d->nb && !st; k++) {
+			memcpy(tmp, d->bm[k], n * sizeof *tmp);
+			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+			for (size_t i = 0; i < n; i++)
+				ref[i] += tmp[i];
+		}
+		spectrum(x, ref);
+		memcpy(x->ref, x->sp, (size_t)d->H * (d->W / 2 + 1) * sizeof *x->ref);
+		for (int k = 0; k < d->nb && !st; k++) {
+			memcpy(tmp, d->bm[k], n * sizeof *tmp);
+			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+			for (size_t i = 0; i < n; i++)
+				ref[i] = tmp[i];
+			double rx, ry;
+			shift_of(x, ref, &rx, &ry);
+			d->bx[k] += rx, d->by[k] += ry;
+		}
+		for (int k = d->nb - 1; k >= 0; k--)
+			d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
+	}
+	d->max_px = 0;
+	for (int k = 0; k < d->nb; k++)
+		d->max_px = fmax(d->max_px, hypot(d->bx[k], d->by[k]));
+	return st;
+}
+
+int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struct c0_drift **out)
+{
+	double t0 = c0_now();
+	*out = NULL;
+	if (n < 1 || n > MAXQ)
+		return c0_fail(C0_EINVAL, "drift: %d stacks (1..%d)", n, MAXQ);
+	if (c->block < 1)
+		return c0_fail(C0_EINVAL, "drift block %d: must be >= 1 frame", c->block);
+	struct c0_drift *d = c0_alloc(1, sizeof *d);
+	if (!d)
+		return C0_ENOMEM;
+	d->nq = n;
+	struct xcorr x = { 0 };
+	double *sum = NULL;
+	float *frame = NULL;
+	int st = C0_OK, cap = 0;
+	int64_t g = 0;
+	for (int q = 0; q < n && !st; q++) {
+		struct c0_tiff_reader *r;
+		if ((st = c0_tiff_open(stacks[q], &r)))
+			break;
+		const struct c0_tiff_info *in = c0_tiff_get_info(r);
+		const int H = (int)in->height, W = (int)in->width;
+		const int64_t T = in->pages;
+		if (q == 0) {
+			d->H = H, d->W = W;
+			sum = c0_alloc((size_t)H * W, sizeof *sum);
+			frame = c0_alloc((size_t)H * W, sizeof *frame);
+			if (!sum || !frame)
+				st = C0_ENOMEM;
+			else if (!(st = xcorr_init(&x, H, W)))
+				st = c0_fshift_new(H, W, &d->sh);
+		} else if (H != d->H || W != d->W) {
+			st = c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s", stacks[q], W, H, stacks[0]);
+		}
+		/* blocks: c->block frames, fewer when the stack has < 2 blocks */
+		int64_t B = T >= 2 * c->block ? c->block : T / 2;
+		if (q == 0)
+			d->block = (int)B;
+		if (!st && B < 5)
+			st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to estimate drift (needs >= 10; switch "
+				     "drift correction off)", stacks[q], (long long)T);
+		int64_t nb = st ? 0 : T / B;
+		if (!st && d->nb + nb > cap) {
+			cap = 2 * (d->nb + (int)nb);
+			double *a = realloc(d->bt, cap * sizeof *a), *b2 = a ? realloc(d->bx, cap * sizeof *a) : NULL,
+			       *c2 = b2 ? realloc(d->by, cap * sizeof *a) : NULL;
+			float **m2 = c2 ? realloc(d->bm, cap * sizeof *m2) : NULL;
+			if (a) d->bt = a;
+			if (b2) d->bx = b2;
+			if (c2) d->by = c2;
+			if (m2) d->bm = m2;
+			if (!a || !b2 || !c2 || !m2)
+				st = c0_fail(C0_ENOMEM, "drift: out of memory");
+		}
+		struct c0_progress pr;
+		c0_progress_begin(&pr, "drift", (double)T);
+		for (int64_t k = 0; k < nb && !st; k++) {
+			/* the last block takes the remainder */
+			int64_t t1 = k * B, t2 = k == nb - 1 ? T : t1 + B;
+			memset(sum, 0, (size_t)H * W * sizeof *sum);
+			for (int64_t t = t1; t < t2 && !st; t++) {
+				if (!(st = c0_tiff_read_f32(r, t, frame)))
+					for (size_t i = 0; i < (size_t)H * W; i++)
+						sum[i] += frame[i];
+				c0_progress_update(&pr, (double)t + 1);
+			}
+			if (st)
+				break;
+			for (size_t i = 0; i < (size_t)H * W; i++)
+				sum[i] /= (double)(t2 - t1);
+			if (!(d->bm[d->nb] = malloc((size_t)H * W * sizeof(float)))) {
+				st = c0_fail(C0_ENOMEM, "drift: out of memory for the block means");
+				break;
+			}
+			for (size_t i = 0; i < (size_t)H * W; i++)
+				d->bm[d->nb][i] = (float)sum[i];
+			double bx = 0, by = 0;
+			if (d->nb == 0) {
+				spectrum(&x, sum);
+				memcpy(x.ref, x.sp, (size_t)H * (W / 2 + 1) * sizeof *x.ref);
+			} else if (shift_of(&x, sum, &bx, &by)) {
+				st = c0_fail(C0_EINVAL, "%s: the drift at frames %lld-%lld (%.1f, %.1f pixels) exceeds a quarter "
+					     "of the field; correct it beforehand or switch drift correction off",
+					     stacks[q], (long long)t1 + 1, (long long)t2, bx, by);
+				break;
+			}
+			d->bt[d->nb] = (double)g + 0.5 * (double)(t1 + t2 - 1);
+			d->bx[d->nb] = bx, d->by[d->nb] = by;
+			d->max_px = fmax(d->max_px, hypot(bx, by));
+			d->nb++;
+		}
+		c0_progress_end(&pr);
+		c0_tiff_close(r);
+		d->frames[q] = T, d->start[q] = g;
+		d->hooks[q].d = d, d->hooks[q].q = q;
+		g += T;
+	}
+	if (!st)
+		st = refine(d, &x, sum, frame);
+	xcorr_free(&x);
+	free(sum), free(frame);
+	for (int k = 0; d->bm && k < d->nb; k++)
+		free(d->bm[k]);
+	free(d->bm), d->bm = NULL;
+	d->seconds = c0_now() - t0;
+	if (st) {
+		c0_drift_free(d);
+		return st;
+	}
+	*out = d;
+	return C0_OK;
+}
+
+void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double *dy)
+{
+	const double tg = (double)(d->start[q] + t);
+	if (d->nb < 2) {
+		*dx = d->nb ? d->bx[0] : 0, *dy = d->nb ? d->by[0] : 0;
+		return;
+	}
+	int k = 0;   /* segment [k, k + 1], the end ones extended */
+	while (k < d->nb - 2 && tg > d->bt[k + 1])
+		k++;
+	double u = (tg - d->bt[k]) / (d->bt[k + 1] - d->bt[k]);
+	*dx = d->bx[k] + u * (d->bx[k + 1] - d->bx[k]);
+	*dy = d->by[k] + u * (d->by[k + 1] - d->by[k]);
+}
+
+void *c0_drift_hook(struct c0_drift *d, int q) { return &d->hooks[q]; }
+
+int c0_drift_frame_fn(void *ctx, int64_t t, float *frame, int H, int W)
+{
+	const struct hook *h = ctx;
+	if (H != h->d->H || W != h->d->W)
+		return c0_fail(C0_EINVAL, "drift: a %dx%d frame for a %dx%d trajectory", W, H, h->d->W, h->d->H);
+	double dx, dy;
+	c0_drift_at(h->d, h->q, t, &dx, &dy);
+	return c0_fshift_apply(h->d->sh, frame, dx, dy);
+}
+
+void c0_drift_get_info(const struct c0_drift *d, struct c0_drift_info *o)
+{
+	o->stacks = d->nq, o->blocks = d->nb, o->block = d->block;
+	o->frames = d->start[d->nq - 1] + d->frames[d->nq - 1];
+	o->stack_frames = d->frames;
+	o->bt = d->bt, o->bx = d->bx, o->by = d->by;
+	o->max_px = d->max_px, o->seconds = d->seconds;
+}
+
+int c0_drift_csv(const struct c0_drift *d, double pixel_nm, char **buf, size_t *len)
+{
+	const int64_t G = d->start[d->nq - 1] + d->frames[d->nq - 1];
+	size_t cap = (size_t)G * 48 + 64, k = 0;
+	char *b = c0_alloc(cap, 1);
+	if (!b)
+		return C0_ENOMEM;
+	k += (size_t)snprintf(b + k, cap - k, "stack,frame,dx_nm,dy_nm\n");
+	for (int q = 0; q < d->nq; q++)
+		for (int64_t t = 0; t < d->frames[q]; t++) {
+			double dx, dy;
+			c0_drift_at(d, q, t, &dx, &dy);
+			k += (size_t)snprintf(b + k, cap - k, "%d,%lld,%.2f,%.2f\n", q + 1, (long long)t + 1, dx * pixel_nm,
+					      dy * pixel_nm);
+		}
+	*buf = b, *len = k;
+	return C0_OK;
+}
+
+static void put(uint8_t *rgb, int w, int h, int x, int y, const uint8_t *c)
+{
+	if (x >= 0 && x < w && y >= 0 && y < h)
+		memcpy(rgb + 3 * ((size_t)y * w + x), c, 3);
+}
+
+int c0_drift_plot(const struct c0_drift *d, double pixel_nm, uint8_t **rgb, int *w, int *h)
+{
+	const int W = 480, H = 240, m = 10;
+	const int64_t G = d->start[d->nq - 1] + d->frames[d->nq - 1];
+	uint8_t *p = c0_alloc((size_t)W * H * 3, 1);
+	if (!p)
+		return C0_ENOMEM;
+	memset(p, 255, (size_t)W * H * 3);
+	double lim = 10;   /* nm, symmetric about 0 */
+	for (int q = 0; q < d->nq; q++)
+		for (int64_t t = 0; t < d->frames[q]; t++) {
+			double dx, dy;
+			c0_drift_at(d, q, t, &dx, &dy);
+			lim = fmax(lim, fmax(fabs(dx), fabs(dy)) * pixel_nm * 1.1);
+		}
+	const uint8_t grey[3] = { 190, 190, 190 }, black[3] = { 0, 0, 0 }, red[3] = { 220, 30, 30 }, blue[3] = { 30, 60, 220 };
+#define ROW(v) (H / 2 - (int)lround((v) / lim * (H / 2 - m)))
+#define COL(g) (m + (int)lround((double)(g) / (double)(G > 1 ? G - 1 : 1) * (W - 2 * m)))
+	for (double v = -floor(lim / 10) * 10; v <= lim; v += 10)
+		for (int x = 0; x < m; x++)
+			put(p, W, H, x, ROW(v), grey);
+	for (int x = m; x < W - m; x++)
+		put(p, W, H, x, H / 2, grey);
+	for (int q = 1; q < d->nq; q++)
+		for (int y = 0; y < H; y += 4)
+			put(p, W, H, COL(d->start[q]), y, grey);
+	for (int y = m; y < H - m; y++)
+		put(p, W, H, m - 1, y, black);
+	for (int q = 0; q < d->nq; q++)
+		for (int64_t t = 0; t < d->frames[q]; t++) {
+			double dx, dy;
+			c0_drift_at(d, q, t, &dx, &dy);
+			int x = COL(d->start[q] + t);
+			for (int k = -1; k <= 1; k++)
+				put(p, W, H, x, ROW(dx * pixel_nm) + k, red), put(p, W, H, x, ROW(dy * pixel_nm) + k, blue);
+		}
+#undef ROW
+#undef COL
+	*rgb = p, *w = W, *h = H;
+	return C0_OK;
+}

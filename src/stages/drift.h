@@ -1,0 +1,43 @@
+/* Lateral drift of a run: estimated from block means of the frames by
+ * cross-correlation with the first block of the first stack (sub-pixel peak),
+ * continued across the stacks in their order, and undone frame by frame in
+ * the streaming passes (a c0_frame_fn, see stages/support.h).
+ *
+ * The blocks' shifts are linearly interpolated between block centres (and
+ * extrapolated from the nearest two beyond them) to every frame. */
+#pragma once
+#include <stddef.h>
+#include <stdint.h>
+
+struct c0_drift_conf {
+	int block;          /* 50 frames per block mean (fewer when a stack has < 2 blocks) */
+};
+#define C0_DRIFT_DEFAULTS { 50 }
+
+struct c0_drift;
+
+/* One streaming pass over each stack (paths, n of them, same size). Errors:
+ * a stack too short to hold two blocks of >= 5 frames; a shift beyond a
+ * quarter of the field (the correlation cannot be trusted there). */
+int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struct c0_drift **out);
+void c0_drift_free(struct c0_drift *d);
+/* The frame hook for stack q: pass c0_drift_frame_fn with this context. */
+void *c0_drift_hook(struct c0_drift *d, int q);
+int c0_drift_frame_fn(void *ctx, int64_t t, float *frame, int H, int W);
+/* Shift of frame t of stack q in pixels (content position minus the first block's). */
+void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double *dy);
+
+struct c0_drift_info {
+	int stacks, blocks, block;  /* blocks over all stacks */
+	int64_t frames;             /* over all stacks */
+	const int64_t *stack_frames;
+	const double *bt, *bx, *by; /* block centre (frame index over all stacks), shift (px) */
+	double max_px, seconds;
+};
+void c0_drift_get_info(const struct c0_drift *d, struct c0_drift_info *out);
+
+/* drift.csv: one row per frame (stack, frame, dx_nm, dy_nm), allocated. */
+int c0_drift_csv(const struct c0_drift *d, double pixel_nm, char **buf, size_t *len);
+/* A small plot (RGB, allocated): x (red) and y (blue) shift against frame,
+ * grey zero line, grey ticks every 10 nm, stack boundaries dotted. */
+int c0_drift_plot(const struct c0_drift *d, double pixel_nm, uint8_t **rgb, int *w, int *h);
