@@ -73,7 +73,9 @@ int cmd_run(int argc, char **argv)
 		"Writes OUTDIR/support.tif (uint8 0/1, fine grid; fine pixel (i, j) covers\n"
 		"[i p/r, (i+1) p/r) nm from the top-left corner), rx.tif, intensity_qNN.tif (fine),\n"
 		"background_qNN.tif (coarse), volume.tif (depth bins x fine grid), depth.tif,\n"
-		"depth.png and report.json (every parameter and estimate; \"z_nm\": bin centres).",
+		"depth.png, render.tif (the intensities splatted with a Gaussian of the localisation\n"
+		"precision, one plane per stack), drift.csv, drift.png and report.json (every parameter\n"
+		"and estimate; \"z_nm\": bin centres).",
 		opts, C0_NOPTS(opts), 1, MAXS };
 	char *stacks[MAXS];
 	int ns, rc = c0_opts_parse(&spec, argc, argv, &ns, stacks);
@@ -160,6 +162,12 @@ int cmd_run(int argc, char **argv)
 	t = c0_now();
 	if (!st)
 		st = c0_run_intensity(&out, &ic, &sc, stacks, ns, drift_on ? hooks : NULL, mask, NULL, known, ires, baseline && three_d ? corr : NULL, rep);
+	if (!st) {
+		double prec = -1;
+		for (int k = 0; k < nsup; k++)
+			prec = fmax(prec, sres[k].precision_nm);
+		st = c0_run_render(&out, ires, ns, prec, sc.pixel_nm / sc.srf, rep);
+	}
 	cJSON_AddNumberToObject(times, "intensity", c0_now() - t);
 	if (!st && three_d) {
 		const float *img[MAXS];

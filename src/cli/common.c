@@ -7,8 +7,10 @@
 #include "io/png.h"
 #include "stages/depthcode.h"
 #include "stages/depthpool.h"
+#include "stages/splat.h"
 
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -123,6 +125,22 @@ int c0_run_support(struct c0_support_conf *c, char **stacks, int n, void *const 
 		cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);
 		cJSON_AddNumberToObject(o, "solve_s", s->t_solve);
 		c0_report_add_array(o, "objective", s->hist, s->nhist);
+		if (s->frc.n) {
+			cJSON *f = cJSON_AddObjectToObject(o, "frc");
+			cJSON_AddStringToObject(f, "images", "emitter variances of the even and the odd frames (fine grid), Hann window");
+			cJSON_AddNumberToObject(f, "threshold", 1.0 / 7);
+			cJSON_AddNumberToObject(f, "resolution_nm", s->frc_nm);
+			if (!(s->frc_nm > 0))
+				cJSON_AddStringToObject(f, "note", "does not fall below 1/7 up to the fine grid's Nyquist frequency: the resolution is at most 2 fine pixels");
+			cJSON_AddNumberToObject(o, "precision_nm", s->precision_nm);
+			double fr[4096];
+			int n = s->frc.n < 4096 ? s->frc.n : 4096;
+			for (int k = 0; k < n; k++)
+				fr[k] = s->frc.freq[k] / (c->pixel_nm / c->srf);
+			c0_report_add_array(f, "frequency_per_nm", fr, n);
+			c0_report_add_array(f, "correlation", s->frc.corr, n);
+			cJSON_AddNumberToObject(f, "seconds", s->t_frc);
+		}
 		if (s->lambda_auto) {
 			const struct c0_lambda_result *v = &s->cv;
 			cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
@@ -296,6 +314,33 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 	cJSON_AddNumberToObject(p, "nu", ic->nu);
 	cJSON_AddNumberToObject(p, "fixed_mu", ic->mu);
 	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
+	return C0_OK;
+}
+
+int c0_run_render(struct c0_outdir *out, const struct c0_intensity_result *res, int n, double precision_nm,
+		  double fine_nm, cJSON *rep)
+{
+	const double sd = fmax(precision_nm, 0.5 * fine_nm);
+	const size_t L = (size_t)res[0].Ly * res[0].Lx;
+	float *img = c0_alloc(L * (size_t)n, sizeof *img);
+	if (!img)
+		return C0_ENOMEM;
+	int st = C0_OK;
+	for (int q = 0; q < n && !st; q++)
+		st = c0_splat(res[q].x, res[0].Ly, res[0].Lx, sd / fine_nm, img + q * L);
+	struct c0_tiff_wopts o = { .width = res[0].Lx, .height = res[0].Ly, .slices = n, .dtype = C0_F32,
+				   .pixel_size_nm = fine_nm, .software = "col0rme" };
+	if (!st)
+		st = c0_tiff_save_f32(c0_outdir_file(out, "render.tif"), &o, img);
+	free(img);
+	if (st)
+		return st;
+	cJSON *j = cJSON_AddObjectToObject(rep, "render");
+	cJSON_AddStringToObject(j, "file", "render.tif");
+	cJSON_AddStringToObject(j, "content", "intensity of each stack (one plane each) splatted with a normalised Gaussian");
+	cJSON_AddNumberToObject(j, "gaussian_sd_nm", sd);
+	cJSON_AddNumberToObject(j, "localisation_precision_nm", precision_nm);
+	cJSON_AddNumberToObject(j, "pixel_nm", fine_nm);
 	return C0_OK;
 }
 

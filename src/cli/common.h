@@ -39,6 +39,11 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 		     const struct c0_support_result *const *known, struct c0_intensity_result *res, float **corrected,
 		     cJSON *rep);
 
+/* render.tif: each stack's intensity splatted with a Gaussian of sd
+ * max(precision_nm, half a fine pixel) (stages/splat.h); fills rep["render"]. */
+int c0_run_render(struct c0_outdir *out, const struct c0_intensity_result *res, int n, double precision_nm,
+		  double fine_nm, cJSON *rep);
+
 #include "stages/matirf.h"
 #include "cli/opts.h"
 

@@ -49,6 +49,7 @@ int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t fram
 void c0_support_result_free(struct c0_support_result *r)
 {
 	free(r->mask), free(r->rx), free(r->mean), free(r->hist);
+	c0_frc_free(&r->frc);
 	memset(r, 0, sizeof *r);
 }
 
@@ -78,12 +79,12 @@ static double smooth(void *vctx, const double *x, double *g)
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
 
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
+static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
 		 struct c0_support_result *res);
 
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
 {
-	return solve(c, cov, NULL, res);
+	return solve(c, cov, NULL, NULL, res);
 }
 
 int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2)
@@ -93,13 +94,14 @@ int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, 
 	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
 	struct c0_support_result r;
 	memset(&r, 0, sizeof r);
-	int st = solve(&cc, cov, mask, &r);
+	int st = solve(&cc, cov, mask, NULL, &r);
 	*sigma2 = r.sigma2;
 	c0_support_result_free(&r);
 	return st;
 }
 
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
+/* x0 (or NULL): a start in camera units (rx of another solve) */
+static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
 		 struct c0_support_result *res)
 {
 	double t0 = c0_now();
@@ -130,6 +132,8 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 		goto out;
 	}
 	res->norm = mx;
+	for (size_t i = 0; x0 && i < L; i++)
+		x[i] = x0[i] / mx;
 	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, mask };
 	for (int l = 0; l < cov->nlag; l++) {
 		double w = c0_cov_weight(cov, l);
@@ -269,16 +273,46 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 	return st;
 }
 
+/* Each half solved on its own (a warm start from the full solution would
+ * make them agree) at the same relative lambda, with at most FRC_MAXIT
+ * iterations; the FRC of their emitter variances. */
+#define FRC_MAXIT 300
+static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2], struct c0_support_result *res)
+{
+	double t0 = c0_now();
+	struct c0_support_result h[2];
+	memset(h, 0, sizeof h);
+	struct c0_support_conf cc = *c;
+	cc.lambda_rel = res->lambda_max > 0 ? res->lambda / res->lambda_max : c0_support_default_lambda(c->penalty);
+	int st = C0_OK;
+	if (cc.fista.maxit > FRC_MAXIT)
+		cc.fista.maxit = FRC_MAXIT;
+	for (int k = 0; k < 2 && !st; k++)
+		st = solve(&cc, &half[k], NULL, NULL, &h[k]);
+	if (!st)
+		st = c0_frc_compute(h[0].rx, h[1].rx, res->Ly, res->Lx, &res->frc);
+	if (!st) {
+		const double fine = c->pixel_nm / c->srf;
+		res->frc_nm = res->frc.resolution_px * fine;
+		/* match within the PSF's half width at half maximum */
+		double p = c0_pair_precision(h[0].mask, h[1].mask, res->Ly, res->Lx, (int)ceil(0.5 * c->fwhm_nm / fine));
+		res->precision_nm = p < 0 ? -1 : p * fine / sqrt(2);
+	}
+	c0_support_result_free(&h[0]), c0_support_result_free(&h[1]);
+	res->t_frc = c0_now() - t0;
+	return st;
+}
+
 int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
 		     struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
 	struct c0_cov cov = { 0 }, half[2] = { { 0 } };
 	struct c0_support_conf cc = *c;
-	const int automatic = !(c->lambda_rel > 0);
+	const int automatic = !(c->lambda_rel > 0), halves = automatic || c->frc;
 	double tc;
-	int st = automatic ? c0_stack_covariance_halves(c, rd, name, half, &tc) : c0_stack_covariance(c, rd, name, &cov, &tc);
-	if (!st && automatic) {
+	int st = halves ? c0_stack_covariance_halves(c, rd, name, half, &tc) : c0_stack_covariance(c, rd, name, &cov, &tc);
+	if (!st && halves) {
 		double t0 = c0_now();
 		st = c0_cov_pool(&half[0], &half[1], &cov);
 		tc += c0_now() - t0;
@@ -287,9 +321,11 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd,
 	c0_progress_begin(&ps, "support", 1);
 	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel, res->lambda_auto = 1;
-	c0_cov_free(&half[0]), c0_cov_free(&half[1]);
 	if (!st)
 		st = c0_support_solve(&cc, &cov, res);
+	if (!st && c->frc)
+		st = half_frc(&cc, half, res);
+	c0_cov_free(&half[0]), c0_cov_free(&half[1]);
 	c0_progress_end(&ps);
 	res->t_cov = tc;
 	if (!st) {

@@ -6,6 +6,7 @@
 #include "ops/covariance.h"
 #include "solve/fista.h"
 #include "stages/lambda.h"
+#include "eval/frc.h"
 #include "io/tiff.h"
 
 #include <stdint.h>
@@ -26,10 +27,12 @@ struct c0_support_conf {
 	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
 	struct c0_fista_conf fista;/* 2000 iterations, tol 1e-5 */
 	int cel0_outer;            /* 10 reweightings */
+	int frc;                   /* 1: also solve each half of the frames (warm started) for the
+				    * resolution by Fourier ring correlation */
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, NULL, NULL }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, 1, NULL, NULL }
 
 struct c0_support_result {
 	int Ly, Lx, lag, nlag;
@@ -46,6 +49,10 @@ struct c0_support_result {
 	double t_cov, t_solve;     /* seconds */
 	int lambda_auto;           /* lambda chosen from the data (stages/lambda.h): */
 	struct c0_lambda_result cv;/* its inputs and time */
+	struct c0_frc frc;         /* of the emitter variances of the two halves (fine grid), with frc */
+	double frc_nm, t_frc;      /* its 1/7 resolution (0: does not cross up to the fine grid's Nyquist), seconds */
+	double precision_nm;       /* localisation sd per axis from the halves' supports (c0_pair_precision),
+				    * for all frames (the halves' / sqrt 2); -1: unknown */
 };
 
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name);
