@@ -73,6 +73,9 @@ int c0_run_drift(struct c0_outdir *out, char **stacks, int n, double pixel_nm, s
 	cJSON_AddNumberToObject(j, "block_frames", in.block);
 	cJSON_AddNumberToObject(j, "blocks", in.blocks);
 	cJSON_AddNumberToObject(j, "max_nm", in.max_px * pixel_nm);
+	double nz[2] = { in.noise_px[0] * pixel_nm, in.noise_px[1] * pixel_nm }, cr[2] = { in.corrected[0], in.corrected[1] };
+	c0_report_add_array(j, "block_noise_nm", nz, 2);
+	c0_report_add_array(j, "corrected_xy", cr, 2);
 	double bt[4096], bx[4096], by[4096];
 	int nb = in.blocks < 4096 ? in.blocks : 4096;
 	for (int k = 0; k < nb; k++)

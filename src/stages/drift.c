@@ -15,6 +15,7 @@
 
 #define MAXQ 64
 #define REFINE 2   /* rounds of refinement against the mean of all blocks */
+#define SIGNIF 4   /* an axis is corrected when its drift exceeds this many noise sds */
 
 struct hook {
 	struct c0_drift *d;
@@ -26,6 +27,8 @@ struct c0_drift {
 	int64_t frames[MAXQ], start[MAXQ];   /* per stack: frames, global index of its first frame */
 	double *bt, *bx, *by;
 	float **bm;                          /* block means, while estimating */
+	double noise_px[2];                  /* sd of a block's shift estimate, per axis */
+	int off[2];                          /* axis not corrected: its drift is within the noise */
 	double max_px, seconds;
 	struct hook hooks[MAXQ];
 	struct c0_fshift *sh;
@@ -46,7 +49,8 @@ void c0_drift_free(struct c0_drift *d)
 /* The correlation set-up: the reference block's spectrum, and the window
  * that keeps the image edges from correlating. */
 struct xcorr {
-	int H, W;
+	int H, W, PH, PW;      /* image, and the zero-padded FFT (linear, not circular, correlation) */
+	size_t ns;             /* spectrum length */
 	double *win, *re;
 	fftw_complex *ref, *sp;
 	fftw_plan f, b;
@@ -62,18 +66,19 @@ static void xcorr_free(struct xcorr *x)
 static int xcorr_init(struct xcorr *x, int H, int W)
 {
 	memset(x, 0, sizeof *x);
-	x->H = H, x->W = W;
-	const size_t n = (size_t)H * W, ns = (size_t)H * (W / 2 + 1);
+	x->H = H, x->W = W, x->PH = 2 * H, x->PW = 2 * W;
+	const size_t n = (size_t)H * W, ns = (size_t)x->PH * (x->PW / 2 + 1);
+	x->ns = ns;
 	x->win = c0_alloc(n, sizeof *x->win);
-	x->re = fftw_malloc(n * sizeof(double));
+	x->re = fftw_malloc((size_t)x->PH * x->PW * sizeof(double));
 	x->ref = fftw_malloc(ns * sizeof(fftw_complex));
 	x->sp = fftw_malloc(ns * sizeof(fftw_complex));
 	if (!x->win || !x->re || !x->ref || !x->sp)
 		return C0_ENOMEM;
 #pragma omp critical(c0_fftw_plan)
 	{
-		x->f = fftw_plan_dft_r2c_2d(H, W, x->re, x->sp, FFTW_ESTIMATE);
-		x->b = fftw_plan_dft_c2r_2d(H, W, x->sp, x->re, FFTW_ESTIMATE);
+		x->f = fftw_plan_dft_r2c_2d(x->PH, x->PW, x->re, x->sp, FFTW_ESTIMATE);
+		x->b = fftw_plan_dft_c2r_2d(x->PH, x->PW, x->sp, x->re, FFTW_ESTIMATE);
 	}
 	if (!x->f || !x->b)
 		return c0_fail(C0_ENOMEM, "drift: cannot plan the FFTs of %dx%d", W, H);
@@ -92,8 +97,12 @@ static void spectrum(struct xcorr *x, const double *img)
 	for (size_t i = 0; i < n; i++)
 		m += img[i] * x->win[i], w += x->win[i];
 	m /= w;
-	for (size_t i = 0; i < n; i++)
-		x->re[i] = (img[i] - m) * x->win[i];
+	memset(x->re, 0, (size_t)x->PH * x->PW * sizeof *x->re);
+	for (int y = 0; y < x->H; y++)
+		for (int i = 0; i < x->W; i++) {
+			size_t k = (size_t)y * x->W + i;
+			x->re[(size_t)y * x->PW + i] = (img[k] - m) * x->win[k];
+		}
 	fftw_execute(x->f);
 }
 
@@ -110,13 +119,12 @@ static double peak3(double a, double b, double c)
 	return den < 0 ? 0.5 * (a - c) / den : 0;
 }
 
-/* shift (px) of the content of img relative to the reference; 1 if the
- * peak lies beyond a quarter of the field */
-static int shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
+/* shift (px) of the content of img relative to the reference */
+static void shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
 {
-	const int H = x->H, W = x->W, Wc = W / 2 + 1;
+	const int H = x->PH, W = x->PW;
 	spectrum(x, img);
-	for (size_t i = 0; i < (size_t)H * Wc; i++)
+	for (size_t i = 0; i < x->ns; i++)
 		x->sp[i] = x->sp[i] * conj(x->ref[i]);
 	fftw_execute(x->b);   /* x->re: circular cross-correlation, lag (0, 0) at index 0 */
 	int by = 0, bx = 0;
@@ -132,7 +140,6 @@ static int shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
 	*dx = bx + peak3(AT(by, bx - 1), AT(by, bx), AT(by, bx + 1));
 	*dy = by + peak3(AT(by - 1, bx), AT(by, bx), AT(by + 1, bx));
 #undef AT
-	return fabs(*dx) > W / 4.0 || fabs(*dy) > H / 4.0;
 }
 
 /* The first estimates correlate each block with the first, one noisy block
@@ -153,7 +160,7 @@ static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
 				ref[i] += tmp[i];
 		}
 		spectrum(x, ref);
-		memcpy(x->ref, x->sp, (size_t)d->H * (d->W / 2 + 1) * sizeof *x->ref);
+		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
 		for (int k = 0; k < d->nb && !st; k++) {
 			memcpy(tmp, d->bm[k], n * sizeof *tmp);
 			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
@@ -165,6 +172,20 @@ static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
 		}
 		for (int k = d->nb - 1; k >= 0; k--)
 			d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
+	}
+	/* an axis whose shifts stay within SIGNIF noise sds of zero has no
+	 * drift we can tell from the estimates' own noise: undoing it would
+	 * only add jitter. The noise sd comes from second differences, which a
+	 * smooth drift does not feed (var of a second difference = 6 var). */
+	for (int a = 0; a < 2 && d->nb >= 3; a++) {
+		double *v = a ? d->by : d->bx, s2 = 0, mx = 0;
+		for (int k = 1; k + 1 < d->nb; k++)
+			s2 += pow(v[k + 1] - 2 * v[k] + v[k - 1], 2);
+		for (int k = 0; k < d->nb; k++)
+			mx = fmax(mx, fabs(v[k]));
+		d->noise_px[a] = sqrt(s2 / (d->nb - 2) / 6);
+		if (mx <= SIGNIF * d->noise_px[a])
+			memset(v, 0, (size_t)d->nb * sizeof *v), d->off[a] = 1;
 	}
 	d->max_px = 0;
 	for (int k = 0; k < d->nb; k++)
@@ -249,11 +270,16 @@ int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struc
 			}
 			for (size_t i = 0; i < (size_t)H * W; i++)
 				d->bm[d->nb][i] = (float)sum[i];
+			/* chained: each block against the one before, so that a large
+			 * total drift is followed in small steps */
 			double bx = 0, by = 0;
-			if (d->nb == 0) {
-				spectrum(&x, sum);
-				memcpy(x.ref, x.sp, (size_t)H * (W / 2 + 1) * sizeof *x.ref);
-			} else if (shift_of(&x, sum, &bx, &by)) {
+			if (d->nb > 0) {
+				shift_of(&x, sum, &bx, &by);
+				bx += d->bx[d->nb - 1], by += d->by[d->nb - 1];
+			}
+			spectrum(&x, sum);
+			memcpy(x.ref, x.sp, x.ns * sizeof *x.ref);
+			if (fabs(bx) > W / 4.0 || fabs(by) > H / 4.0) {
 				st = c0_fail(C0_EINVAL, "%s: the drift at frames %lld-%lld (%.1f, %.1f pixels) exceeds a quarter "
 					     "of the field; correct it beforehand or switch drift correction off",
 					     stacks[q], (long long)t1 + 1, (long long)t2, bx, by);
@@ -320,6 +346,8 @@ void c0_drift_get_info(const struct c0_drift *d, struct c0_drift_info *o)
 	o->stack_frames = d->frames;
 	o->bt = d->bt, o->bx = d->bx, o->by = d->by;
 	o->max_px = d->max_px, o->seconds = d->seconds;
+	o->noise_px[0] = d->noise_px[0], o->noise_px[1] = d->noise_px[1];
+	o->corrected[0] = !d->off[0], o->corrected[1] = !d->off[1];
 }
 
 int c0_drift_csv(const struct c0_drift *d, double pixel_nm, char **buf, size_t *len)

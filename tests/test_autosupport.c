@@ -1,0 +1,253 @@
+/* Support without hand tuning: the halves' pooled covariance against the
+ * direct one, the Fourier shift, FRC and the pair precision on known cases,
+ * drift estimation and correction on simulated drift, the automatic lambda
+ * against its neighbours, and the bad inputs. */
+#define _POSIX_C_SOURCE 200809L
+#include "check.h"
+#include "ops/covpool.h"
+#include "ops/fshift.h"
+#include "eval/frc.h"
+#include "eval/metrics.h"
+#include "stages/drift.h"
+#include "stages/support.h"
+#include "stages/splat.h"
+#include "sim/sim.h"
+#include "io/outdir.h"
+#include "io/tiff.h"
+#include "core/err.h"
+#include "core/rng.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static struct c0_rng rng;
+
+static void test_cov_pool(void)
+{
+	enum { W = 6, H = 5, T = 21, N = W * H };
+	struct c0_cov_acc *all, *half[2];
+	c0_cov_acc_new(W, H, 2, &all), c0_cov_acc_new(W, H, 2, &half[0]), c0_cov_acc_new(W, H, 2, &half[1]);
+	float f[N];
+	for (int t = 0; t < T; t++) {
+		for (int i = 0; i < N; i++)
+			f[i] = (float)(100 + 10 * sin(0.3 * t + i) + 5 * c0_rng_normal(&rng));
+		c0_cov_acc_add(all, f), c0_cov_acc_add(half[t % 2], f);
+	}
+	struct c0_cov c, a, b, p;
+	CHECK(c0_cov_acc_finish(all, &c) == C0_OK && c0_cov_acc_finish(half[0], &a) == C0_OK &&
+	      c0_cov_acc_finish(half[1], &b) == C0_OK);
+	CHECK(c0_cov_pool(&a, &b, &p) == C0_OK);
+	double err = 0, mx = 0;
+	for (size_t i = 0; i < (size_t)c.nlag * N; i++)
+		err = fmax(err, fabs(p.r[i] - c.r[i])), mx = fmax(mx, fabs(c.r[i]));
+	for (int i = 0; i < N; i++)
+		err = fmax(err, fabs(p.mean[i] - c.mean[i]) / 100);
+	CHECK_MSG(err <= 1e-10 * mx, "pooled vs direct covariance: %g of %g", err, mx);
+	CHECK(p.frames == T);
+	c0_cov_free(&c), c0_cov_free(&a), c0_cov_free(&b), c0_cov_free(&p);
+}
+
+static void test_fshift(void)
+{
+	enum { S = 40 };
+	float img[S * S];
+	struct c0_fshift *sh;
+	CHECK(c0_fshift_new(S, S, &sh) == C0_OK);
+	/* a Gaussian moves by (-dx, -dy) */
+	const double cx = 19.2, cy = 20.7, sg = 2, dx = 0.37, dy = -1.61;
+	for (int y = 0; y < S; y++)
+		for (int x = 0; x < S; x++)
+			img[y * S + x] = (float)exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (2 * sg * sg));
+	CHECK(c0_fshift_apply(sh, img, dx, dy) == C0_OK);
+	double err = 0;
+	for (int y = 4; y < S - 4; y++)
+		for (int x = 4; x < S - 4; x++) {
+			double X = x + dx - cx, Y = y + dy - cy;
+			err = fmax(err, fabs(img[y * S + x] - exp(-(X * X + Y * Y) / (2 * sg * sg))));
+		}
+	CHECK_MSG(err < 2e-3, "shifted Gaussian off by %g", err);
+	/* white noise keeps its variance and stays white after a half-pixel shift */
+	double v0 = 0, v1 = 0, c1 = 0;
+	for (int i = 0; i < S * S; i++)
+		img[i] = (float)c0_rng_normal(&rng), v0 += img[i] * img[i];
+	c0_fshift_apply(sh, img, 0.5, 0.5);
+	int n = 0;
+	for (int y = 3; y < S - 3; y++)
+		for (int x = 3; x < S - 4; x++)
+			v1 += img[y * S + x] * img[y * S + x], c1 += img[y * S + x] * img[y * S + x + 1], n++;
+	v0 /= S * S, v1 /= n, c1 /= n;
+	CHECK_MSG(fabs(v1 / v0 - 1) < 0.1 && fabs(c1 / v1) < 0.08, "noise variance ratio %g, lag-1 correlation %g", v1 / v0, c1 / v1);
+	c0_fshift_free(sh);
+}
+
+static void test_frc(void)
+{
+	enum { S = 64 };
+	float a[S * S], b[S * S], s[S * S];
+	/* a random structure blurred by sd 2 pixels: the FRC of two noisy copies
+	 * falls below 1/7 where the blur leaves less signal than noise */
+	for (int i = 0; i < S * S; i++)
+		a[i] = c0_rng_uniform(&rng) < 0.05 ? 100 : 0;
+	CHECK(c0_splat(a, S, S, 2, s) == C0_OK);
+	for (int i = 0; i < S * S; i++)
+		a[i] = s[i] + (float)c0_rng_normal(&rng), b[i] = s[i] + (float)c0_rng_normal(&rng);
+	struct c0_frc f;
+	CHECK(c0_frc_compute(a, b, S, S, &f) == C0_OK);
+	CHECK(f.corr[2] > 0.9);
+	CHECK_MSG(f.resolution_px > 3 && f.resolution_px < 12, "resolution %g pixels", f.resolution_px);
+	c0_frc_free(&f);
+	/* identical images never decorrelate; independent noise does at once */
+	CHECK(c0_frc_compute(a, a, S, S, &f) == C0_OK && f.resolution_px == 0 && f.corr[f.n - 1] > 0.999);
+	c0_frc_free(&f);
+	for (int i = 0; i < S * S; i++)
+		a[i] = (float)c0_rng_normal(&rng), b[i] = (float)c0_rng_normal(&rng);
+	CHECK(c0_frc_compute(a, b, S, S, &f) == C0_OK && fabs(f.corr[f.n / 2]) < 0.2);
+	c0_frc_free(&f);
+	/* pair precision: b is a moved by one pixel, so each estimate is off by 1/2 */
+	unsigned char ma[S * S] = { 0 }, mb[S * S] = { 0 };
+	for (int k = 0; k < 20; k++) {
+		int y = 5 + 2 * k, x = 10 + k;
+		ma[y * S + x] = 1, mb[y * S + x + 1] = 1;
+	}
+	CHECK_CLOSE(c0_pair_precision(ma, mb, S, S, 3), 0.5, 1e-12);
+}
+
+static char dir[] = "/tmp/c0_test_autosupport_XXXXXX";
+
+static void simulate(const char *sub, int size, int frames, double drift_x, double drift_y)
+{
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	s.seed = 5, s.nangles = 1, s.angles[0] = 65, s.z_min_nm = 0, s.z_max_nm = 200;
+	s.width = s.height = size, s.frames = frames, s.drift_nm[0] = drift_x, s.drift_nm[1] = drift_y;
+	char p[512];
+	snprintf(p, sizeof p, "%s/%s", dir, sub);
+	struct c0_outdir out;
+	struct c0_sim_result r;
+	CHECK(c0_outdir_open(&out, p, 1) == C0_OK);
+	CHECK(c0_simulate(&s, &out, &r) == C0_OK);
+	c0_sim_result_free(&r);
+}
+
+static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel, double *chosen)
+{
+	char p[512];
+	snprintf(p, sizeof p, "%s/%s/stack_q01.tif", dir, sub);
+	struct c0_tiff_reader *rd;
+	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
+	c.pixel_nm = 100, c.fwhm_nm = 229, c.frc = 0, c.lambda_rel = lambda_rel;
+	if (d)
+		c.frame_fn = c0_drift_frame_fn, c.frame_ctx = c0_drift_hook(d, 0);
+	struct c0_support_result res;
+	CHECK(c0_support_stack(&c, rd, p, &res) == C0_OK);
+	c0_tiff_close(rd);
+	if (chosen)
+		*chosen = res.lambda / res.lambda_max;
+	snprintf(p, sizeof p, "%s/%s/truth_support.tif", dir, sub);
+	struct c0_tiff_info in;
+	float *t;
+	CHECK(c0_tiff_load_f32(p, &in, &t) == C0_OK);
+	uint8_t *tm = malloc(in.width * in.height);
+	for (int64_t i = 0; i < in.width * in.height; i++)
+		tm[i] = t[i] > 0;
+	struct c0_jaccard ji;
+	c0_jaccard_index(res.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &ji);
+	free(t), free(tm);
+	c0_support_result_free(&res);
+	return ji.index;
+}
+
+static struct c0_drift *drift_of(const char *sub)
+{
+	char p[512], *stacks[1] = { p };
+	snprintf(p, sizeof p, "%s/%s/stack_q01.tif", dir, sub);
+	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
+	struct c0_drift *d = NULL;
+	CHECK(c0_drift_estimate(&dc, stacks, 1, &d) == C0_OK);
+	return d;
+}
+
+/* 100 nm over 500 frames: the trajectory within 10 nm RMS, the support close
+ * to that of the same data without drift, which correction does not spoil */
+static void test_drift(void)
+{
+	simulate("still", 48, 500, 0, 0);
+	simulate("drift", 48, 500, 100, 0);
+	struct c0_drift *d = drift_of("drift"), *d0 = drift_of("still");
+	if (!d || !d0)
+		return;
+	/* both relative to the first block's centre */
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	s.nangles = 1, s.frames = 500, s.drift_nm[0] = 100;
+	double tx[500], ty[500], se = 0;
+	c0_sim_drift(&s, 0, tx, ty);
+	struct c0_drift_info in;
+	c0_drift_get_info(d, &in);
+	const double r0x = 0.5 * (tx[24] + tx[25]), r0y = 0.5 * (ty[24] + ty[25]);
+	for (int t = 0; t < 500; t++) {
+		double ex, ey;
+		c0_drift_at(d, 0, t, &ex, &ey);
+		se += pow(ex * 100 - (tx[t] - r0x), 2) + pow(ey * 100 - (ty[t] - r0y), 2);
+	}
+	double rms = sqrt(se / 500);
+	CHECK_MSG(rms <= 10, "drift trajectory RMS error %.2f nm", rms);
+	double j_still = support_ji("still", NULL, 0, NULL), j_still_on = support_ji("still", d0, 0, NULL);
+	double j_drift_off = support_ji("drift", NULL, 0, NULL), j_drift_on = support_ji("drift", d, 0, NULL);
+	fprintf(stderr, "drift: trajectory RMS error %.2f nm; JI still %.3f (corrected %.3f), drifting %.3f -> %.3f\n", rms,
+		j_still, j_still_on, j_drift_off, j_drift_on);
+	CHECK(j_drift_on >= j_still - 0.05);
+	CHECK(j_still_on >= j_still - 0.01);
+	CHECK(j_drift_off < j_still - 0.1);    /* the test data do need the correction */
+	c0_drift_free(d), c0_drift_free(d0);
+}
+
+/* the automatic lambda against a third and three times itself, on the dim
+ * member of the panel (docs/parameters.md has the whole panel and sweep) */
+static void test_auto_lambda(void)
+{
+	double chosen;
+	double j = support_ji("still", NULL, 0, &chosen);
+	double lo = support_ji("still", NULL, chosen / 3, NULL), hi = support_ji("still", NULL, fmin(chosen * 3, 0.5), NULL);
+	fprintf(stderr, "auto lambda %.3g: JI %.3f (x1/3: %.3f, x3: %.3f)\n", chosen, j, lo, hi);
+	CHECK(j >= fmax(lo, hi) - 0.03);
+	CHECK(j >= 0.55);
+}
+
+static void test_bad_input(void)
+{
+	simulate("far", 32, 400, 1600, 0);   /* 14 pixels in a 32-pixel field */
+	char p[512], *stacks[1] = { p };
+	snprintf(p, sizeof p, "%s/far/stack_q01.tif", dir);
+	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
+	struct c0_drift *d = NULL;
+	CHECK(c0_drift_estimate(&dc, stacks, 1, &d) == C0_EINVAL && strstr(c0_errmsg(), "quarter") && !d);
+	/* too short for blocks, and for the halves */
+	simulate("short", 32, 5, 0, 0);
+	snprintf(p, sizeof p, "%s/short/stack_q01.tif", dir);
+	CHECK(c0_drift_estimate(&dc, stacks, 1, &d) == C0_EINVAL && strstr(c0_errmsg(), "too short") && !d);
+	struct c0_tiff_reader *rd;
+	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
+	c.pixel_nm = 100, c.fwhm_nm = 229;
+	struct c0_support_result res;
+	CHECK(c0_support_stack(&c, rd, p, &res) == C0_EINVAL && strstr(c0_errmsg(), "too short to choose lambda"));
+	c0_tiff_close(rd);
+}
+
+int main(void)
+{
+	c0_rng_init(&rng, 7, 0);
+	RUN(test_cov_pool);
+	RUN(test_fshift);
+	RUN(test_frc);
+	CHECK(mkdtemp(dir) != NULL);
+	RUN(test_drift);
+	RUN(test_auto_lambda);
+	RUN(test_bad_input);
+	char cmd[600];
+	snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+	if (system(cmd)) {}
+	return CHECK_DONE();
+}
