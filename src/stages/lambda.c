@@ -15,6 +15,10 @@
  * panel's choice (sigma_C <= 2e-3 lambda_max there) and takes the MusiJ
  * stacks' far-from-structure share below 10 %. */
 static const double REL0 = 1e-2, KAPPA = 4;
+/* CEL0 does not shrink what it keeps, and is best with a lower entry
+ * threshold: 3e-6 lambda_max (l0 scale) on the panel, 0.03 of the square of
+ * the l1 choice */
+static const double CEL0_GAMMA = 0.03;
 
 static int cmpd(const void *a, const void *b)
 {
@@ -94,7 +98,7 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	} else {
 		memcpy(d, op.n, L * sizeof *d);
 		double nm = median(d, L);
-		out->chosen_rel = fmin(t * t / (2 * nm * nm) / lmax0, 0.5);
+		out->chosen_rel = fmin(CEL0_GAMMA * t * t / (2 * nm * nm) / lmax0, 0.5);
 	}
 out:
 	free(R), free(ca), free(cb), free(d);

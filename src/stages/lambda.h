@@ -9,7 +9,8 @@
  * i.e. lambda relative to lambda_max as measured best on our simulations
  * (rel0), but never within kappa noise sds of zero, where pure noise would
  * enter (the background specks of real, noisier stacks). CEL0 gets the same
- * threshold on its l0 scale: lambda = t^2 / (2 ||a||^2) (median column norm).
+ * threshold on its l0 scale, lowered as measured: lambda = 0.03 t^2 / (2 ||a||^2)
+ * (median column norm).
  * Measured in docs/parameters.md, with why held-out cross-validation and
  * the discrepancy principle were not kept. */
 #pragma once
