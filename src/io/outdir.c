@@ -35,7 +35,7 @@ int c0_outdir_open(struct c0_outdir *o, const char *path, int force)
 		if (!S_ISDIR(sb.st_mode))
 			return c0_fail(C0_EIO, "outdir %s: exists and is not a directory", path);
 		if (!force && !is_empty(path))
-			return c0_fail(C0_EIO, "outdir %s: directory is not empty (set force to write into it)", path);
+			return c0_fail(C0_EIO, "outdir %s: directory is not empty (write into it with force)", path);
 		if (access(path, W_OK))
 			return c0_fail(C0_EIO, "outdir %s: not writable", path);
 		return C0_OK;
