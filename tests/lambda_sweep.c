@@ -5,6 +5,7 @@
 #include "stages/support.h"
 #include "ops/covpool.h"
 #include "eval/metrics.h"
+#include "io/frames.h"
 #include "io/tiff.h"
 #include "core/err.h"
 
@@ -31,18 +32,18 @@ int main(int argc, char **argv)
 	snprintf(p, sizeof p, "%s/stack_q01.tif", argv[1]);
 	if (strstr(argv[1], ".tif"))
 		snprintf(p, sizeof p, "%s", argv[1]);
-	struct c0_tiff_reader *rd;
-	if (c0_tiff_open(p, &rd))
+	struct c0_frames rd;
+	if (c0_frames_open(&rd, p))
 		return fprintf(stderr, "%s\n", c0_errmsg()), 1;
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = getenv("PIXEL") ? atof(getenv("PIXEL")) : c0_tiff_get_info(rd)->pixel_size_nm, c.fwhm_nm = atof(argv[2]);
+	c.pixel_nm = getenv("PIXEL") ? atof(getenv("PIXEL")) : rd.pixel_nm, c.fwhm_nm = atof(argv[2]);
 	if (argc > 3 && !strcmp(argv[3], "cel0"))
 		c.penalty = C0_PENALTY_CEL0;
 	struct c0_cov half[2], cov;
 	double tc;
-	if (c0_stack_covariance_halves(&c, rd, p, half, &tc) || c0_cov_pool(&half[0], &half[1], &cov))
+	if (c0_stack_covariance_halves(&c, &rd, half, &tc) || c0_cov_pool(&half[0], &half[1], &cov))
 		return fprintf(stderr, "%s\n", c0_errmsg()), 1;
-	c0_tiff_close(rd);
+	c0_frames_close(&rd);
 	snprintf(p, sizeof p, "%s/truth_support.tif", argv[1]);
 	struct c0_tiff_info in;
 	float *t;

@@ -13,6 +13,7 @@
 #include "stages/splat.h"
 #include "sim/sim.h"
 #include "io/outdir.h"
+#include "io/frames.h"
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/rng.h"
@@ -133,15 +134,15 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 {
 	char p[512];
 	snprintf(p, sizeof p, "%s/%s/stack_q01.tif", dir, sub);
-	struct c0_tiff_reader *rd;
-	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	struct c0_frames rd;
+	CHECK(c0_frames_open(&rd, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
 	c.pixel_nm = 100, c.fwhm_nm = 229, c.frc = 0, c.lambda_rel = lambda_rel;
 	if (d)
 		c.frame_fn = c0_drift_frame_fn, c.frame_ctx = c0_drift_hook(d, 0);
 	struct c0_support_result res;
-	CHECK(c0_support_stack(&c, rd, p, &res) == C0_OK);
-	c0_tiff_close(rd);
+	CHECK(c0_support_stack(&c, &rd, &res) == C0_OK);
+	c0_frames_close(&rd);
 	if (chosen)
 		*chosen = res.lambda / res.lambda_max;
 	snprintf(p, sizeof p, "%s/%s/truth_support.tif", dir, sub);
@@ -160,11 +161,14 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 
 static struct c0_drift *drift_of(const char *sub)
 {
-	char p[512], *stacks[1] = { p };
+	char p[512];
 	snprintf(p, sizeof p, "%s/%s/stack_q01.tif", dir, sub);
 	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
 	struct c0_drift *d = NULL;
-	CHECK(c0_drift_estimate(&dc, stacks, 1, &d) == C0_OK);
+	struct c0_frames f;
+	CHECK(c0_frames_open(&f, p) == C0_OK);
+	CHECK(c0_drift_estimate(&dc, &f, 1, &d) == C0_OK);
+	c0_frames_close(&f);
 	return d;
 }
 
@@ -218,22 +222,24 @@ static void test_auto_lambda(void)
 static void test_bad_input(void)
 {
 	simulate("far", 32, 400, 1600, 0);   /* 14 pixels in a 32-pixel field */
-	char p[512], *stacks[1] = { p };
+	char p[512];
 	snprintf(p, sizeof p, "%s/far/stack_q01.tif", dir);
 	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
 	struct c0_drift *d = NULL;
-	CHECK(c0_drift_estimate(&dc, stacks, 1, &d) == C0_EINVAL && strstr(c0_errmsg(), "quarter") && !d);
+	struct c0_frames f;
+	CHECK(c0_frames_open(&f, p) == C0_OK);
+	CHECK(c0_drift_estimate(&dc, &f, 1, &d) == C0_EINVAL && strstr(c0_errmsg(), "quarter") && !d);
+	c0_frames_close(&f);
 	/* too short for blocks, and for the halves */
 	simulate("short", 32, 5, 0, 0);
 	snprintf(p, sizeof p, "%s/short/stack_q01.tif", dir);
-	CHECK(c0_drift_estimate(&dc, stacks, 1, &d) == C0_EINVAL && strstr(c0_errmsg(), "too short") && !d);
-	struct c0_tiff_reader *rd;
-	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	CHECK(c0_frames_open(&f, p) == C0_OK);
+	CHECK(c0_drift_estimate(&dc, &f, 1, &d) == C0_EINVAL && strstr(c0_errmsg(), "too short") && !d);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
 	c.pixel_nm = 100, c.fwhm_nm = 229;
 	struct c0_support_result res;
-	CHECK(c0_support_stack(&c, rd, p, &res) == C0_EINVAL && strstr(c0_errmsg(), "too short to choose lambda"));
-	c0_tiff_close(rd);
+	CHECK(c0_support_stack(&c, &f, &res) == C0_EINVAL && strstr(c0_errmsg(), "too short to choose lambda"));
+	c0_frames_close(&f);
 }
 
 int main(void)

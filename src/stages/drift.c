@@ -1,6 +1,6 @@
 #include "stages/drift.h"
 #include "ops/fshift.h"
-#include "io/tiff.h"
+#include "io/frames.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -193,7 +193,7 @@ static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
 	return st;
 }
 
-int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struct c0_drift **out)
+int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct c0_drift **out)
 {
 	double t0 = c0_now();
 	*out = NULL;
@@ -211,12 +211,9 @@ int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struc
 	int st = C0_OK, cap = 0;
 	int64_t g = 0;
 	for (int q = 0; q < n && !st; q++) {
-		struct c0_tiff_reader *r;
-		if ((st = c0_tiff_open(stacks[q], &r)))
-			break;
-		const struct c0_tiff_info *in = c0_tiff_get_info(r);
-		const int H = (int)in->height, W = (int)in->width;
-		const int64_t T = in->pages;
+		struct c0_frames *r = &f[q];
+		const int H = r->height, W = r->width;
+		const int64_t T = r->count;
 		if (q == 0) {
 			d->H = H, d->W = W;
 			sum = c0_alloc((size_t)H * W, sizeof *sum);
@@ -226,7 +223,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struc
 			else if (!(st = xcorr_init(&x, H, W)))
 				st = c0_fshift_new(H, W, &d->sh);
 		} else if (H != d->H || W != d->W) {
-			st = c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s", stacks[q], W, H, stacks[0]);
+			st = c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s", r->name, W, H, f[0].name);
 		}
 		/* blocks: c->block frames, fewer when the stack has < 2 blocks */
 		int64_t B = T >= 2 * c->block ? c->block : T / 2;
@@ -234,7 +231,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struc
 			d->block = (int)B;
 		if (!st && B < 5)
 			st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to estimate drift (needs >= 10; switch "
-				     "drift correction off)", stacks[q], (long long)T);
+				     "drift correction off)", r->name, (long long)T);
 		int64_t nb = st ? 0 : T / B;
 		if (!st && d->nb + nb > cap) {
 			cap = 2 * (d->nb + (int)nb);
@@ -255,7 +252,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struc
 			int64_t t1 = k * B, t2 = k == nb - 1 ? T : t1 + B;
 			memset(sum, 0, (size_t)H * W * sizeof *sum);
 			for (int64_t t = t1; t < t2 && !st; t++) {
-				if (!(st = c0_tiff_read_f32(r, t, frame)))
+				if (!(st = c0_frames_read(r, t, frame)))
 					for (size_t i = 0; i < (size_t)H * W; i++)
 						sum[i] += frame[i];
 				c0_progress_update(&pr, (double)t + 1);
@@ -282,7 +279,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struc
 			if (fabs(bx) > W / 4.0 || fabs(by) > H / 4.0) {
 				st = c0_fail(C0_EINVAL, "%s: the drift at frames %lld-%lld (%.1f, %.1f pixels) exceeds a quarter "
 					     "of the field; correct it beforehand or switch drift correction off",
-					     stacks[q], (long long)t1 + 1, (long long)t2, bx, by);
+					     r->name, (long long)t1 + 1, (long long)t2, bx, by);
 				break;
 			}
 			d->bt[d->nb] = (double)g + 0.5 * (double)(t1 + t2 - 1);
@@ -291,7 +288,6 @@ int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struc
 			d->nb++;
 		}
 		c0_progress_end(&pr);
-		c0_tiff_close(r);
 		d->frames[q] = T, d->start[q] = g;
 		d->hooks[q].d = d, d->hooks[q].q = q;
 		g += T;

@@ -19,10 +19,11 @@ struct c0_drift_conf {
 
 struct c0_drift;
 
-/* One streaming pass over each stack (paths, n of them, same size). Errors:
- * a stack too short to hold two blocks of >= 5 frames; a shift beyond a
- * quarter of the field (the correlation cannot be trusted there). */
-int c0_drift_estimate(const struct c0_drift_conf *c, char **stacks, int n, struct c0_drift **out);
+struct c0_frames;
+/* One streaming pass over each stack (n of them, same size, in acquisition
+ * order). Errors: a stack too short to hold two blocks of >= 5 frames; a
+ * shift beyond a quarter of the field (the correlation cannot be trusted there). */
+int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct c0_drift **out);
 void c0_drift_free(struct c0_drift *d);
 /* The frame hook for stack q: pass c0_drift_frame_fn with this context. */
 void *c0_drift_hook(struct c0_drift *d, int q);

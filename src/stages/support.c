@@ -29,14 +29,14 @@ static double lambda_rel(const struct c0_support_conf *c)
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name)
 {
 	if (!(c->pixel_nm > 0))
-		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
+		return c0_fail(C0_EINVAL, "pixel_nm %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
 	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
 	if (st)
 		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
-		return c0_fail(C0_EINVAL, "--lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
+		return c0_fail(C0_EINVAL, "lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
 	if (c->fista.maxit < 1 || !(c->fista.tol > 0))
-		return c0_fail(C0_EINVAL, "--iterations / --tol must be positive");
+		return c0_fail(C0_EINVAL, "iterations %d / tol %g: must be positive", c->fista.maxit, c->fista.tol);
 	int d = c0_support_lag(c);
 	if (W < 2 * d + 1 || H < 2 * d + 1)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels is smaller than the PSF band (%d x %d pixels for lag %d)",
@@ -185,29 +185,28 @@ out:
 }
 
 /* One pass; frames alternate between the nacc accumulators (1 or 2). */
-static int stream_cov(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name, int nacc,
-		      struct c0_cov *cov, double *seconds)
+static int stream_cov(const struct c0_support_conf *c, struct c0_frames *in, int nacc, struct c0_cov *cov,
+		      double *seconds)
 {
-	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
-	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
-	if (!st && nacc == 2 && in->pages < 6)
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
+	if (!st && nacc == 2 && in->count < 6)
 		st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
-			     "give lambda)", name, (long long)in->pages);
+			     "give lambda)", in->name, (long long)in->count);
 	if (st)
 		return st;
 	double t0 = c0_now();
 	struct c0_cov_acc *acc[2] = { NULL, NULL };
 	for (int k = 0; k < nacc && !st; k++)
-		st = c0_cov_acc_new((int)in->width, (int)in->height, c0_support_lag(c), &acc[k]);
+		st = c0_cov_acc_new(in->width, in->height, c0_support_lag(c), &acc[k]);
 	float *frame = st ? NULL : c0_alloc((size_t)in->width * in->height, sizeof *frame);
 	if (!st && !frame)
 		st = C0_ENOMEM;
 	struct c0_progress pr;
-	c0_progress_begin(&pr, "covariance", (double)in->pages);
-	for (int64_t t = 0; t < in->pages && !st; t++) {
-		st = c0_tiff_read_f32(rd, t, frame);
+	c0_progress_begin(&pr, "covariance", (double)in->count);
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
 		if (!st && c->frame_fn)
-			st = c->frame_fn(c->frame_ctx, t, frame, (int)in->height, (int)in->width);
+			st = c->frame_fn(c->frame_ctx, t, frame, in->height, in->width);
 		if (!st)
 			st = c0_cov_acc_add(acc[t % nacc], frame);
 		c0_progress_update(&pr, (double)t + 1);
@@ -225,23 +224,21 @@ static int stream_cov(const struct c0_support_conf *c, struct c0_tiff_reader *rd
 	return st;
 }
 
-int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-			struct c0_cov *cov, double *seconds)
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov *cov, double *seconds)
 {
-	return stream_cov(c, rd, name, 1, cov, seconds);
+	return stream_cov(c, in, 1, cov, seconds);
 }
 
-int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-			       struct c0_cov half[2], double *seconds)
+int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov half[2],
+			       double *seconds)
 {
-	return stream_cov(c, rd, name, 2, half, seconds);
+	return stream_cov(c, in, 2, half, seconds);
 }
 
-int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name, double **mean,
-		  int64_t *frames, double *seconds)
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double **mean, int64_t *frames,
+		  double *seconds)
 {
-	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
-	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
 	if (st)
 		return st;
 	double t0 = c0_now();
@@ -253,11 +250,11 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 		return C0_ENOMEM;
 	}
 	struct c0_progress pr;
-	c0_progress_begin(&pr, "mean", (double)in->pages);
-	for (int64_t t = 0; t < in->pages && !st; t++) {
-		st = c0_tiff_read_f32(rd, t, frame);
+	c0_progress_begin(&pr, "mean", (double)in->count);
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
 		if (!st && c->frame_fn)
-			st = c->frame_fn(c->frame_ctx, t, frame, (int)in->height, (int)in->width);
+			st = c->frame_fn(c->frame_ctx, t, frame, in->height, in->width);
 		for (size_t i = 0; !st && i < n; i++)
 			(*mean)[i] += frame[i];
 		c0_progress_update(&pr, (double)t + 1);
@@ -265,17 +262,18 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 	c0_progress_end(&pr);
 	free(frame);
 	for (size_t i = 0; !st && i < n; i++)
-		(*mean)[i] /= (double)in->pages;
+		(*mean)[i] /= (double)in->count;
 	if (st)
 		free(*mean), *mean = NULL;
-	*frames = in->pages;
+	*frames = in->count;
 	*seconds = c0_now() - t0;
 	return st;
 }
 
 /* Each half solved on its own (a warm start from the full solution would
  * make them agree) at the same relative lambda, with at most FRC_MAXIT
- * iterations; the FRC of their emitter variances. */
+ * iterations; the FRC of their emitter variances, and the localisation
+ * precision from how far their supports lie apart. */
 #define FRC_MAXIT 300
 static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2], struct c0_support_result *res)
 {
@@ -284,9 +282,9 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	memset(h, 0, sizeof h);
 	struct c0_support_conf cc = *c;
 	cc.lambda_rel = res->lambda_max > 0 ? res->lambda / res->lambda_max : c0_support_default_lambda(c->penalty);
-	int st = C0_OK;
 	if (cc.fista.maxit > FRC_MAXIT)
 		cc.fista.maxit = FRC_MAXIT;
+	int st = C0_OK;
 	for (int k = 0; k < 2 && !st; k++)
 		st = solve(&cc, &half[k], NULL, NULL, &h[k]);
 	if (!st)
@@ -303,15 +301,14 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	return st;
 }
 
-int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-		     struct c0_support_result *res)
+int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
 	struct c0_cov cov = { 0 }, half[2] = { { 0 } };
 	struct c0_support_conf cc = *c;
 	const int automatic = !(c->lambda_rel > 0), halves = automatic || c->frc;
 	double tc;
-	int st = halves ? c0_stack_covariance_halves(c, rd, name, half, &tc) : c0_stack_covariance(c, rd, name, &cov, &tc);
+	int st = halves ? c0_stack_covariance_halves(c, in, half, &tc) : c0_stack_covariance(c, in, &cov, &tc);
 	if (!st && halves) {
 		double t0 = c0_now();
 		st = c0_cov_pool(&half[0], &half[1], &cov);

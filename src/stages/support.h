@@ -7,11 +7,11 @@
 #include "solve/fista.h"
 #include "stages/lambda.h"
 #include "eval/frc.h"
-#include "io/tiff.h"
+#include "io/frames.h"
 
 #include <stdint.h>
 
-enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };
+#include "col0rme.h"   /* enum c0_penalty */
 
 /* Per-frame preprocessing in the streaming passes (drift correction): frame
  * t (0-based in its stack, H x W) is changed in place before it is used. */
@@ -27,8 +27,8 @@ struct c0_support_conf {
 	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
 	struct c0_fista_conf fista;/* 2000 iterations, tol 1e-5 */
 	int cel0_outer;            /* 10 reweightings */
-	int frc;                   /* 1: also solve each half of the frames (warm started) for the
-				    * resolution by Fourier ring correlation */
+	int frc;                   /* 1: also solve each half of the frames (on its own, at most 300
+				    * iterations) for the FRC resolution and the localisation precision */
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
 };
@@ -60,23 +60,21 @@ int c0_support_lag(const struct c0_support_conf *c);
 /* Measured on simulated filaments (docs/parameters.md): l1 1e-2, cel0 3e-5.
  * The two differ because CEL0's lambda_max is on the l0 scale. */
 double c0_support_default_lambda(enum c0_penalty p);
-/* Streams the stack once for its covariance (and its two interleaved
- * halves when lambda is automatic), then solves. */
-int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
-		     struct c0_support_result *res);
+/* Streams the stack once for its covariance and its two interleaved halves
+ * (for the automatic lambda and the FRC), then solves. */
+int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *f, struct c0_support_result *res);
 /* Solves from a finished covariance (which is left unchanged). */
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res);
 void c0_support_result_free(struct c0_support_result *r);
 /* One streaming pass: banded covariance (lag from the PSF) and temporal mean. */
-int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
-			struct c0_cov *cov, double *seconds);
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *f, struct c0_cov *cov, double *seconds);
 /* The same pass, even frames into half[0], odd into half[1]. */
-int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
-			       struct c0_cov half[2], double *seconds);
+int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames *f, struct c0_cov half[2],
+			       double *seconds);
 /* One streaming pass for the temporal mean only (allocated), when the noise
  * variance is already known and the covariance is not needed. */
-int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name, double **mean,
-		  int64_t *frames, double *seconds);
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double **mean, int64_t *frames,
+		  double *seconds);
 /* Noise variance of a stack whose support is known: the same model with
  * r_x free on the mask only and no penalty (100 iterations). */
 int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2);
