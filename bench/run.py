@@ -70,6 +70,23 @@ with tempfile.TemporaryDirectory() as tmp:
             "%.0f frames/s cov; %d its, %.1f ms/it" % (rep["covariance_frames_per_s"], rep["iterations"],
                                                        1e3 * rep["solve_s"] / max(rep["iterations"], 1)), mem,
             "%.0fx dense per it" % (dense_it / (rep["solve_s"] / max(rep["iterations"], 1))))
+        # the automatic lambda against the same command with lambda given
+        # (drift and FRC off in both: their own rows below)
+        mem_def = mem
+        base = ["--fwhm", "229", "--pixel-size", "100", "--no-drift", "--frc", "0"]
+        dt_fix, mem, _ = timed([CLI, "support", *base, "--lambda", "1e-2", "-o", o + "f", os.path.join(d, "stack_q01.tif")])
+        row("support, lambda 1e-2 given", "%dx%dx%d r4" % (w, w, T), dt_fix, "", mem)
+        dt_auto, mem, _ = timed([CLI, "support", *base, "-o", o + "a", os.path.join(d, "stack_q01.tif")])
+        la = json.load(open(os.path.join(o + "a", "report.json")))["support"][0]
+        row("support, lambda automatic", "%dx%dx%d r4" % (w, w, T), dt_auto,
+            "chose %.3g in %.2f s" % (la["lambda_relative"], la["lambda_auto"]["seconds"]), mem,
+            "%.2fx lambda given" % (dt_auto / dt_fix))
+        dt_d, mem, _ = timed([CLI, "support", *base[:-3], "--frc", "0", "-o", o + "d", os.path.join(d, "stack_q01.tif")])
+        ld = json.load(open(os.path.join(o + "d", "report.json")))
+        row("support, lambda automatic + drift", "%dx%dx%d r4" % (w, w, T), dt_d,
+            "drift estimate %.2f s" % ld["drift"]["seconds"], mem, "%.2fx lambda given" % (dt_d / dt_fix))
+        row("support, defaults (+ FRC halves)", "%dx%dx%d r4" % (w, w, T), dt,
+            "FRC %.2f s" % rep["frc"]["seconds"], mem_def, "%.2fx lambda given" % (dt / dt_fix))
 
     # the whole method on the default demo data (5 angles, fine grid 256x256)
     d = os.path.join(tmp, "sim64")
