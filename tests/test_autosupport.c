@@ -113,6 +113,33 @@ static void test_frc(void)
 	CHECK_CLOSE(c0_pair_precision(ma, mb, S, S, 3), 0.5, 1e-12);
 }
 
+/* the simulator's drift: linear from 0 to the given displacement over all
+ * angles in order; the random walk repeatable and of the given scale */
+static void test_sim_drift(void)
+{
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	s.nangles = 2, s.frames = 100, s.drift_nm[0] = 50, s.drift_nm[1] = -20;
+	double x[100], y[100];
+	c0_sim_drift(&s, 0, x, y);
+	CHECK(x[0] == 0 && y[0] == 0);
+	c0_sim_drift(&s, 1, x, y);
+	CHECK_CLOSE(x[99], 50, 1e-12);
+	CHECK_CLOSE(y[99], -20, 1e-12);
+	CHECK_CLOSE(x[0], 50 * 100.0 / 199, 1e-12);
+	s.drift_walk = 1, s.frames = 2000, s.nangles = 1;
+	double *wx = malloc(sizeof(double) * 2000), *wy = malloc(sizeof(double) * 2000), *vx = malloc(sizeof(double) * 2000),
+	       *vy = malloc(sizeof(double) * 2000);
+	c0_sim_drift(&s, 0, wx, wy);
+	c0_sim_drift(&s, 0, vx, vy);
+	double inc = 0;
+	for (int t = 1; t < 2000; t++)
+		inc += (wx[t] - wx[t - 1]) * (wx[t] - wx[t - 1]);
+	CHECK(!memcmp(wx, vx, sizeof(double) * 2000) && !memcmp(wy, vy, sizeof(double) * 2000));
+	CHECK_MSG(fabs(sqrt(inc / 1999) - 50 / sqrt(2000)) < 0.1 * 50 / sqrt(2000), "walk step sd %g", sqrt(inc / 1999));
+	free(wx), free(wy), free(vx), free(vy);
+}
+
 static char dir[] = "/tmp/c0_test_autosupport_XXXXXX";
 
 static void simulate(const char *sub, int size, int frames, double drift_x, double drift_y)
@@ -248,6 +275,7 @@ int main(void)
 	RUN(test_cov_pool);
 	RUN(test_fshift);
 	RUN(test_frc);
+	RUN(test_sim_drift);
 	CHECK(mkdtemp(dir) != NULL);
 	RUN(test_drift);
 	RUN(test_auto_lambda);
