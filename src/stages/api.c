@@ -1,7 +1,8 @@
-/* The public calls besides the pipeline (include/col0rme.h): the simulator
- * in memory, for programs and the Python package. Thin wrappers: the method
- * lives in sim/ and stages/. */
+/* The public calls besides c0_run (include/col0rme.h): the conf on the
+ * heap, single steps, and the simulator in memory, for programs and the
+ * Python package. Thin wrappers: the method lives in sim/ and stages/. */
 #include "col0rme.h"
+#include "stages/pipeline.h"
 #include "sim/sim.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -9,8 +10,73 @@
 #include <errno.h>
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+struct c0_run_conf *c0_run_conf_new(void)
+{
+	struct c0_run_conf *c = c0_alloc(1, sizeof *c);
+	if (c)
+		c0_run_conf_init(c);
+	return c;
+}
+
+void c0_run_conf_free(struct c0_run_conf *c)
+{
+	free(c);
+}
+
+int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)
+{
+	struct c0_frames f[C0_MAX_STACKS];
+	struct c0_stage_confs sc;
+	struct c0_result *r;
+	int st = c0_pipe_begin("support", c, stacks, n, f, &sc, &r);
+	if (st)
+		return st;
+	r->nsup = n;
+	for (int i = 0; i < n; i++)
+		r->sup[i] = i;
+	st = c0_step_support(r, &sc.support, f);
+	c0_stacks_close(f, n);
+	if (st) {
+		c0_result_free(r);
+		return st;
+	}
+	*out = r;
+	return C0_OK;
+}
+
+int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n, int h, int w, struct c0_result **out)
+{
+	*out = NULL;
+	if (!c || !images || n < 1 || n > C0_MAX_STACKS || h < 1 || w < 1)
+		return c0_fail(C0_EINVAL, "images: %d of %dx%d given, expected 1..%d images of at least 1x1", n, h, w,
+			       C0_MAX_STACKS);
+	for (int q = 0; q < n; q++)
+		if (!images[q])
+			return c0_fail(C0_EINVAL, "images: image %d is NULL", q + 1);
+	struct c0_matirf_conf mc;
+	c0_run_conf_matirf(c, &mc);
+	int st = c0_run_conf_matirf_check(c, &mc, n);
+	if (st)
+		return st;
+	char names[C0_MAX_STACKS][16];
+	const char *np[C0_MAX_STACKS];
+	int is_file[C0_MAX_STACKS] = { 0 };
+	for (int q = 0; q < n; q++)
+		snprintf(names[q], sizeof names[q], "image %d", q + 1), np[q] = names[q];
+	struct c0_result *r;
+	if ((st = c0_result_new("matirf", n, np, is_file, &r)))
+		return st;
+	if ((st = c0_step_matirf(r, c, &mc, images, NULL, h, w, c->pixel_nm, 0))) {
+		c0_result_free(r);
+		return st;
+	}
+	*out = r;
+	return C0_OK;
+}
 
 struct c0_simulation {
 	struct c0_sim_conf c;
