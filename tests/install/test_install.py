@@ -67,6 +67,12 @@ open(t, "w").write("#include <col0rme.h>\nint main(void) { return c0_last_error(
 check(sh(["cc", "-std=c11", "-Wall", "-Wextra", "-pedantic", "-Werror", t, "-o", t[:-2]] + flags,
          env=env).returncode == 0, "col0rme.h alone, -std=c11 -pedantic")
 
+# the examples of docs/api.md are these files, verbatim
+doc = open(os.path.join(src, "docs", "api.md")).read()
+for ex, lang in (("run_arrays.c", "c"), ("run_arrays.py", "python")):
+    text = open(os.path.join(src, "examples", ex)).read()
+    check("```%s\n%s```" % (lang, text) in doc, "docs/api.md shows examples/%s as it is" % ex)
+
 exes = {}
 for ex in sorted(glob.glob(os.path.join(src, "examples", "*.c"))):
     name = os.path.basename(ex)[:-2]
