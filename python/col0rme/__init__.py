@@ -4,9 +4,11 @@
     support(stacks, pixel_size=..., fwhm=..., **options)         -> Result (support only)
     matirf(images, angles=..., pixel_size=..., **options)        -> Result (volume, depth, z_nm)
     simulate(**parameters)                                       -> Simulation
+    parameters()                                                 -> {name: help}
 
-options are the parameters of c0_run_conf_set (lambda=1e-3, penalty="cel0",
-kappa=0.05, ...): numbers, strings, booleans or sequences. Images are
+options are the parameters of c0_run_conf_set (penalty="cel0", kappa=0.05,
+lam=1e-3 for "lambda", a Python keyword, ...): numbers, strings, booleans or
+sequences. Images are
 row-major numpy arrays: stacks T x H x W, volumes Z x H x W. Errors raise
 col0rme.Error with the library's message.
 """
@@ -18,7 +20,7 @@ import numpy as np
 
 from . import _lib
 
-__all__ = ["Error", "Result", "Simulation", "run", "support", "matirf", "simulate", "version"]
+__all__ = ["Error", "Result", "Simulation", "run", "support", "matirf", "simulate", "parameters", "version"]
 
 _c = None
 
@@ -41,6 +43,17 @@ def _check(status):
 
 def version():
     return _L().c0_version().decode()
+
+
+def parameters():
+    """The options run(), support() and matirf() take: {name: help line with the default}."""
+    out, i, doc = {}, 0, ctypes.c_char_p()
+    while True:
+        name = _L().c0_run_conf_param(i, ctypes.byref(doc))
+        if not name:
+            return out
+        out[name.decode()] = doc.value.decode() if doc.value else ""
+        i += 1
 
 
 def _text(name, v):
@@ -75,7 +88,7 @@ class _Conf:
 
 
 def _options(angles, pixel_size, fwhm, options):
-    o = dict(options)
+    o = {("lambda" if k == "lam" else k): v for k, v in options.items()}
     for k, v in (("angles", angles), ("pixel_nm", pixel_size), ("fwhm_nm", fwhm)):
         if v is not None:
             o[k] = v

@@ -82,9 +82,10 @@ def test_run_on_paths_and_write(data, cli_run, tmp_path):
 
 def test_options_reach_the_library(data):
     _, _, stacks = data
-    r = col0rme.run(stacks[:1], pixel_size=100, fwhm=229, penalty="cel0", srf=2)
+    r = col0rme.run(stacks[:1], pixel_size=100, fwhm=229, penalty="cel0", srf=2, lam=1e-4)
     assert r.volume is None and r.support.shape == (48, 48) and len(r.intensity) == 1
     assert r.report["parameters"]["mode"] == "2D"
+    assert json.dumps(r.report).count("cel0") >= 1 and "0.0001" in json.dumps(r.report)
 
 
 def test_support_equals_cli(data, tmp_path):
@@ -101,6 +102,11 @@ def test_matirf_equals_cli(cli_run, tmp_path):
     r = col0rme.matirf([tifffile.imread(p) for p in imgs], angles=ANGLES)
     same(r.volume, tifffile.imread(tmp_path / "m" / "volume.tif"), "matirf volume")
     same(r.depth, tifffile.imread(tmp_path / "m" / "depth.tif"), "matirf depth")
+
+
+def test_parameters_listed():
+    p = col0rme.parameters()
+    assert {"lambda", "angles", "pixel_nm", "fwhm_nm", "kappa", "baseline"} <= set(p) and all(p.values())
 
 
 def test_bad_input_raises(data):
