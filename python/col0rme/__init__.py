@@ -74,6 +74,7 @@ class _Conf:
     """A c0_run_conf with its documented defaults, set by parameter name."""
 
     def __init__(self, options):
+        self._free = _L().c0_run_conf_free   # kept: module globals may be gone at exit
         self.p = _L().c0_run_conf_new()
         if not self.p:
             raise MemoryError("c0_run_conf_new")
@@ -83,7 +84,7 @@ class _Conf:
 
     def __del__(self):
         if getattr(self, "p", None):
-            _L().c0_run_conf_free(self.p)
+            self._free(self.p)
             self.p = None
 
 
@@ -138,7 +139,7 @@ class Result:
 
     def __init__(self, handle):
         L, h, w, nz = _L(), ctypes.c_int(), ctypes.c_int(), ctypes.c_int()
-        self._h = handle
+        self._h, self._free = handle, L.c0_result_free
         ref = ctypes.byref
         s = L.c0_result_support(handle, ref(h), ref(w))
         self.support = _copy(s, (h.value, w.value), np.uint8).astype(bool) if s else None
@@ -168,7 +169,7 @@ class Result:
 
     def __del__(self):
         if getattr(self, "_h", None):
-            _L().c0_result_free(self._h)
+            self._free(self._h)
             self._h = None
 
 
@@ -217,8 +218,8 @@ class Simulation:
     pixel_size and fwhm (nm), and get(name) for any other parameter."""
 
     def __init__(self, handle):
-        self._h = handle
         L, t, h, w, n = _L(), ctypes.c_int(), ctypes.c_int(), ctypes.c_int(), ctypes.c_int()
+        self._h, self._free = handle, L.c0_simulation_free
         ref = ctypes.byref
         a = L.c0_simulation_angles(handle, ref(n))
         self.angles = [a[i] for i in range(n.value)]
@@ -234,7 +235,7 @@ class Simulation:
 
     def __del__(self):
         if getattr(self, "_h", None):
-            _L().c0_simulation_free(self._h)
+            self._free(self._h)
             self._h = None
 
 
