@@ -3,7 +3,7 @@
 #include "cli/cmdkit.h"
 
 static const char *const params[] = { "pixel_nm", "fwhm_nm", "emission_nm", "na", "srf", "penalty", "lambda",
-				      "iterations", "tol", "reweightings", "lag", "drift", "no_drift", "frc", NULL };
+				      "iterations", "tol", "reweightings", "lag", NULL };
 
 int cmd_support(int argc, char **argv)
 {
@@ -11,29 +11,15 @@ int cmd_support(int argc, char **argv)
 		"Estimate the emitters' support on the fine grid from each stack's spatial covariance\n"
 		"(COL0RME); with several stacks the support is the union. Writes OUTDIR/support.tif\n"
 		"(uint8 0/1; fine pixel (i, j) covers [i p/r, (i+1) p/r) nm from the top-left corner),\n"
-		"OUTDIR/rx.tif (float32 emitter variance, one plane per stack), OUTDIR/report.json and,\n"
-		"with drift correction (the default), OUTDIR/drift.csv and OUTDIR/drift.png.",
+		"OUTDIR/rx.tif (float32 emitter variance, one plane per stack) and OUTDIR/report.json.",
 		NULL, 0, 1, C0_MAX_STACKS };
 	struct c0_cli k;
 	int rc = c0_cli_start(&k, &spec, params, NULL, 0, argc, argv);
 	if (rc)
 		return rc == 1 ? 0 : 2;
-	struct c0_frames f[C0_MAX_STACKS];
-	struct c0_stage_confs sc;
 	struct c0_result *r = NULL;
-	int st = c0_pipe_begin("support", &k.m.c, k.stacks, k.n, f, &sc, &r);
-	if (st)
-		return c0_cli_end(&k, "support", r, st, argc, argv);
-	if (!(st = c0_cli_open(&k))) {
-		r->nsup = k.n;
-		for (int i = 0; i < k.n; i++)
-			r->sup[i] = i;
-		r->pixel_nm = sc.support.pixel_nm;
-		if (k.m.c.drift)
-			st = c0_step_drift(r, f, k.n);
-		if (!st)
-			st = c0_step_support(r, &sc.support, f);
-	}
-	c0_stacks_close(f, k.n);
+	int st = c0_cli_open(&k);
+	if (!st)
+		st = c0_run_support(&k.m.c, k.stacks, k.n, &r);
 	return c0_cli_end(&k, "support", r, st, argc, argv);
 }
