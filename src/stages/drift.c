@@ -280,6 +280,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 				st = c0_fail(C0_EINVAL, "%s: the drift at frames %lld-%lld (%.1f, %.1f pixels) exceeds a quarter "
 					     "of the field; correct it beforehand or switch drift correction off",
 					     r->name, (long long)t1 + 1, (long long)t2, bx, by);
+				free(d->bm[d->nb]);   /* not yet counted in d->nb */
 				break;
 			}
 			d->bt[d->nb] = (double)g + 0.5 * (double)(t1 + t2 - 1);
