@@ -237,6 +237,7 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 void c0_matirf_cli_opts(struct c0_matirf_cli *m, struct c0_opt *o)
 {
 	m->reg = m->c.reg == C0_REG_TV ? "tv" : "hessian";
+	m->solver = m->c.solver == C0_MATIRF_EXACT ? "exact" : "diag";
 	const struct c0_opt rows[C0_MATIRF_CLI_OPTS] = {
 		{ "angles", 0, C0_OPT_DOUBLES, m->angles, "DEG,...", "incidence angle in the glass of each stack/image, same order", "none", 64, &m->nangles },
 		{ "n-glass", 0, C0_OPT_DOUBLE, &m->c.tirf.n_glass, "N", "refractive index of the coverslip and immersion", NULL, 0, NULL },
@@ -250,6 +251,7 @@ void c0_matirf_cli_opts(struct c0_matirf_cli *m, struct c0_opt *o)
 		{ "sparsity", 0, C0_OPT_DOUBLE, &m->c.sparsity, "S", "weight of the l1 term that keeps few depths per pixel", NULL, 0, NULL },
 		{ "axial-weight", 0, C0_OPT_DOUBLE, &m->c.wz, "W", "axial weight of the regulariser relative to lateral", NULL, 0, NULL },
 		{ "matirf-iterations", 0, C0_OPT_INT, &m->c.pdhg.maxit, "N", "maximum primal-dual iterations", NULL, 0, NULL },
+		{ "matirf-solver", 0, C0_OPT_STRING, &m->solver, "exact|diag", "exact per-pixel data steps, or the earlier diagonal-step solver", NULL, 0, NULL },
 	};
 	memcpy(o, rows, sizeof rows);
 }
@@ -262,6 +264,10 @@ int c0_matirf_cli_finish(struct c0_matirf_cli *m, int nimages)
 		m->c.reg = C0_REG_HESSIAN;
 	else
 		return c0_fail(C0_EINVAL, "--reg %s: expected tv or hessian", m->reg);
+	if (!strcmp(m->solver, "exact") || !strcmp(m->solver, "diag"))
+		m->c.solver = m->solver[0] == 'e' ? C0_MATIRF_EXACT : C0_MATIRF_DIAG;
+	else
+		return c0_fail(C0_EINVAL, "--matirf-solver %s: expected exact or diag", m->solver);
 	if (m->nzr && m->nzr != 3)
 		return c0_fail(C0_EINVAL, "--z-range: expected MIN,MAX,STEP in nm");
 	if (m->nzr)
@@ -334,6 +340,8 @@ int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const fl
 	cJSON_AddNumberToObject(j, "data_scale", res->scale);
 	cJSON_AddNumberToObject(j, "iterations", res->iters);
 	cJSON_AddBoolToObject(j, "converged", res->converged);
+	cJSON_AddStringToObject(j, "solver", res->exact ? "exact" : "diag");
+	cJSON_AddNumberToObject(j, "final_relative_change", res->rel_change);
 	cJSON_AddNumberToObject(j, "seconds", res->seconds);
 	return C0_OK;
 }

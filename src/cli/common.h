@@ -38,9 +38,9 @@ struct c0_matirf_cli {
 	struct c0_matirf_conf c;
 	double angles[64], gains[64], zr[3];
 	int nangles, ngains, nzr;
-	const char *reg;
+	const char *reg, *solver;
 };
-#define C0_MATIRF_CLI_OPTS 12
+#define C0_MATIRF_CLI_OPTS 13
 /* Fills C0_MATIRF_CLI_OPTS rows of o from m (which holds the defaults). */
 void c0_matirf_cli_opts(struct c0_matirf_cli *m, struct c0_opt *o);
 /* Turns the parsed strings and lists into m->c; nimages: expected angles. */

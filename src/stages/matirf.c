@@ -3,6 +3,7 @@
 #include "ops/grad3m.h"
 #include "ops/tirfop.h"
 #include "solve/pdhg.h"
+#include "solve/nnqp.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -31,6 +32,8 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 		return c0_fail(C0_EINVAL, "--z-range %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
 		return c0_fail(C0_EINVAL, "--z-range: more than 512 depth bins");
+	if (!(c->gamma > 0))
+		return c0_fail(C0_EINVAL, "matirf: gamma %g must be > 0", c->gamma);
 	if (!(c->kappa >= 0) || !(c->wz >= 0) || !(c->sparsity >= 0))
 		return c0_fail(C0_EINVAL, "--kappa, --axial-weight and --sparsity must be >= 0");
 	return C0_OK;
@@ -54,30 +57,41 @@ struct ctx {
 	struct c0_grad3m g;       /* TV: gradient over the columns */
 	struct c0_diff3 d;        /* Hessian: full grid (M = all pixels) */
 	double kappa, l1;
+	/* the exact solver (C0_MATIRF_EXACT): K = R's operator, one primal step
+	 * tau1, H = W^T W + I / tau1 and c = W^T b - l1 per voxel */
+	int exact;
+	double tau1, hcol, H[C0_NNQP_MAX * C0_NNQP_MAX], Hi[C0_NNQP_MAX * C0_NNQP_MAX];
+	float *c;
 	struct c0_progress *pr;
 };
 
 /* K u = [W u per column; R's operator u] */
+/* K u = [W u per column; R's operator u], or R's operator alone for the
+ * exact solver */
 static void K(void *vc, const float *u, float *y)
 {
 	struct ctx *c = vc;
 	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
-	c0_tirfop_forward(&w, u, y);
+	float *yr = c->exact ? y : y + c->nq * w.M;
+	if (!c->exact)
+		c0_tirfop_forward(&w, u, y);
 	if (c->reg == C0_REG_TV)
-		c0_grad3m_forward(&c->g, u, y + c->nq * w.M);
+		c0_grad3m_forward(&c->g, u, yr);
 	else
-		c0_hess3(&c->d, u, y + c->nq * w.M);
+		c0_hess3(&c->d, u, yr);
 }
 
 static void KT(void *vc, const float *y, float *u)
 {
 	struct ctx *c = vc;
 	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
+	const float *yr = c->exact ? y : y + c->nq * w.M;
 	if (c->reg == C0_REG_TV)
-		c0_grad3m_adjoint(&c->g, y + c->nq * w.M, u);
+		c0_grad3m_adjoint(&c->g, yr, u);
 	else
-		c0_hess3_adjoint(&c->d, y + c->nq * w.M, u);
-	c0_tirfop_adjoint_add(&w, y, u);
+		c0_hess3_adjoint(&c->d, yr, u);
+	if (!c->exact)
+		c0_tirfop_adjoint_add(&w, y, u);
 }
 
 static void iter(void *vc, int it)
@@ -189,11 +203,12 @@ static void spectral_clip(double h[6], double k)
  * projects on the kappa ball of the dual norm (group l2 for TV, spectral for
  * Schatten-1; the sum of |entries| bounds the spectral norm, so most voxels
  * skip the eigen-decomposition). */
+static void dual_reg(struct ctx *c, float *y, const float *s, float rho, double sums[2]);
+
 static void dual_step(void *vc, float *y, const float *s, float rho, double sums[2])
 {
 	struct ctx *c = vc;
-	const size_t M = c->M, N = c->N, nd = (size_t)c->nq * M;
-	const float k = (float)c->kappa;
+	const size_t M = c->M, nd = (size_t)c->nq * M;
 	float d2 = 0, n2 = 0;   /* per thread; sums is double */
 	for (int q = 0; q < c->nq; q++) {
 		const float sg = (float)c->sig_d[q], *bq = c->b + q * M, *sq = s + q * M;
@@ -202,7 +217,16 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 		for (size_t i = 0; i < M; i++)
 			prox_data_entry(&yq[i], sq[i], bq[i], sg, rho, &d2, &n2);
 	}
-	y += nd, s += nd;
+	sums[0] += d2, sums[1] += n2;
+	dual_reg(c, y + nd, s + nd, rho, sums);
+}
+
+/* the regulariser's rows of the dual step */
+static void dual_reg(struct ctx *c, float *y, const float *s, float rho, double sums[2])
+{
+	const size_t N = c->N;
+	const float k = (float)c->kappa;
+	float d2 = 0, n2 = 0;
 	const float s0 = (float)c->sig_r[0], s1 = (float)c->sig_r[1], s2 = (float)c->sig_r[2];
 	if (c->reg == C0_REG_TV && !(k > 0)) {   /* no regulariser: its dual goes to 0 */
 		for (size_t i = 0; i < c->ncomp * N; i++)
@@ -233,6 +257,37 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 			for (int e = 0; e < 6; e++)
 				c0_pdhg_dual_entry(&y[e * N + i], (float)h[e], rho, &d2, &n2);
 		}
+	}
+	sums[0] += d2, sums[1] += n2;
+}
+
+static void dual_step_exact(void *vc, float *y, const float *s, float rho, double sums[2])
+{
+	dual_reg(vc, y, s, rho, sums);
+}
+
+/* The exact solver's primal step: G = data + l1 + positivity, whose prox is
+ * a small non-negative quadratic program per column,
+ *   min_{u >= 0} 1/2 u^T H u - (c + v / tau)^T u,  v = x - tau K^T y,
+ * warm-started from the column's current values. */
+static void primal_step_exact(void *vc, float *x, float *t, float rho, double sums[2])
+{
+	struct ctx *c = vc;
+	const size_t M = c->M;
+	const int nz = c->nz;
+	const double tau = c->tau1;
+	float d2 = 0, n2 = 0;
+#pragma omp parallel for schedule(dynamic, 512) reduction(+ : d2, n2) if (c->N > 50000)
+	for (size_t k = 0; k < M; k++) {
+		double g[C0_NNQP_MAX], u[C0_NNQP_MAX];
+		for (int l = 0; l < nz; l++) {
+			const size_t i = l * M + k;
+			g[l] = c->c[i] + (x[i] - tau * t[i]) / tau;
+			u[l] = x[i];
+		}
+		c0_nnqp(nz, c->H, c->Hi, g, u);
+		for (int l = 0; l < nz; l++)
+			c0_pdhg_primal_entry(&x[l * M + k], &t[l * M + k], (float)u[l], rho, &d2, &n2);
 	}
 	sums[0] += d2, sums[1] += n2;
 }
@@ -331,6 +386,41 @@ static void dual_fused(void *vc, const float *t, float *y, float rho, double sum
 	sums[0] += d2, sums[1] += n2;
 }
 
+/* Steps of the exact solver: the diagonal (Pock-Chambolle) steps of K = R's
+ * operator with one tau for all voxels (their largest column sum), traded
+ * against sigma by gamma; H = W^T W + I / tau and c = W^T b - l1. */
+static void exact_setup(struct ctx *x, const struct c0_matirf_conf *c, const double *W)
+{
+	const int nz = x->nz, nq = x->nq;
+	const size_t M = x->M;
+	double cmax = 0;
+	if (x->reg == C0_REG_TV) {
+		for (int j = 0; j < nz; j++)
+			for (size_t k = 0; k < M; k++)
+				cmax = fmax(cmax, c0_grad3m_colsum(&x->g, (int)k, j));
+	} else
+		cmax = x->hcol;
+	const double gamma = c->gamma;
+	x->tau1 = gamma / (cmax > 0 ? cmax : 1);
+	for (int comp = 0; comp < x->ncomp; comp++)
+		x->sig_r[comp] /= gamma;
+	for (int i = 0; i < nz; i++)
+		for (int j = 0; j < nz; j++) {
+			double s = i == j ? 1 / x->tau1 : 0;
+			for (int q = 0; q < nq; q++)
+				s += W[q * nz + i] * W[q * nz + j];
+			x->H[i * nz + j] = s;
+		}
+	c0_spd_inverse(nz, x->H, x->Hi);
+	for (int j = 0; j < nz; j++)
+		for (size_t k = 0; k < M; k++) {
+			double s = -x->l1;
+			for (int q = 0; q < nq; q++)
+				s += W[q * nz + j] * x->b[q * M + k];
+			x->c[j * M + k] = (float)s;
+		}
+}
+
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		    const float *const *x, int ny, int nx, struct c0_matirf_result *res)
 {
@@ -376,9 +466,12 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	const size_t M = (size_t)ctx.g.M, N = M * nz, nd = (size_t)nq * M;
 	const int ncomp = c->reg == C0_REG_TV ? ctx.g.nc : 6;
 	ctx.M = (int)M, ctx.N = N, ctx.ncomp = ncomp;
-	const size_t m = nd + ncomp * N;
+	ctx.exact = c->solver == C0_MATIRF_EXACT && nz <= C0_NNQP_MAX;
+	const size_t m = ctx.exact ? ncomp * N : nd + ncomp * N;
 	float *b = c0_alloc(nd, sizeof *b), *u = c0_alloc(N, sizeof *u), *y = c0_alloc(m, sizeof *y);
 	float *tau = c0_alloc(N, sizeof *tau);
+	if (ctx.exact && !(ctx.c = c0_alloc(N, sizeof *ctx.c)))
+		st = C0_ENOMEM;
 	if (c->reg == C0_REG_HESSIAN && !(ctx.d.work = c0_alloc(2 * N, sizeof *ctx.d.work)))
 		st = C0_ENOMEM;
 	res->f = c0_alloc(np * nz, sizeof *res->f);
@@ -399,6 +492,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	for (int a = 0; a < 3; a++)
 		for (int e = a; e < 3; e++)
 			hcol += (a == e ? 4 : 4 * sqrt(2.0)) * wa[a] * wa[e];
+	ctx.hcol = hcol;
 	for (int j = 0; j < nz; j++) {
 		double sw = 0;
 		for (int q = 0; q < nq; q++)
@@ -421,17 +515,24 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		ctx.sig_r[comp] = rs > 0 ? 1 / rs : 1;
 	}
 	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, primal_step, dual_step, iter, NULL, NULL };
-	if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused)
+	if (ctx.exact) {
+		pb.primal_step = primal_step_exact, pb.dual_step = dual_step_exact;
+		exact_setup(&ctx, c, W);
+	} else if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused)
 		pb.primal_fused = primal_fused, pb.dual_fused = dual_fused;
 	struct c0_pdhg_info info;
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "matirf (iterations, at most)", c->pdhg.maxit);
 	ctx.pr = &pr;
-	st = c0_pdhg_solve(&pb, &c->pdhg, u, y, &info);
+	struct c0_pdhg_conf pc = c->pdhg;
+	if (!(pc.tol > 0))           /* each solver's default */
+		pc.tol = ctx.exact ? 1e-3 : 1e-4;
+	st = c0_pdhg_solve(&pb, &pc, u, y, &info);
 	c0_progress_end(&pr);
 	if (st)
 		goto out;
 	res->nz = nz, res->ny = ny, res->nx = nx, res->iters = info.iters, res->converged = info.converged;
+	res->exact = ctx.exact, res->rel_change = fmax(info.dx, info.dy);
 	for (int j = 0; j < nz; j++) {
 		res->z_nm[j] = c->z0_nm + (j + 0.5) * c->dz_nm;
 		for (size_t k = 0; k < M; k++)
@@ -446,7 +547,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	}
 out:
 	c0_grad3m_free(&ctx.g);
-	free(b), free(u), free(y), free(tau), free(ctx.d.work);
+	free(b), free(u), free(y), free(tau), free(ctx.d.work), free(ctx.c);
 	if (st)
 		c0_matirf_result_free(res);
 	res->seconds = c0_now() - t0;

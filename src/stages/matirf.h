@@ -13,6 +13,10 @@
 #include "solve/pdhg.h"
 
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };
+/* exact: PDHG with the data term's prox solved exactly per pixel (one small
+ * (I + tau W^T W)^-1 for all); diag: the data rows in the dual with
+ * diagonal steps (the earlier solver, kept as a reference) */
+enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG };
 
 struct c0_matirf_conf {
 	struct c0_tirf tirf;
@@ -21,10 +25,12 @@ struct c0_matirf_conf {
 	double kappa;                /* 3e-2: weight of R, for data scaled to max 1 */
 	double wz;                   /* 0: axial weight of R relative to lateral (0: lateral TV) */
 	double sparsity;             /* 3e-2: weight s of the l1 term, same scale */
-	struct c0_pdhg_conf pdhg;    /* 3000 iterations, tol 1e-4 */
+	struct c0_pdhg_conf pdhg;    /* 3000 iterations; tol 0: the solver's (1e-3 exact, 1e-4 diag); relax 1.8 */
 	int fused;                   /* 1: TV's steps in one pass each; 0: the operator sequence (tests) */
+	enum c0_matirf_solver solver;/* exact */
+	double gamma;                /* 3: exact solver's primal step relative to the diagonal one */
 };
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, C0_PDHG_DEFAULTS, 1 }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_EXACT, 3 }
 
 struct c0_matirf_result {
 	int nz, ny, nx;
@@ -32,8 +38,9 @@ struct c0_matirf_result {
 	double *z_nm;                /* bin centres */
 	float *depth;                /* ny x nx intensity-weighted mean depth (nm), 0 where empty */
 	float *total;                /* ny x nx sum over depth */
-	int iters, converged;
+	int iters, converged, exact;   /* exact: which solver ran */
 	double seconds, scale;
+	double rel_change;           /* the last iteration's relative change (max of primal, dual) */
 };
 
 int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles);
