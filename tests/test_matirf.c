@@ -6,6 +6,7 @@
 #include "ops/tirfop.h"
 #include "optics/tirf.h"
 #include "stages/matirf.h"
+#include "solve/nnqp.h"
 #include "core/rng.h"
 #include "core/err.h"
 
@@ -148,6 +149,12 @@ static void phantom(int n, double *depth, double *amp)
 		}
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
 static double depth_error(const struct c0_matirf_conf *c, double noise, double *resid)
 {
 	const int n = 40, nq = 5;
@@ -227,6 +234,106 @@ static void test_fused(void)
 		free(img[q]);
 }
 
+/* the active-set NNQP against projected gradient run to convergence, on
+ * random problems with sparse and dense solutions and a warm start */
+static void test_nnqp(void)
+{
+	enum { N = 12 };
+	double worst = 0;
+	for (int trial = 0; trial < 40; trial++) {
+		double A[20 * N], H[N * N], Hi[N * N], g[N], x[N], y[N];
+		for (int i = 0; i < 20 * N; i++)
+			A[i] = c0_rng_normal(&rng);
+		for (int i = 0; i < N; i++)
+			for (int j = 0; j < N; j++) {
+				double s = i == j ? 0.05 : 0;
+				for (int r = 0; r < 20; r++)
+					s += A[r * N + i] * A[r * N + j];
+				H[i * N + j] = s;
+			}
+		CHECK(c0_spd_inverse(N, H, Hi) == 0);
+		for (int i = 0; i < N; i++)
+			g[i] = c0_rng_normal(&rng) * 10 + (trial % 2 ? 8 : -4), x[i] = trial % 3 ? c0_rng_normal(&rng) : 0;
+		CHECK(c0_nnqp(N, H, Hi, g, x) >= 0);
+		double L = 0;
+		for (int i = 0; i < N * N; i++)
+			L += H[i] * H[i];
+		L = sqrt(L);
+		for (int i = 0; i < N; i++)
+			y[i] = 0;
+		for (int it = 0; it < 200000; it++)
+			for (int i = 0; i < N; i++) {      /* exact coordinate minimisation, projected */
+				double r = g[i];
+				for (int j = 0; j < N; j++)
+					r -= H[i * N + j] * y[j];
+				double v = y[i] + r / H[i * N + i];
+				y[i] = v > 0 ? v : 0;
+			}
+		double d = 0, m = 0;
+		for (int i = 0; i < N; i++)
+			{
+			d = fmax(d, fabs(x[i] - y[i])), m = fmax(m, fabs(y[i]));
+			CHECK(x[i] >= 0);
+		}
+		worst = fmax(worst, d / fmax(m, 1e-12));
+		(void)L;
+	}
+	CHECK_MSG(worst < 1e-6, "nnqp vs coordinate descent: relative difference %g", worst);
+}
+
+/* the exact solver against the diagonal-step one: tightly converged they
+ * reach the same depths; at their defaults they stay close */
+static void test_solvers(void)
+{
+	const int n = 40, nq = 5;
+	double depth[40 * 40], amp[40 * 40];
+	phantom(n, depth, amp);
+	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
+	float *img[5];
+	for (int q = 0; q < nq; q++) {
+		double p;
+		c0_tirf_p(&c.tirf, ANG[q], &p);
+		img[q] = malloc(sizeof(float) * n * n);
+		for (int i = 0; i < n * n; i++)
+			img[q][i] = amp[i] > 0 ? (float)(1000 * amp[i] * exp(-p * depth[i]) * (1 + 0.1 * c0_rng_normal(&rng))) : 0;
+	}
+	struct c0_matirf_result r[4];
+	for (int k = 0; k < 4; k++) {
+		c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
+		c.solver = k % 2 ? C0_MATIRF_DIAG : C0_MATIRF_EXACT;
+		if (k >= 2)
+			c.pdhg.tol = 1e-6, c.pdhg.maxit = 8000;
+		CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &r[k]) == C0_OK);
+	}
+	double dd[2], med[2];
+	for (int pair = 0; pair < 2; pair++) {
+		double e[40 * 40];
+		int k = 0;
+		for (int i = 0; i < n * n; i++)
+			if (amp[i] > 0)
+				e[k++] = fabs(r[2 * pair].depth[i] - r[2 * pair + 1].depth[i]);
+		qsort(e, k, sizeof *e, cmp_double);
+		med[pair] = e[k / 2], dd[pair] = e[k - 1];
+	}
+	fprintf(stderr, "exact vs diag, defaults: %d vs %d iterations (%.2f vs %.2f s), depth difference median %.2f nm, max %.1f nm\n"
+		"  tol 1e-6: %d vs %d iterations, median %.3f nm, max %.2f nm\n  objectives %.8g %.8g, tight %.8g %.8g\n",
+		r[0].iters, r[1].iters, r[0].seconds, r[1].seconds, med[0], dd[0], r[2].iters, r[3].iters, med[1], dd[1],
+		r[0].objective, r[1].objective, r[2].objective, r[3].objective);
+	CHECK(r[0].exact && !r[1].exact && r[0].converged && r[1].converged);
+	/* the objective is flat along depth: nearly equal objectives still
+	 * differ by a few nm, so the objectives are the test */
+	const double best = fmin(r[2].objective, r[3].objective);
+	CHECK_MSG(r[2].objective <= best * (1 + 2e-4) && r[3].objective <= best * (1 + 2e-4),
+		  "tight objectives %.8g (exact) vs %.8g (diag)", r[2].objective, r[3].objective);
+	CHECK_MSG(r[0].objective <= best * 1.005 && r[1].objective <= best * 1.005, "default objectives %.8g %.8g vs %.8g",
+		  r[0].objective, r[1].objective, best);
+	CHECK_MSG(med[1] < 5 && med[0] < 5, "the solvers' depths differ by %.2f nm (defaults), %.2f nm (tight)", med[0], med[1]);
+	for (int k = 0; k < 4; k++)
+		c0_matirf_result_free(&r[k]);
+	for (int q = 0; q < nq; q++)
+		free(img[q]);
+}
+
 static void test_depth(void)
 {
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
@@ -267,6 +374,8 @@ int main(void)
 	RUN(test_tirfop);
 	RUN(test_i0_ratios);
 	RUN(test_fused);
+	RUN(test_nnqp);
+	RUN(test_solvers);
 	RUN(test_depth);
 	RUN(test_refusals);
 	return CHECK_DONE();

@@ -421,6 +421,44 @@ static void exact_setup(struct ctx *x, const struct c0_matirf_conf *c, const dou
 		}
 }
 
+/* The objective at u (scaled units): 1/2 ||W u - b||^2 + kappa R(u) + l1 sum u,
+ * to compare solvers; work: ncomp N floats. */
+static double objective(struct ctx *c, const float *u, float *work)
+{
+	const size_t M = c->M, N = c->N;
+	double data = 0, reg = 0, l1 = 0;
+	for (size_t k = 0; k < M; k++)
+		for (int q = 0; q < c->nq; q++) {
+			double s = -c->b[q * M + k];
+			for (int j = 0; j < c->nz; j++)
+				s += c->W[q * c->nz + j] * u[j * M + k];
+			data += 0.5 * s * s;
+		}
+	for (size_t i = 0; i < N; i++)
+		l1 += u[i];
+	if (c->reg == C0_REG_TV) {
+		c0_grad3m_forward(&c->g, u, work);
+		for (size_t i = 0; i < N; i++) {
+			double s = 0;
+			for (int e = 0; e < c->ncomp; e++)
+				s += (double)work[e * N + i] * work[e * N + i];
+			reg += sqrt(s);
+		}
+	} else {
+		c0_hess3(&c->d, u, work);
+		const double r2 = sqrt(2.0);
+		for (size_t i = 0; i < N; i++) {
+			double h[6], v[3][3];
+			for (int e = 0; e < 6; e++)
+				h[e] = work[e * N + i];
+			double a[3][3] = { { h[0], h[3] / r2, h[4] / r2 }, { h[3] / r2, h[1], h[5] / r2 }, { h[4] / r2, h[5] / r2, h[2] } };
+			eig3(a, v);
+			reg += fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+		}
+	}
+	return data + c->kappa * reg + c->l1 * l1;
+}
+
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		    const float *const *x, int ny, int nx, struct c0_matirf_result *res)
 {
@@ -533,6 +571,11 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		goto out;
 	res->nz = nz, res->ny = ny, res->nx = nx, res->iters = info.iters, res->converged = info.converged;
 	res->exact = ctx.exact, res->rel_change = fmax(info.dx, info.dy);
+	{
+		float *work = c0_alloc(ncomp * N, sizeof *work);
+		res->objective = work ? objective(&ctx, u, work) : NAN;
+		free(work);
+	}
 	for (int j = 0; j < nz; j++) {
 		res->z_nm[j] = c->z0_nm + (j + 0.5) * c->dz_nm;
 		for (size_t k = 0; k < M; k++)

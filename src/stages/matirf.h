@@ -41,6 +41,7 @@ struct c0_matirf_result {
 	int iters, converged, exact;   /* exact: which solver ran */
 	double seconds, scale;
 	double rel_change;           /* the last iteration's relative change (max of primal, dual) */
+	double objective;            /* at the result, data scaled to max 1 (compares solvers) */
 };
 
 int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles);
