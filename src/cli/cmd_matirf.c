@@ -4,6 +4,7 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "optics/psf.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,12 +14,17 @@ int cmd_matirf(int argc, char **argv)
 {
 	struct c0_matirf_cli m = { .c = C0_MATIRF_DEFAULTS };
 	const char *outdir = NULL;
-	double pixel_nm = 0;
+	double pixel_nm = 0, offset = 0, psf_fwhm = 0, bg_smooth = 100;
+	const char *background = "0";
 	int force = 0, verbose = 0;
 	const struct c0_opt own[] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &pixel_nm, "NM", "pixel size of the images (calibration of the outputs)", "from the TIFF calibration", 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
+		{ "offset", 0, C0_OPT_DOUBLE, &offset, "ADU", "camera offset subtracted from every image", NULL, 0, NULL },
+		{ "background", 0, C0_OPT_STRING, &background, "V|estimate", "constant background subtracted after the offset, or 'estimate': a smooth background common to all angles, estimated jointly (written to background.tif)", NULL, 0, NULL },
+		{ "background-smooth", 0, C0_OPT_DOUBLE, &bg_smooth, "PX2", "smoothness weight of the estimated background", NULL, 0, NULL },
+		{ "psf-fwhm", 0, C0_OPT_DOUBLE, &psf_fwhm, "NM", "joint deconvolution: the images are W f blurred by a Gaussian PSF of this FWHM (needs the pixel size)", "0: none", 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
 	enum { NOWN = sizeof own / sizeof *own };   /* its own rows, then the MA-TIRF ones */
@@ -51,6 +57,30 @@ int cmd_matirf(int argc, char **argv)
 	}
 	if (!st && !(pixel_nm > 0))
 		pixel_nm = in[0].pixel_size_nm;
+	double bg_value = 0;
+	if (!st && !strcmp(background, "estimate"))
+		m.c.bg_smooth = bg_smooth;
+	else if (!st) {
+		char *end;
+		bg_value = strtod(background, &end);
+		if (*end || end == background)
+			st = c0_fail(C0_EINVAL, "--background %s: expected a value (image units) or 'estimate'", background);
+	}
+	if (!st && !(bg_smooth > 0))
+		st = c0_fail(C0_EINVAL, "--background-smooth %g: must be > 0", bg_smooth);
+	if (!st && psf_fwhm != 0) {
+		if (!(psf_fwhm > 0) || !(pixel_nm > 0))
+			st = c0_fail(C0_EINVAL, "--psf-fwhm %g: needs a positive FWHM and the pixel size (--pixel-size or the TIFF calibration)", psf_fwhm);
+		else
+			m.c.psf_sigma_px = c0_psf_sigma_px(psf_fwhm, pixel_nm);
+	}
+	const size_t np = st ? 0 : (size_t)in[0].height * in[0].width;
+	if (!st)
+		st = c0_matirf_subtract(data, ni, np, offset, "offset");
+	if (!st)
+		st = c0_matirf_subtract(data, ni, np, bg_value, "background");
+	if (!st)
+		st = c0_matirf_check(&m.c, m.nangles, m.angles);
 	struct c0_outdir out;
 	if (!st)
 		st = c0_outdir_open(&out, outdir, force);
@@ -63,6 +93,21 @@ int cmd_matirf(int argc, char **argv)
 	struct c0_matirf_result res;
 	st = c0_run_matirf(&out, &m, (const float *const *)data, NULL, (int)in[0].height, (int)in[0].width, pixel_nm, "",
 			   "matirf", &res, rep);
+	cJSON *j = st ? NULL : cJSON_GetObjectItem(rep, "matirf");
+	if (j) {
+		cJSON_AddNumberToObject(j, "offset", offset);
+		if (res.background) {
+			cJSON_AddStringToObject(j, "background", "estimated");
+			cJSON_AddNumberToObject(j, "background_mean", res.background_mean);
+			cJSON_AddNumberToObject(j, "background_smooth_px2", bg_smooth);
+			struct c0_tiff_wopts o = { .width = (int)in[0].width, .height = (int)in[0].height, .dtype = C0_F32,
+						   .pixel_size_nm = pixel_nm, .software = "col0rme" };
+			st = c0_tiff_save_f32(c0_outdir_file(&out, "background.tif"), &o, res.background);
+		} else
+			cJSON_AddNumberToObject(j, "background", bg_value);
+		cJSON_AddNumberToObject(j, "psf_fwhm_nm", psf_fwhm);
+		cJSON_AddNumberToObject(j, "objective", res.objective);
+	}
 	if (!st)
 		st = c0_report_write(rep, c0_outdir_file(&out, "report.json"));
 	c0_matirf_result_free(&res);

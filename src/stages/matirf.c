@@ -2,6 +2,9 @@
 #include "ops/diff3.h"
 #include "ops/grad3m.h"
 #include "ops/tirfop.h"
+#include "ops/blur2.h"
+#include "solve/cg.h"
+#include "optics/psf.h"
 #include "solve/pdhg.h"
 #include "solve/nnqp.h"
 #include "core/clock.h"
@@ -32,6 +35,9 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 		return c0_fail(C0_EINVAL, "--z-range %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
 		return c0_fail(C0_EINVAL, "--z-range: more than 512 depth bins");
+	if (!(c->bg_smooth >= 0) || !(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
+		return c0_fail(C0_EINVAL, "matirf: background smoothing %g must be >= 0 and the PSF sigma %g px in [0, 12]",
+			       c->bg_smooth, c->psf_sigma_px);
 	if (!(c->gamma > 0))
 		return c0_fail(C0_EINVAL, "matirf: gamma %g must be > 0", c->gamma);
 	if (!(c->kappa >= 0) || !(c->wz >= 0) || !(c->sparsity >= 0))
@@ -39,9 +45,27 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	return C0_OK;
 }
 
+int c0_matirf_subtract(float *const *x, int nq, size_t np, double v, const char *what)
+{
+	if (!(v == v) || v < 0)
+		return c0_fail(C0_EINVAL, "--%s %g: must be >= 0", what, v);
+	for (int q = 0; q < nq && v > 0; q++) {
+		double s = 0;
+		for (size_t p = 0; p < np; p++)
+			s += x[q][p];
+		if (!(v < s / np))
+			return c0_fail(C0_EINVAL, "--%s %g: not below the mean of image %d (%g): nothing would be left of it", what,
+				       v, q + 1, s / np);
+	}
+	for (int q = 0; q < nq && v > 0; q++)
+		for (size_t p = 0; p < np; p++)
+			x[q][p] -= (float)v;
+	return C0_OK;
+}
+
 void c0_matirf_result_free(struct c0_matirf_result *r)
 {
-	free(r->f), free(r->z_nm), free(r->depth), free(r->total);
+	free(r->f), free(r->z_nm), free(r->depth), free(r->total), free(r->background);
 	memset(r, 0, sizeof *r);
 }
 
@@ -60,6 +84,17 @@ struct ctx {
 	/* the exact solver (C0_MATIRF_EXACT): K = R's operator, one primal step
 	 * tau1, H = W^T W + I / tau1 and c = W^T b - l1 per voxel */
 	int exact;
+	/* joint deconvolution: the data rows are B W u, B a Gaussian blur of
+	 * each angle's image (full grid); work: nq M floats */
+	struct c0_blur2 blur;
+	float *dwork;
+	/* background estimation: b = b0 - bg, bg updated from the residual every
+	 * BG_EVERY iterations; u is the solver's primal iterate */
+	const float *b0, *u;
+	float *bg, *b_mut;
+	double *bgd, *bgr;
+	double bg_smooth;
+	int ny, nx;
 	double tau1, hcol, H[C0_NNQP_MAX * C0_NNQP_MAX], Hi[C0_NNQP_MAX * C0_NNQP_MAX];
 	float *c;
 	struct c0_progress *pr;
@@ -75,6 +110,8 @@ static void K(void *vc, const float *u, float *y)
 	float *yr = c->exact ? y : y + c->nq * w.M;
 	if (!c->exact)
 		c0_tirfop_forward(&w, u, y);
+	if (c->blur.k)
+		c0_blur2_apply(&c->blur, y, c->nq);
 	if (c->reg == C0_REG_TV)
 		c0_grad3m_forward(&c->g, u, yr);
 	else
@@ -90,14 +127,73 @@ static void KT(void *vc, const float *y, float *u)
 		c0_grad3m_adjoint(&c->g, yr, u);
 	else
 		c0_hess3_adjoint(&c->d, yr, u);
-	if (!c->exact)
+	if (c->blur.k) {
+		memcpy(c->dwork, y, sizeof(float) * c->nq * w.M);
+		c0_blur2_apply(&c->blur, c->dwork, c->nq);
+		c0_tirfop_adjoint_add(&w, c->dwork, u);
+	} else if (!c->exact)
 		c0_tirfop_adjoint_add(&w, y, u);
 }
+
+/* (I + lambda grad^T grad) on the ny x nx grid, Neumann borders */
+static void smooth_op(void *vc, const double *in, double *out)
+{
+	const struct ctx *c = vc;
+	const int ny = c->ny, nx = c->nx;
+	const double l = c->bg_smooth;
+	for (int y = 0; y < ny; y++)
+		for (int x = 0; x < nx; x++) {
+			const size_t i = (size_t)y * nx + x;
+			double v = in[i], s = 0;
+			if (x > 0) s += v - in[i - 1];
+			if (x < nx - 1) s += v - in[i + 1];
+			if (y > 0) s += v - in[i - nx];
+			if (y < ny - 1) s += v - in[i + nx];
+			out[i] = v + l * s;
+		}
+}
+
+/* bg = max((I + lambda grad^T grad)^-1 mean_q (b0_q - (B W u)_q), 0): the
+ * background common to all angles that minimises the data term given u,
+ * smoothed (Soubies et al., ISBI 2019); then the data the solver sees. */
+static void background_update(struct ctx *c, const double *W)
+{
+	const size_t M = c->M;
+	const struct c0_tirfop w = { c->nq, c->nz, M, W };
+	c0_tirfop_forward(&w, c->u, c->dwork);
+	if (c->blur.k)
+		c0_blur2_apply(&c->blur, c->dwork, c->nq);
+	for (size_t k = 0; k < M; k++) {
+		double s = 0;
+		for (int q = 0; q < c->nq; q++)
+			s += c->b0[q * M + k] - c->dwork[q * M + k];
+		c->bgr[k] = s / c->nq;
+	}
+	struct c0_cg_info ci;
+	c0_cg(smooth_op, c, M, c->bgr, NULL, c->bgd, 1e-6, 500, &ci);
+	for (size_t k = 0; k < M; k++) {
+		c->bg[k] = c->bgd[k] > 0 ? (float)c->bgd[k] : 0;
+		for (int q = 0; q < c->nq; q++)
+			c->b_mut[q * M + k] = c->b0[q * M + k] - c->bg[k];
+	}
+	if (c->exact)
+		for (int j = 0; j < c->nz; j++)
+			for (size_t k = 0; k < M; k++) {
+				double s = -c->l1;
+				for (int q = 0; q < c->nq; q++)
+					s += W[q * c->nz + j] * c->b_mut[q * M + k];
+				c->c[j * M + k] = (float)s;
+			}
+}
+
+#define BG_EVERY 10
 
 static void iter(void *vc, int it)
 {
 	struct ctx *c = vc;
 	c0_progress_update(c->pr, it);
+	if (c->bg && it % BG_EVERY == 0)
+		background_update(c, c->W);
 }
 
 /* The proximal maps per entry, shared by the plain and the fused steps.
@@ -496,7 +592,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		return C0_ENOMEM;
 	for (size_t p = 0; p < np; p++)
 		for (int q = 0; q < nq; q++)
-			mask[p] |= c->reg == C0_REG_HESSIAN || x[q][p] > 0;
+			mask[p] |= c->reg == C0_REG_HESSIAN || c->bg_smooth > 0 || c->psf_sigma_px > 0 || x[q][p] > 0;
 	st = c0_grad3m_init(&ctx.g, mask, ny, nx, nz, 1, c->wz);
 	free(mask);
 	if (st)
@@ -504,7 +600,31 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	const size_t M = (size_t)ctx.g.M, N = M * nz, nd = (size_t)nq * M;
 	const int ncomp = c->reg == C0_REG_TV ? ctx.g.nc : 6;
 	ctx.M = (int)M, ctx.N = N, ctx.ncomp = ncomp;
-	ctx.exact = c->solver == C0_MATIRF_EXACT && nz <= C0_NNQP_MAX;
+	/* the exact solver's per-pixel prox has no room for a lateral blur */
+	ctx.exact = c->solver == C0_MATIRF_EXACT && nz <= C0_NNQP_MAX && !(c->psf_sigma_px > 0);
+	ctx.ny = ny, ctx.nx = nx, ctx.bg_smooth = c->bg_smooth;
+	float kern[2 * 64 + 1];
+	if (c->psf_sigma_px > 0) {
+		double kd[2 * 64 + 1];
+		int r = (int)ceil(C0_PSF_CUTOFF * c->psf_sigma_px);
+		r = r > 64 ? 64 : r;
+		c0_psf_pixel_weights(0.5, c->psf_sigma_px, -r, 2 * r + 1, kd);
+		for (int i = 0; i <= 2 * r; i++)
+			kern[i] = (float)kd[i];
+		ctx.blur = (struct c0_blur2){ ny, nx, r, kern, c0_alloc(np, sizeof(float)) };
+		if (!ctx.blur.work)
+			st = C0_ENOMEM;
+	}
+	if ((c->psf_sigma_px > 0 || c->bg_smooth > 0) && !(ctx.dwork = c0_alloc((size_t)nq * M, sizeof(float))))
+		st = C0_ENOMEM;
+	float *b0 = NULL;
+	if (c->bg_smooth > 0) {
+		ctx.bg = c0_alloc(M, sizeof *ctx.bg), ctx.bgd = c0_alloc(M, sizeof *ctx.bgd), ctx.bgr = c0_alloc(M, sizeof *ctx.bgr);
+		b0 = c0_alloc(nd, sizeof *b0);
+		res->background = c0_alloc(np, sizeof *res->background);
+		if (!ctx.bg || !ctx.bgd || !ctx.bgr || !b0 || !res->background)
+			st = C0_ENOMEM;
+	}
 	const size_t m = ctx.exact ? ncomp * N : nd + ncomp * N;
 	float *b = c0_alloc(nd, sizeof *b), *u = c0_alloc(N, sizeof *u), *y = c0_alloc(m, sizeof *y);
 	float *tau = c0_alloc(N, sizeof *tau);
@@ -520,10 +640,14 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		st = C0_ENOMEM;
 		goto out;
 	}
-	ctx.b = b, ctx.tau = tau;
+	ctx.b = b, ctx.tau = tau, ctx.u = u;
 	for (int q = 0; q < nq; q++)
 		for (size_t k = 0; k < M; k++)
 			b[q * M + k] = (float)(x[q][ctx.g.pixel[k]] / mx);
+	if (b0) {
+		memcpy(b0, b, sizeof *b0 * nd);
+		ctx.b0 = b0, ctx.b_mut = b;
+	}
 	/* diagonal steps: 1 / (absolute row or column sums of K) */
 	const double wa[3] = { 1, 1, c->wz };
 	double hcol = 0;
@@ -556,7 +680,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (ctx.exact) {
 		pb.primal_step = primal_step_exact, pb.dual_step = dual_step_exact;
 		exact_setup(&ctx, c, W);
-	} else if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused)
+	} else if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused && !ctx.blur.k)
 		pb.primal_fused = primal_fused, pb.dual_fused = dual_fused;
 	struct c0_pdhg_info info;
 	struct c0_progress pr;
@@ -571,6 +695,13 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		goto out;
 	res->nz = nz, res->ny = ny, res->nx = nx, res->iters = info.iters, res->converged = info.converged;
 	res->exact = ctx.exact, res->rel_change = fmax(info.dx, info.dy);
+	if (ctx.bg) {
+		background_update(&ctx, W);      /* the background of the final iterate */
+		double sb = 0;
+		for (size_t k = 0; k < M; k++)
+			res->background[ctx.g.pixel[k]] = (float)(ctx.bg[k] * mx), sb += ctx.bg[k] * mx;
+		res->background_mean = sb / (M ? M : 1);
+	}
 	{
 		float *work = c0_alloc(ncomp * N, sizeof *work);
 		res->objective = work ? objective(&ctx, u, work) : NAN;
@@ -591,6 +722,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 out:
 	c0_grad3m_free(&ctx.g);
 	free(b), free(u), free(y), free(tau), free(ctx.d.work), free(ctx.c);
+	free(ctx.blur.work), free(ctx.dwork), free(ctx.bg), free(ctx.bgd), free(ctx.bgr), free(b0);
 	if (st)
 		c0_matirf_result_free(res);
 	res->seconds = c0_now() - t0;

@@ -29,8 +29,15 @@ struct c0_matirf_conf {
 	int fused;                   /* 1: TV's steps in one pass each; 0: the operator sequence (tests) */
 	enum c0_matirf_solver solver;/* exact */
 	double gamma;                /* 3: exact solver's primal step relative to the diagonal one */
+	/* 0: the images are background-free; > 0: estimate a smooth background
+	 * common to all angles jointly with f, as (I + bg_smooth grad^T grad)^-1
+	 * of the mean residual, clipped at 0 (bg_smooth in px^2) */
+	double bg_smooth;
+	/* 0: no deconvolution; > 0: the forward model blurs each angle's image
+	 * by a Gaussian of this sigma (camera pixels); uses the diag solver */
+	double psf_sigma_px;
 };
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_EXACT, 3 }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_EXACT, 3, 0, 0 }
 
 struct c0_matirf_result {
 	int nz, ny, nx;
@@ -42,10 +49,15 @@ struct c0_matirf_result {
 	double seconds, scale;
 	double rel_change;           /* the last iteration's relative change (max of primal, dual) */
 	double objective;            /* at the result, data scaled to max 1 (compares solvers) */
+	float *background;           /* ny x nx estimated background (image units), or NULL */
+	double background_mean;
 };
 
 int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles);
 /* x: nq images of ny x nx; gain: nq per-angle gains or NULL. */
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		    const float *const *x, int ny, int nx, struct c0_matirf_result *res);
+/* x_q -= v for every image (a camera offset or a constant background),
+ * refused when v is not below the mean of some image; what names the option. */
+int c0_matirf_subtract(float *const *x, int nq, size_t np, double v, const char *what);
 void c0_matirf_result_free(struct c0_matirf_result *r);
