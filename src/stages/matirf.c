@@ -343,6 +343,26 @@ static void dual_reg(struct ctx *c, float *y, const float *s, float rho, double 
 	} else {
 		/* Schatten-1's dual is the spectral norm: clip the eigenvalues to [-kappa, kappa] */
 		const double r2 = sqrt(2.0);
+		if (c->d.wz == 0) {
+			/* lateral Hessian: the z rows stay 0 and the matrix is 2x2, whose
+			 * eigenvalues m +- r have a closed form; clipped ones rebuild it
+			 * as c2 I + (c1 - c2) (A - e2 I) / (2 r) */
+			const float s0 = (float)c->sig_r[0], s1 = (float)c->sig_r[1], s3 = (float)c->sig_r[3], ir2 = (float)(1 / r2);
+			float *y0 = y, *y1 = y + N, *y3 = y + 3 * N;
+			const float *t0 = s, *t1 = s + N, *t3 = s + 3 * N;
+#pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) if (N > 20000)
+			for (size_t i = 0; i < N; i++) {
+				float a = y0[i] + s0 * t0[i], b = y1[i] + s1 * t1[i], o = (y3[i] + s3 * t3[i]) * ir2;
+				float m = 0.5f * (a + b), h = 0.5f * (a - b), r = sqrtf(h * h + o * o);
+				float e1 = m + r, e2 = m - r;
+				float c1 = fminf(fmaxf(e1, -k), k), c2 = fminf(fmaxf(e2, -k), k);
+				float f = r > 0 ? (c1 - c2) / (2 * r) : 0;
+				float na = r > 0 ? c2 + f * (a - e2) : c1, nb = r > 0 ? c2 + f * (b - e2) : c1, no = f * o;
+				c0_pdhg_dual_entry(&y0[i], na, rho, &d2, &n2);
+				c0_pdhg_dual_entry(&y1[i], nb, rho, &d2, &n2);
+				c0_pdhg_dual_entry(&y3[i], no * (float)r2, rho, &d2, &n2);
+			}
+		} else
 #pragma omp parallel for schedule(static) reduction(+ : d2, n2) if (N > 20000)
 		for (size_t i = 0; i < N; i++) {
 			double h[6];
