@@ -3,6 +3,7 @@
  * dense sample covariance, and accuracy on simulated data. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
+#include "check_adjoint.h"
 #include "ops/covop.h"
 #include "ops/covariance.h"
 #include "optics/psf.h"
@@ -177,14 +178,18 @@ static void test_dense_identities(void)
 	}
 	CHECK_REL(op.lip, lam, 1e-9);
 	/* Psi and Psi^T against the dense matrix, and their adjointness */
-	double *y = rnd(NP, -0.5), psix[NP], psity[NL];
+	double psix[NP];
 	c0_covop_psi(&op, x, psix);
 	for (int p = 0; p < NP; p++)
 		slow[p] = dot(P + (size_t)p * NL, x, NL);
 	CHECK(maxdiff(psix, slow, NP) < 1e-12);
-	c0_covop_psit(&op, y, psity);
-	CHECK_REL(dot(psix, y, NP), dot(x, psity, NL), 1e-12);
-	free(P), free(x), free(fast), free(slow), free(M), free(e), free(AtA), free(v), free(y);
+	const struct c0_linop Psi = c0_covop_psi_linop(&op);
+	CHECK_ADJOINT(&Psi, NULL, 1e-12);
+	/* one PSF factor alone, along the rows of an image */
+	struct c0_band_rows gx = { &op.Gx, 3 };
+	const struct c0_linop Gx = c0_band_linop(&gx);
+	CHECK_ADJOINT(&Gx, NULL, 1e-12);
+	free(P), free(x), free(fast), free(slow), free(M), free(e), free(AtA), free(v);
 	c0_covop_free(&op);
 }
 
@@ -275,12 +280,13 @@ static void test_covariance_operator(void)
 	/* adjoint test in the band's Frobenius product, with a narrower band */
 	c0_cov_free(&cov);
 	random_cov(2, 10, &cov, D);
-	c0_covop_forward(&op, &cov, x, m);
-	c0_covop_adjoint(&op, &cov, cov.r, C);
-	double lhs = 0;
-	for (int l = 0; l < cov.nlag; l++)
-		lhs += c0_cov_weight(&cov, l) * dot(m + (size_t)l * NP, cov.r + (size_t)l * NP, NP);
-	CHECK_REL(lhs, dot(x, C, NL), 1e-12);
+	struct c0_covop_band band = { &op, &cov };
+	const struct c0_linop A = c0_covop_linop(&band);
+	double *w = malloc(sizeof *w * A.nout);
+	for (size_t i = 0; i < A.nout; i++)
+		w[i] = c0_cov_weight(&cov, (int)(i / NP));
+	CHECK_ADJOINT(&A, w, 1e-12);
+	free(w);
 	/* gradient of 1/2||R - M(x) - sI||^2 in x at fixed s, and the closed-form s */
 	c0_cov_free(&cov);
 	random_cov(5, 30, &cov, D);
@@ -320,11 +326,11 @@ static void test_wrong_inputs(void)
 	CHECK(c0_support_check(&c, 10, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "smaller than the PSF band"));
 	CHECK(c0_support_check(&c, 64, 64, 2, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "at least 3"));
 	c.pixel_nm = 0;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--pixel-size"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "pixel_nm"));
 	c.pixel_nm = 100, c.fwhm_nm = -1;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--fwhm"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "fwhm_nm"));
 	c.fwhm_nm = 229, c.srf = 0;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--srf"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "srf"));
 }
 
 /* Gaussian read noise only (no Poisson): the estimated noise variance is the read noise's */
@@ -381,13 +387,13 @@ static void test_accuracy(void)
 	c0_sim_result_free(&sr);
 	char p[256];
 	snprintf(p, sizeof p, "%s/stack_q01.tif", dir);
-	struct c0_tiff_reader *rd;
-	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	struct c0_frames fr;
+	CHECK(c0_frames_open(&fr, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
 	c.pixel_nm = 100, c.fwhm_nm = 229;
 	struct c0_support_result res;
-	CHECK(c0_support_stack(&c, rd, p, &res) == C0_OK);
-	c0_tiff_close(rd);
+	CHECK(c0_support_stack(&c, &fr, &res) == C0_OK);
+	c0_frames_close(&fr);
 	snprintf(p, sizeof p, "%s/truth_support.tif", dir);
 	struct c0_tiff_info in;
 	float *t;

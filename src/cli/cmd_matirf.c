@@ -1,122 +1,51 @@
 /* col0rme matirf: axial reconstruction from one image per TIRF angle. */
 #include "cli/commands.h"
-#include "cli/common.h"
+#include "cli/cmdkit.h"
 #include "io/tiff.h"
 #include "core/err.h"
-#include "core/mem.h"
-#include "optics/psf.h"
 
-#include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
+
+static const char *const params[] = { "pixel_nm", C0_MATIRF_PARAMS, "offset", "matirf_background", "estimate_background",
+				      "background_smooth", "psf_fwhm_nm", NULL };
 
 int cmd_matirf(int argc, char **argv)
 {
-	struct c0_matirf_cli m = { .c = C0_MATIRF_DEFAULTS };
-	const char *outdir = NULL;
-	double pixel_nm = 0, offset = 0, psf_fwhm = 0, bg_smooth = 100;
-	const char *background = "0";
-	int force = 0, verbose = 0;
-	const struct c0_opt own[] = {
-		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
-		{ "pixel-size", 0, C0_OPT_DOUBLE, &pixel_nm, "NM", "pixel size of the images (calibration of the outputs)", "from the TIFF calibration", 0, NULL },
-		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
-		{ "offset", 0, C0_OPT_DOUBLE, &offset, "ADU", "camera offset subtracted from every image", NULL, 0, NULL },
-		{ "background", 0, C0_OPT_STRING, &background, "V|estimate", "constant background subtracted after the offset, or 'estimate': a smooth background common to all angles, estimated jointly (written to background.tif)", NULL, 0, NULL },
-		{ "background-smooth", 0, C0_OPT_DOUBLE, &bg_smooth, "PX2", "smoothness weight of the estimated background", NULL, 0, NULL },
-		{ "psf-fwhm", 0, C0_OPT_DOUBLE, &psf_fwhm, "NM", "joint deconvolution: the images are W f blurred by a Gaussian PSF of this FWHM (needs the pixel size)", "0: none", 0, NULL },
-		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
-	};
-	enum { NOWN = sizeof own / sizeof *own };   /* its own rows, then the MA-TIRF ones */
-	struct c0_opt opts[NOWN + C0_MATIRF_CLI_OPTS];
-	memcpy(opts, own, sizeof own);
-	c0_matirf_cli_opts(&m, opts + NOWN);
-	const struct c0_cmd_spec spec = { "matirf", "--angles DEG,... [options] -o OUTDIR IMAGE...",
+	struct c0_cmd_spec spec = { "matirf", "--angles DEG,... [options] -o OUTDIR IMAGE...",
 		"Multi-angle TIRF axial reconstruction from one 2D image per angle (e.g. the\n"
 		"intensity_qNN.tif of 'col0rme intensity', or background-corrected means). Writes\n"
 		"OUTDIR/volume.tif (float32, depth bins x H x W, z spacing = bin width),\n"
 		"OUTDIR/depth.tif (intensity-weighted mean depth, nm), OUTDIR/depth.png (depth colour\n"
 		"code with colour bar) and OUTDIR/report.json (\"z_nm\": bin centres).",
-		opts, C0_NOPTS(opts), 2, 64 };
-	char *imgs[64];
-	int ni, rc = c0_opts_parse(&spec, argc, argv, &ni, imgs);
+		NULL, 0, 2, C0_MAX_STACKS };
+	struct c0_cli k;
+	int rc = c0_cli_start(&k, &spec, params, NULL, 0, argc, argv);
 	if (rc)
 		return rc == 1 ? 0 : 2;
-	int st = c0_matirf_cli_finish(&m, ni);
-	if (!st)
-		st = c0_check_inputs(imgs, ni, outdir);
-	float *data[64] = { 0 };
-	struct c0_tiff_info in[64];
+	const int ni = k.n;
+	struct c0_matirf_conf mc;
+	c0_run_conf_matirf(&k.m.c, &mc);
+	int st = c0_run_conf_matirf_check(&k.m.c, &mc, ni), is_file[C0_MAX_STACKS];
+	float *data[C0_MAX_STACKS] = { 0 };
+	struct c0_tiff_info in[C0_MAX_STACKS];
 	for (int q = 0; !st && q < ni; q++) {
-		st = c0_tiff_load_f32(imgs[q], &in[q], &data[q]);
+		is_file[q] = 1;
+		st = c0_tiff_load_f32(k.paths[q], &in[q], &data[q]);
 		if (!st && in[q].pages != 1)
-			st = c0_fail(C0_EINVAL, "%s: %lld planes; expected one 2D image per angle", imgs[q], (long long)in[q].pages);
+			st = c0_fail(C0_EINVAL, "%s: %lld planes; expected one 2D image per angle", k.paths[q], (long long)in[q].pages);
 		if (!st && (in[q].width != in[0].width || in[q].height != in[0].height))
-			st = c0_fail(C0_EINVAL, "%s: %lldx%lld pixels differs from %s", imgs[q], (long long)in[q].width,
-				     (long long)in[q].height, imgs[0]);
+			st = c0_fail(C0_EINVAL, "%s: %lldx%lld pixels differs from %s", k.paths[q], (long long)in[q].width,
+				     (long long)in[q].height, k.paths[0]);
 	}
-	if (!st && !(pixel_nm > 0))
-		pixel_nm = in[0].pixel_size_nm;
-	double bg_value = 0;
-	if (!st && !strcmp(background, "estimate"))
-		m.c.bg_smooth = bg_smooth;
-	else if (!st) {
-		char *end;
-		bg_value = strtod(background, &end);
-		if (*end || end == background)
-			st = c0_fail(C0_EINVAL, "--background %s: expected a value (image units) or 'estimate'", background);
-	}
-	if (!st && !(bg_smooth > 0))
-		st = c0_fail(C0_EINVAL, "--background-smooth %g: must be > 0", bg_smooth);
-	if (!st && psf_fwhm != 0) {
-		if (!(psf_fwhm > 0) || !(pixel_nm > 0))
-			st = c0_fail(C0_EINVAL, "--psf-fwhm %g: needs a positive FWHM and the pixel size (--pixel-size or the TIFF calibration)", psf_fwhm);
-		else
-			m.c.psf_sigma_px = c0_psf_sigma_px(psf_fwhm, pixel_nm);
-	}
-	const size_t np = st ? 0 : (size_t)in[0].height * in[0].width;
+	struct c0_result *r = NULL;
 	if (!st)
-		st = c0_matirf_subtract(data, ni, np, offset, "offset");
+		st = c0_result_new("matirf", ni, (const char *const *)k.paths, is_file, &r);
 	if (!st)
-		st = c0_matirf_subtract(data, ni, np, bg_value, "background");
+		st = c0_cli_open(&k);
 	if (!st)
-		st = c0_matirf_check(&m.c, m.nangles, m.angles);
-	struct c0_outdir out;
-	if (!st)
-		st = c0_outdir_open(&out, outdir, force);
-	if (st) {
-		for (int q = 0; q < ni; q++)
-			free(data[q]);
-		return c0_cli_error("matirf");
-	}
-	cJSON *rep = c0_report_new("matirf", argc, argv);
-	struct c0_matirf_result res;
-	st = c0_run_matirf(&out, &m, (const float *const *)data, NULL, (int)in[0].height, (int)in[0].width, pixel_nm, "",
-			   "matirf", &res, rep);
-	cJSON *j = st ? NULL : cJSON_GetObjectItem(rep, "matirf");
-	if (j) {
-		cJSON_AddNumberToObject(j, "offset", offset);
-		if (res.background) {
-			cJSON_AddStringToObject(j, "background", "estimated");
-			cJSON_AddNumberToObject(j, "background_mean", res.background_mean);
-			cJSON_AddNumberToObject(j, "background_smooth_px2", bg_smooth);
-			struct c0_tiff_wopts o = { .width = (int)in[0].width, .height = (int)in[0].height, .dtype = C0_F32,
-						   .pixel_size_nm = pixel_nm, .software = "col0rme" };
-			st = c0_tiff_save_f32(c0_outdir_file(&out, "background.tif"), &o, res.background);
-		} else
-			cJSON_AddNumberToObject(j, "background", bg_value);
-		cJSON_AddNumberToObject(j, "psf_fwhm_nm", psf_fwhm);
-		cJSON_AddNumberToObject(j, "objective", res.objective);
-	}
-	if (!st)
-		st = c0_report_write(rep, c0_outdir_file(&out, "report.json"));
-	c0_matirf_result_free(&res);
-	cJSON_Delete(rep);
+		st = c0_step_matirf_raw(r, &k.m.c, &mc, (const float *const *)data, (int)in[0].height, (int)in[0].width,
+					k.m.c.pixel_nm > 0 ? k.m.c.pixel_nm : in[0].pixel_size_nm);
 	for (int q = 0; q < ni; q++)
 		free(data[q]);
-	if (st) {
-		c0_outdir_rollback(&out);
-		return c0_cli_error("matirf");
-	}
-	return 0;
+	return c0_cli_end(&k, "matirf", r, st, argc, argv);
 }

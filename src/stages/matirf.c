@@ -25,36 +25,37 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (st)
 		return st;
 	if (nq < 2 || nq > MAXQ)
-		return c0_fail(C0_EINVAL, "--angles: MA-TIRF needs 2..%d angles (got %d)", MAXQ, nq);
+		return c0_fail(C0_EINVAL, "angles: MA-TIRF needs 2..%d angles (got %d)", MAXQ, nq);
 	for (int q = 0; q < nq; q++) {
 		double p;
 		if (c0_tirf_p(&c->tirf, angles[q], &p))
-			return c0_fail(C0_EINVAL, "--angles: %s", c0_errmsg());
+			return c0_fail(C0_EINVAL, "angles: %s", c0_errmsg());
 	}
 	if (!(c->dz_nm > 0) || !(c->z1_nm > c->z0_nm) || c->z0_nm < 0)
-		return c0_fail(C0_EINVAL, "--z-range %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
+		return c0_fail(C0_EINVAL, "z_range_nm %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
-		return c0_fail(C0_EINVAL, "--z-range: more than 512 depth bins");
-	if (!(c->bg_smooth >= 0) || !(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
-		return c0_fail(C0_EINVAL, "matirf: background smoothing %g must be >= 0 and the PSF sigma %g px in [0, 12]",
-			       c->bg_smooth, c->psf_sigma_px);
+		return c0_fail(C0_EINVAL, "z_range_nm: more than 512 depth bins");
+	if (!(c->bg_smooth >= 0))
+		return c0_fail(C0_EINVAL, "matirf_background_smooth %g: must be >= 0", c->bg_smooth);
+	if (!(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
+		return c0_fail(C0_EINVAL, "psf_fwhm_nm: %g pixels sigma, must be in [0, 12]", c->psf_sigma_px);
 	if (!(c->gamma > 0))
 		return c0_fail(C0_EINVAL, "matirf: gamma %g must be > 0", c->gamma);
 	if (!(c->kappa >= 0) || !(c->wz >= 0) || !(c->sparsity >= 0))
-		return c0_fail(C0_EINVAL, "--kappa, --axial-weight and --sparsity must be >= 0");
+		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: each must be >= 0", c->kappa, c->wz, c->sparsity);
 	return C0_OK;
 }
 
 int c0_matirf_subtract(float *const *x, int nq, size_t np, double v, const char *what)
 {
 	if (!(v == v) || v < 0)
-		return c0_fail(C0_EINVAL, "--%s %g: must be >= 0", what, v);
+		return c0_fail(C0_EINVAL, "%s %g: must be >= 0", what, v);
 	for (int q = 0; q < nq && v > 0; q++) {
 		double s = 0;
 		for (size_t p = 0; p < np; p++)
 			s += x[q][p];
 		if (!(v < s / np))
-			return c0_fail(C0_EINVAL, "--%s %g: not below the mean of image %d (%g): nothing would be left of it", what,
+			return c0_fail(C0_EINVAL, "%s %g: not below the mean of image %d (%g): nothing would be left of it", what,
 				       v, q + 1, s / np);
 	}
 	for (int q = 0; q < nq && v > 0; q++)
@@ -431,15 +432,7 @@ static void primal_fused(void *vc, const float *y, float *x, float *t, float rho
 		const size_t k1 = k0 + FCHUNK < M ? k0 + FCHUNK : M, n = k1 - k0;
 		float a[FCHUNK];                    /* K^T y of the chunk at one depth */
 		for (int j = 0; j < nz; j++) {
-			const float *dxj = dx + j * M + k0, *dyj = dy + j * M, *hr = g->hr + k0, *hd = g->hd + k0;
-			for (size_t i = 0; i < n; i++)
-				a[i] = -hr[i] * dxj[i] - hd[i] * dyj[k0 + i];
-			if (k0 > 0)
-				a[0] += hr[-1] * dxj[-1];
-			for (size_t i = 1; i < n; i++)
-				a[i] += hr[i - 1] * dxj[i - 1];
-			for (size_t i = 0; i < n; i++)       /* gather: from the upper neighbour */
-				a[i] += g->hu[k0 + i] * dyj[g->up[k0 + i]];
+			c0_grad3m_lateral_adjoint(g, dx + j * M, dy + j * M, k0, n, a);
 			for (size_t i = 0; i < n; i++)
 				a[i] *= wl;
 			for (int q = 0; q < nq; q++) {
@@ -479,13 +472,7 @@ static void dual_fused(void *vc, const float *t, float *y, float rho, double sum
 				for (size_t i = 0; i < n; i++)
 					acc[q * FCHUNK + i] += w * tj[k0 + i];
 			}
-			const size_t nr = k1 < M ? n : n - 1;   /* the last column has no right neighbour */
-			for (size_t i = 0; i < nr; i++)
-				ex[i] = g->hr[k0 + i] * (tj[k0 + i + 1] - tj[k0 + i]);
-			if (nr < n)
-				ex[nr] = 0;
-			for (size_t i = 0; i < n; i++)       /* gather: from the lower neighbour */
-				ey[i] = tj[g->down[k0 + i]] - tj[k0 + i];
+			c0_grad3m_lateral(g, tj, k0, n, ex, ey);
 			float *gxj = gx + j * M + k0, *gyj = gy + j * M + k0;
 #pragma omp simd reduction(+ : d2, n2)
 			for (size_t i = 0; i < n; i++)

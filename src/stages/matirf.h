@@ -12,11 +12,11 @@
 #include "optics/tirf.h"
 #include "solve/pdhg.h"
 
-enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };
-/* exact: PDHG with the data term's prox solved exactly per pixel (one small
- * (I + tau W^T W)^-1 for all); diag: the data rows in the dual with
- * diagonal steps (the earlier solver, kept as a reference) */
-enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG };
+#include "col0rme.h"   /* enum c0_reg */
+
+/* enum c0_matirf_solver (col0rme.h): exact, PDHG whose primal step solves
+ * the data + l1 + positivity prox exactly per pixel (a small NNQP); diag,
+ * the data rows in the dual with diagonal steps (the earlier solver) */
 
 struct c0_matirf_conf {
 	struct c0_tirf tirf;
