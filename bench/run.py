@@ -17,6 +17,7 @@ BUILD = os.environ.get("BUILD", "build")
 CLI = os.path.join(BUILD, "col0rme")
 QUICK = "--quick" in sys.argv
 rows = []
+LAST_CPU = [0.0]   # user + system CPU seconds of the last timed() child
 
 
 def timed(cmd, env=None):
@@ -27,6 +28,7 @@ def timed(cmd, env=None):
     out, err = p.stdout.read(), p.stderr.read()
     _, status, ru = os.wait4(p.pid, 0)
     dt = time.perf_counter() - t0
+    LAST_CPU[0] = ru.ru_utime + ru.ru_stime
     p.returncode = os.waitstatus_to_exitcode(status)
     if p.returncode:
         sys.exit("bench: %s failed:\n%s" % (" ".join(cmd), err))
@@ -61,7 +63,7 @@ def matirf350(tmp):
         o = os.path.join(tmp, "mt350_" + tag)
         dt, mem, _ = timed([CLI, "matirf", "--angles", ang13, "--z-range", "0,300,20", "--force", "-o", o] + extra + imgs, env)
         rep = json.load(open(os.path.join(o, "report.json")))["matirf"]
-        rep["mem"] = mem
+        rep["mem"], rep["cpu"] = mem, LAST_CPU[0]
         return dt, rep, tifffile.imread(os.path.join(o, "depth.tif"))
 
     best = {}
@@ -73,10 +75,11 @@ def matirf350(tmp):
     (tn, rn, dn), (to, ro, do) = best["exact"], best["diag"]
     for what, (t, r, d) in (("previous solver (diag)", best["diag"]), ("exact solver (default)", best["exact"])):
         row("matirf, 350x350 phantom, " + what, "350x350x15 x13", t,
-            "%d its, %s, rel. change %.1e, objective %.6g, depth err %.1f nm" %
-            (r["iterations"], "converged" if r["converged"] else "NOT converged", r["final_relative_change"],
+            "%.1f CPU-s, %d its, %s, rel. change %.1e, objective %.6g, depth err %.1f nm" %
+            (r["cpu"], r["iterations"], "converged" if r["converged"] else "NOT converged", r["final_relative_change"],
              r["objective"], np.median(np.abs(d - truth))), r["mem"],
-            "" if d is do else "%.2fx faster; depth vs previous: median %.2f nm" % (to / tn, np.median(np.abs(dn - do))))
+            "" if d is do else "%.2fx faster (%.2fx CPU); depth vs previous: median %.2f nm" %
+            (to / tn, ro["cpu"] / rn["cpu"], np.median(np.abs(dn - do))))
     t1, t2 = [], []
     for rnd in range(2):   # interleaved
         t1.append(mt("t1", [], {"OMP_NUM_THREADS": "1"})[0])
@@ -85,7 +88,7 @@ def matirf350(tmp):
         "%.2fx speed-up" % (min(t1) / min(t2)))
     dt, r, d = mt("hessian", ["--reg", "hessian"])
     row("matirf Hessian-Schatten (exact)", "350x350x15 x13", dt,
-        "%d its, %s, rel. change %.1e, depth err %.1f nm" % (r["iterations"], "converged" if r["converged"] else "NOT converged",
+        "%.1f CPU-s, %d its, %s, rel. change %.1e, depth err %.1f nm" % (r["cpu"], r["iterations"], "converged" if r["converged"] else "NOT converged",
                                                              r["final_relative_change"], np.median(np.abs(d - truth))), r["mem"])
 
 
