@@ -402,7 +402,7 @@ static void primal_step_exact(void *vc, float *x, float *t, float rho, double su
 			g[l] = c->c[i] + (x[i] - tau * t[i]) / tau;
 			u[l] = x[i];
 		}
-		c0_nnqp(nz, c->H, c->Hi, g, u);
+		c0_nnqp(nz, c->H, c->Hi, g, u);   /* at its cap u is still feasible and no worse */
 		for (int l = 0; l < nz; l++)
 			c0_pdhg_primal_entry(&x[l * M + k], &t[l * M + k], (float)u[l], rho, &d2, &n2);
 	}
