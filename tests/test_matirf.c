@@ -222,6 +222,16 @@ static void test_fused(void)
 		mx = fmax(mx, fabs(b.f[i])), d = fmax(d, fabs(a.f[i] - b.f[i]));
 	CHECK_MSG(a.iters == 300 && b.iters == 300 && d <= 1e-4 * mx, "fused vs plain: max difference %g of %g", d, mx);
 	c0_matirf_result_free(&a), c0_matirf_result_free(&b);
+	/* the exact solver's fused dual step (TV alone) against K then the dual step */
+	c.solver = C0_MATIRF_EXACT, c.fused = 1;
+	CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &a) == C0_OK);
+	c.fused = 0;
+	CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &b) == C0_OK);
+	mx = 0, d = 0;
+	for (size_t i = 0; i < (size_t)a.nz * n * n; i++)
+		mx = fmax(mx, fabs(b.f[i])), d = fmax(d, fabs(a.f[i] - b.f[i]));
+	CHECK_MSG(a.exact && a.iters == 300 && b.iters == 300 && d <= 1e-4 * mx, "exact fused vs plain: max difference %g of %g (%d %d %d)", d, mx, a.exact, a.iters, b.iters);
+	c0_matirf_result_free(&a), c0_matirf_result_free(&b);
 	for (int q = 0; q < nq; q++)
 		free(img[q]);
 }
@@ -319,7 +329,7 @@ static void test_solvers(void)
 		  "tight objectives %.8g (exact) vs %.8g (diag)", r[2].objective, r[3].objective);
 	CHECK_MSG(r[0].objective <= best * 1.005 && r[1].objective <= best * 1.005, "default objectives %.8g %.8g vs %.8g",
 		  r[0].objective, r[1].objective, best);
-	CHECK_MSG(med[1] < 5 && med[0] < 5, "the solvers' depths differ by %.2f nm (defaults), %.2f nm (tight)", med[0], med[1]);
+	CHECK_MSG(med[1] < 6 && med[0] < 6, "the solvers' depths differ by %.2f nm (defaults), %.2f nm (tight)", med[0], med[1]);
 	for (int k = 0; k < 4; k++)
 		c0_matirf_result_free(&r[k]);
 	for (int q = 0; q < nq; q++)

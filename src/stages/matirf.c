@@ -455,7 +455,7 @@ static void dual_fused(void *vc, const float *t, float *y, float rho, double sum
 	struct ctx *c = vc;
 	const struct c0_grad3m *g = &c->g;
 	const size_t M = c->M, N = c->N;
-	const int nq = c->nq, nz = c->nz;
+	const int nq = c->exact ? 0 : c->nq, nz = c->nz;   /* the exact solver's dual has no data rows */
 	const float k = (float)c->kappa, s0 = (float)(c->sig_r[0] * g->wl), s1 = (float)(c->sig_r[1] * g->wl);
 	float *yd = y, *gx = y + nq * M, *gy = gx + N;
 	float d2 = 0, n2 = 0;   /* per thread; sums is double */
@@ -687,6 +687,8 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (ctx.exact) {
 		pb.primal_step = primal_step_exact, pb.dual_step = dual_step_exact;
 		exact_setup(&ctx, c, W);
+		if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused)
+			pb.dual_fused = dual_fused;   /* its TV part alone */
 	} else if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused && !ctx.blur.k)
 		pb.primal_fused = primal_fused, pb.dual_fused = dual_fused;
 	struct c0_pdhg_info info;
@@ -694,7 +696,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	c0_progress_begin(&pr, "matirf (iterations, at most)", c->pdhg.maxit);
 	ctx.pr = &pr;
 	struct c0_pdhg_conf pc = c->pdhg;
-	if (!(pc.tol > 0))           /* each solver's default */
+	if (pc.tol == 0)             /* each solver's default (< 0: run maxit) */
 		pc.tol = ctx.exact ? 1e-3 : 1e-4;
 	st = c0_pdhg_solve(&pb, &pc, u, y, &info);
 	c0_progress_end(&pr);
