@@ -378,6 +378,7 @@ static void test_accuracy(void)
 	c0_outdir_open(&out, dir, 1);
 	struct c0_sim_result sr;
 	CHECK(c0_simulate(&s, &out, &sr) == C0_OK);
+	CHECK(c0_outdir_commit(&out) == C0_OK);
 	c0_sim_result_free(&sr);
 	char p[256];
 	snprintf(p, sizeof p, "%s/stack_q01.tif", dir);

@@ -99,9 +99,7 @@ int cmd_intensity(int argc, char **argv)
 		c0_intensity_result_free(&res[i]);
 	free(res), free(mask), free(stacks);
 	cJSON_Delete(rep);
-	if (st) {
-		c0_outdir_rollback(&out);
+	if ((st = c0_outdir_finish(&out, st)))
 		return c0_cli_error("intensity");
-	}
 	return 0;
 }

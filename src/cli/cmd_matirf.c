@@ -69,9 +69,7 @@ int cmd_matirf(int argc, char **argv)
 	cJSON_Delete(rep);
 	for (int q = 0; q < ni; q++)
 		free(data[q]);
-	if (st) {
-		c0_outdir_rollback(&out);
+	if ((st = c0_outdir_finish(&out, st)))
 		return c0_cli_error("matirf");
-	}
 	return 0;
 }

@@ -195,9 +195,7 @@ int cmd_run(int argc, char **argv)
 	c0_matirf_result_free(&vres), c0_matirf_result_free(&bres);
 	free(mask);
 	cJSON_Delete(rep);
-	if (st) {
-		c0_outdir_rollback(&out);
+	if ((st = c0_outdir_finish(&out, st)))
 		return c0_cli_error("run");
-	}
 	return 0;
 }

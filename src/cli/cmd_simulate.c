@@ -130,8 +130,7 @@ int cmd_simulate(int argc, char **argv)
 		st = c0_report_write(rep, c0_outdir_file(&out, "sim.json"));
 	}
 	cJSON_Delete(rep);
-	if (st) {
-		c0_outdir_rollback(&out);
+	if ((st = c0_outdir_finish(&out, st))) {
 		c0_sim_result_free(&res);
 		return c0_cli_error("simulate");
 	}

@@ -72,9 +72,7 @@ int cmd_support(int argc, char **argv)
 		c0_support_result_free(&res[i]);
 	free(res), cJSON_Delete(rep);
 	free(stacks);
-	if (st) {
-		c0_outdir_rollback(&out);
+	if ((st = c0_outdir_finish(&out, st)))
 		return c0_cli_error("support");
-	}
 	return 0;
 }

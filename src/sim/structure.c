@@ -52,7 +52,7 @@ int c0_sim_check(const struct c0_sim_conf *c)
 	for (int q = 0; q < c->nangles; q++) {
 		double p;
 		if (c0_tirf_p(&c->tirf, c->angles[q], &p))
-			return c0_fail(C0_EINVAL, "--angles: %s", c0_errmsg());
+			return c0_fail_prefix(C0_EINVAL, "--angles");
 	}
 	if (!(c->tau_on_ms > 0) || !(c->tau_off_ms > 0))
 		return c0_fail(C0_EINVAL, "--tau-on %g / --tau-off %g: lifetimes must be positive (ms)", c->tau_on_ms, c->tau_off_ms);
@@ -66,6 +66,15 @@ int c0_sim_check(const struct c0_sim_conf *c)
 		return c0_fail(C0_EINVAL, "--gain must be positive, --read-noise and --offset >= 0");
 	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
 		return c0_fail(C0_EINVAL, "--z-range %g,%g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
+	/* every real parameter finite: infinity passes the >= 0 tests above */
+	const double all[] = { c->tau_on_ms, c->tau_off_ms, c->tau_bleach_s, c->fps, c->brightness, c->brightness_cv,
+			       c->background, c->offset, c->gain, c->read_noise, c->snr_db, c->z_min_nm, c->z_max_nm,
+			       c->persistence_nm, c->density_per_um };
+	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+		if (!isfinite(all[i]))
+			return c0_fail(C0_EINVAL, "simulation parameter %g: must be finite (see col0rme simulate --help)", all[i]);
+	if ((double)c->width * c->height * c->frames > 1e10)
+		return c0_fail(C0_EINVAL, "--size %dx%d with --frames %d: more than 1e10 pixels per angle", c->width, c->height, c->frames);
 	if (!c->emitters_csv && (c->filaments < 1 || !(c->density_per_um > 0) || !(c->persistence_nm > 0)))
 		return c0_fail(C0_EINVAL, "empty structure: --filaments %d, --density %g, --persistence %g must be positive (or give --emitters CSV)",
 			       c->filaments, c->density_per_um, c->persistence_nm);

@@ -15,8 +15,10 @@ int c0_intensity_check(const struct c0_intensity_conf *c)
 	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
 	if (st)
 		return st;
-	if (!(c->beta >= 0) || !(c->nu >= 0) || !(c->mu >= 0))
-		return c0_fail(C0_EINVAL, "--beta, --nu and --mu must be >= 0");
+	if (!(c->beta >= 0 && isfinite(c->beta)) || !(c->nu >= 0 && isfinite(c->nu)) || !(c->mu >= 0 && isfinite(c->mu)))
+		return c0_fail(C0_EINVAL, "--beta %g, --nu %g, --mu %g: must be finite and >= 0", c->beta, c->nu, c->mu);
+	if (!(c->tol > 0 && c->tol < 1) || c->maxit < 1)
+		return c0_fail(C0_EINVAL, "--tol %g: must be in (0, 1)", c->tol);
 	if (!(c->graph_radius >= 1 && c->graph_radius <= 4))
 		return c0_fail(C0_EINVAL, "--graph-radius %g: must be in [1, 4] fine pixels", c->graph_radius);
 	return C0_OK;
