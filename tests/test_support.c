@@ -382,13 +382,13 @@ static void test_accuracy(void)
 	c0_sim_result_free(&sr);
 	char p[256];
 	snprintf(p, sizeof p, "%s/stack_q01.tif", dir);
-	struct c0_tiff_reader *rd;
-	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	struct c0_frames fr;
+	CHECK(c0_frames_open(&fr, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
 	c.pixel_nm = 100, c.fwhm_nm = 229;
 	struct c0_support_result res;
-	CHECK(c0_support_stack(&c, rd, p, &res) == C0_OK);
-	c0_tiff_close(rd);
+	CHECK(c0_support_stack(&c, &fr, &res) == C0_OK);
+	c0_frames_close(&fr);
 	snprintf(p, sizeof p, "%s/truth_support.tif", dir);
 	struct c0_tiff_info in;
 	float *t;

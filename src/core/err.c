@@ -40,3 +40,8 @@ void c0_clear_error(void)
 {
 	msg[0] = '\0';
 }
+
+const char *c0_last_error(void)
+{
+	return c0_errmsg();
+}

@@ -2,10 +2,12 @@
 #include "io/outdir.h"
 #include "io/atomic.h"
 #include "core/err.h"
+#include "io/tiff.h"
 
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -123,12 +125,12 @@ int c0_outdir_open(struct c0_outdir *o, const char *path, int force)
 {
 	memset(o, 0, sizeof o[0]);
 	if (!path || !path[0])
-		return c0_fail(C0_EINVAL, "-o: an output directory is required");
+		return c0_fail(C0_EINVAL, "outdir: an output directory is required");
 	size_t l = strlen(path);
 	while (l > 1 && path[l - 1] == '/')
 		l--;
 	if (l >= sizeof o->path - 64)
-		return c0_fail(C0_EINVAL, "-o %s: path too long", path);
+		return c0_fail(C0_EINVAL, "outdir %s: path too long", path);
 	memcpy(o->path, path, l);
 	o->path[l] = '\0';
 	const char *slash = strrchr(o->path, '/');
@@ -139,34 +141,34 @@ int c0_outdir_open(struct c0_outdir *o, const char *path, int force)
 		snprintf(parent, sizeof parent, ".");
 	const char *base = slash ? slash + 1 : o->path;
 	if (!strcmp(base, ".") || !strcmp(base, "..") || !strcmp(o->path, "/"))
-		return c0_fail(C0_EINVAL, "-o %s: name the output directory itself (it is replaced as a whole)", path);
+		return c0_fail(C0_EINVAL, "outdir %s: name the output directory itself (it is replaced as a whole)", path);
 	struct stat sb;
 	if (!stat(o->path, &sb)) {
 		if (!S_ISDIR(sb.st_mode))
-			return c0_fail(C0_EIO, "-o %s: exists and is not a directory", path);
+			return c0_fail(C0_EIO, "outdir %s: exists and is not a directory", path);
 		int empty;
 		char sub[256];
 		if (scan(o->path, &empty, sub, sizeof sub))
-			return c0_fail(C0_EIO, "-o %s: not readable: %s", path, strerror(errno));
+			return c0_fail(C0_EIO, "outdir %s: not readable: %s", path, strerror(errno));
 		if (!force && !empty)
-			return c0_fail(C0_EIO, "-o %s: directory is not empty (use --force to replace its contents)", path);
+			return c0_fail(C0_EIO, "outdir %s: directory is not empty (force: replace its contents)", path);
 		if (sub[0])
-			return c0_fail(C0_EIO, "-o %s: holds the directory %s; --force replaces the whole directory, so it may only hold files",
+			return c0_fail(C0_EIO, "outdir %s: holds the directory %s; force replaces the whole directory, so it may only hold files",
 				       path, sub);
 	} else if (errno != ENOENT) {
-		return c0_fail(C0_EIO, "-o %s: %s", path, strerror(errno));
+		return c0_fail(C0_EIO, "outdir %s: %s", path, strerror(errno));
 	}
 	errno = 0;
 	if (stat(parent, &sb) || !S_ISDIR(sb.st_mode))
-		return c0_fail(C0_EIO, "-o %s: parent directory %s: %s", path, parent,
+		return c0_fail(C0_EIO, "outdir %s: parent directory %s: %s", path, parent,
 			       errno ? strerror(errno) : "not a directory");
 	if (access(parent, W_OK | X_OK))
-		return c0_fail(C0_EIO, "-o %s: cannot write in %s: %s", path, parent, strerror(errno));
+		return c0_fail(C0_EIO, "outdir %s: cannot write in %s: %s", path, parent, strerror(errno));
 	clean_stale(parent, base);
 	snprintf(o->stage, sizeof o->stage, "%s.c0tmp-%ld", o->path, (long)getpid());
 	remove_flat(o->stage);   /* ours from an earlier command in this process */
 	if (mkdir(o->stage, 0777))
-		return c0_fail(C0_EIO, "-o %s: cannot create %s: %s", path, o->stage, strerror(errno));
+		return c0_fail(C0_EIO, "outdir %s: cannot create %s: %s", path, o->stage, strerror(errno));
 	o->open = 1;
 	guard(o->stage);
 	return C0_OK;
@@ -191,7 +193,7 @@ void c0_outdir_rollback(struct c0_outdir *o)
 int c0_outdir_commit(struct c0_outdir *o)
 {
 	if (!o->open)
-		return c0_fail(C0_EINVAL, "-o %s: not open", o->path);
+		return c0_fail(C0_EINVAL, "outdir %s: not open", o->path);
 	/* no signal between moving the old result aside and the new one in */
 	sigset_t block, prev;
 	sigemptyset(&block);
@@ -204,11 +206,11 @@ int c0_outdir_commit(struct c0_outdir *o)
 	if (!lstat(o->path, &sb)) {
 		remove_flat(old);
 		if (rename(o->path, old))
-			st = c0_fail(C0_EIO, "-o %s: cannot move the previous result aside: %s", o->path, strerror(errno));
+			st = c0_fail(C0_EIO, "outdir %s: cannot move the previous result aside: %s", o->path, strerror(errno));
 		moved = !st;
 	}
 	if (!st && rename(o->stage, o->path)) {
-		st = c0_fail(C0_EIO, "-o %s: cannot move the result into place: %s", o->path, strerror(errno));
+		st = c0_fail(C0_EIO, "outdir %s: cannot move the result into place: %s", o->path, strerror(errno));
 		if (moved)
 			rename(old, o->path);
 	}
@@ -235,4 +237,24 @@ int c0_outdir_finish(struct c0_outdir *o, int st)
 int c0_write_file_named(struct c0_outdir *o, const char *name, const void *data, unsigned long n)
 {
 	return c0_write_file(c0_outdir_file(o, name), data, n);
+}
+
+int c0_outdir_check_inputs(const char *path, const char *const *inputs, int n)
+{
+	char od[PATH_MAX] = "";
+	if (!path || !realpath(path, od))
+		return C0_OK;          /* does not exist yet: cannot hold an input */
+	for (int i = 0; i < n; i++) {
+		char in[PATH_MAX], file[PATH_MAX];
+		if (!inputs[i])
+			continue;
+		if (!realpath(inputs[i], in) && !(c0_tiff_channel_spec(inputs[i], file, sizeof file) && realpath(file, in)))
+			continue;
+		char *slash = strrchr(in, '/');
+		if (slash)
+			*slash = '\0';
+		if (!strcmp(in[0] ? in : "/", od))
+			return c0_fail(C0_EINVAL, "outdir %s: is the directory of input %s; write results elsewhere", path, inputs[i]);
+	}
+	return C0_OK;
 }

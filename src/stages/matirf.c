@@ -21,23 +21,23 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (st)
 		return st;
 	if (nq < 2 || nq > MAXQ)
-		return c0_fail(C0_EINVAL, "--angles: MA-TIRF needs 2..%d angles (got %d)", MAXQ, nq);
+		return c0_fail(C0_EINVAL, "angles: MA-TIRF needs 2..%d angles (got %d)", MAXQ, nq);
 	for (int q = 0; q < nq; q++) {
 		double p;
 		if (c0_tirf_p(&c->tirf, angles[q], &p))
-			return c0_fail_prefix(C0_EINVAL, "--angles");
+			return c0_fail_prefix(C0_EINVAL, "angles");
 	}
 	if (!(c->dz_nm > 0) || !(c->z1_nm > c->z0_nm) || !(c->z0_nm >= 0) || !isfinite(c->z1_nm))
-		return c0_fail(C0_EINVAL, "--z-range %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
+		return c0_fail(C0_EINVAL, "z_range_nm %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
-		return c0_fail(C0_EINVAL, "--z-range: more than 512 depth bins");
+		return c0_fail(C0_EINVAL, "z_range_nm: more than 512 depth bins");
 	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
-		return c0_fail(C0_EINVAL, "--kappa %g, --axial-weight %g, --sparsity %g: must be finite and >= 0", c->kappa, c->wz,
+		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: must be finite and >= 0", c->kappa, c->wz,
 			       c->sparsity);
 	if (c->pdhg.maxit < 1)
-		return c0_fail(C0_EINVAL, "--matirf-iterations %d: must be at least 1", c->pdhg.maxit);
+		return c0_fail(C0_EINVAL, "matirf_iterations %d: must be at least 1", c->pdhg.maxit);
 	if (!(c->pdhg.tol >= 0 && isfinite(c->pdhg.tol)) || !(c->pdhg.relax > 0 && c->pdhg.relax < 2))
-		return c0_fail(C0_EINVAL, "MA-TIRF tolerance %g must be >= 0 and relaxation %g in (0, 2)", c->pdhg.tol, c->pdhg.relax);
+		return c0_fail(C0_EINVAL, "matirf_tol %g: must be >= 0 (relaxation %g in (0, 2))", c->pdhg.tol, c->pdhg.relax);
 	return C0_OK;
 }
 
