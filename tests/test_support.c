@@ -320,11 +320,11 @@ static void test_wrong_inputs(void)
 	CHECK(c0_support_check(&c, 10, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "smaller than the PSF band"));
 	CHECK(c0_support_check(&c, 64, 64, 2, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "at least 3"));
 	c.pixel_nm = 0;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--pixel-size"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "pixel_nm"));
 	c.pixel_nm = 100, c.fwhm_nm = -1;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--fwhm"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "fwhm_nm"));
 	c.fwhm_nm = 229, c.srf = 0;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--srf"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "srf"));
 }
 
 /* Gaussian read noise only (no Poisson): the estimated noise variance is the read noise's */

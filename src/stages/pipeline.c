@@ -380,17 +380,13 @@ static int volume(struct c0_result *r, const struct c0_run_conf *c, const struct
 	return st;
 }
 
-static int run(const struct c0_run_conf *c, struct c0_frames *f, int n, struct c0_result *r)
+static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
+	       struct c0_result *r)
 {
-	struct c0_stage_confs s;
-	double pixel_nm;
+	const struct c0_stage_confs s = *sc;
 	const int three_d = c->nangles > 0;
-	int st = c0_stacks_pixel(c, f, n, &pixel_nm);
-	if (!st)
-		st = c0_run_conf_stages(c, pixel_nm, &s);
-	if (!st)   /* every stack's size and frames, before the first one's solve */
-		st = c0_stacks_check(&s.support, f, n);
-	if (!st && three_d)
+	int st = C0_OK;
+	if (three_d)
 		st = c0_run_conf_matirf_check(c, &s.matirf, n);
 	if (!st && c->nnoise_variance)
 		st = c0_fail(C0_EINVAL, "noise_variance: not used by the whole method (the support step estimates it)");
@@ -424,22 +420,41 @@ static int run(const struct c0_run_conf *c, struct c0_frames *f, int n, struct c
 	return C0_OK;
 }
 
-int c0_run(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)
+int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
+		  struct c0_frames *f, struct c0_stage_confs *sc, struct c0_result **out)
 {
 	*out = NULL;
 	if (n < 1 || n > C0_MAX_STACKS || !stacks || !c)
 		return c0_fail(C0_EINVAL, "stacks: %d given, expected 1..%d", n, C0_MAX_STACKS);
-	struct c0_frames f[C0_MAX_STACKS];
 	int st = c0_stacks_open(stacks, n, f);
 	if (st)
 		return st;
 	const char *names[C0_MAX_STACKS];
 	int is_file[C0_MAX_STACKS];
+	double pixel_nm;
 	for (int i = 0; i < n; i++)
 		names[i] = f[i].name, is_file[i] = stacks[i].path != NULL;
+	st = c0_stacks_pixel(c, f, n, &pixel_nm);
+	if (!st)
+		st = c0_run_conf_stages(c, pixel_nm, sc);
+	if (!st)   /* every stack's size and frames, before the first one's work */
+		st = c0_stacks_check(&sc->support, f, n);
+	if (!st)
+		st = c0_result_new(command, n, names, is_file, out);
+	if (st)
+		c0_stacks_close(f, n);
+	return st;
+}
+
+int c0_run(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)
+{
+	struct c0_frames f[C0_MAX_STACKS];
+	struct c0_stage_confs sc;
 	struct c0_result *r;
-	if (!(st = c0_result_new("run", n, names, is_file, &r)))
-		st = run(c, f, n, r);
+	int st = c0_pipe_begin("run", c, stacks, n, f, &sc, &r);
+	if (st)
+		return st;
+	st = run(c, &sc, f, n, r);
 	c0_stacks_close(f, n);
 	if (st) {
 		c0_result_free(r);

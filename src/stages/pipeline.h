@@ -57,6 +57,10 @@ void c0_stacks_close(struct c0_frames *f, int n);
 int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, int n, double *pixel_nm);
 /* Every stack against the support config (size against the PSF band, frames). */
 int c0_stacks_check(const struct c0_support_conf *sc, const struct c0_frames *f, int n);
+/* The start of every run: the stacks opened into f (close them with
+ * c0_stacks_close), the stages' configs, an empty result for command. */
+int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
+		  struct c0_frames *f, struct c0_stage_confs *sc, struct c0_result **out);
 
 /* Support of stacks r->sup[0..nsup) (indices into f); sets the union mask. */
 int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struct c0_frames *f);

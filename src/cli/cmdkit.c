@@ -1,0 +1,49 @@
+#include "cli/cmdkit.h"
+#include "cli/commands.h"
+#include "core/err.h"
+
+#include <string.h>
+
+int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
+		 int nextra, int argc, char **argv)
+{
+	memset(k, 0, sizeof *k);
+	c0_conf_cli_init(&k->m);
+	int no = c0_conf_cli_table(&k->m, params, &k->outdir, &k->force, &k->verbose, k->opts);
+	memcpy(k->opts + no, extra, (size_t)nextra * sizeof *extra);
+	spec->opts = k->opts, spec->nopts = no + nextra;
+	int na, rc = c0_opts_parse(spec, argc, argv, &na, k->paths);
+	if (rc)
+		return rc;
+	/* a multi-channel file gives one stack per channel (or --channel's) */
+	if (c0_conf_cli_finish(&k->m) || c0_frames_expand(k->paths, na, k->m.channel, C0_MAX_STACKS, &k->names, &k->n)) {
+		c0_cli_error(spec->name);
+		return 2;
+	}
+	for (int i = 0; i < k->n; i++)
+		k->stacks[i].path = k->paths[i] = k->names[i];
+	return 0;
+}
+
+int c0_cli_open(struct c0_cli *k)
+{
+	int st = c0_outdir_check_inputs(k->outdir, (const char *const *)k->paths, k->n);
+	if (!st)
+		st = c0_outdir_open(&k->out, k->outdir, k->force);
+	k->opened = !st;
+	return st;
+}
+
+int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, int argc, char **argv)
+{
+	if (!st) {
+		c0_result_set_argv(r, argc, argv);
+		st = c0_result_write_to(r, &k->out);
+	}
+	if (k->opened)
+		st = c0_outdir_finish(&k->out, st);
+	c0_result_free(r);
+	c0_frames_expand_free(k->names, k->n);
+	k->names = NULL;
+	return st ? c0_cli_error(cmd) : 0;
+}
