@@ -2,7 +2,16 @@
 #include "cli/commands.h"
 #include "core/err.h"
 
+#include <stdio.h>
 #include <string.h>
+
+int c0_cli_error(const char *cmd)
+{
+	char msg[2048];
+	c0_cli_flags(c0_errmsg(), msg, sizeof msg);   /* the library names parameters; we show flags */
+	fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
+	return 1;
+}
 
 int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
 		 int nextra, int argc, char **argv)

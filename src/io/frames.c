@@ -85,7 +85,12 @@ int c0_frames_expand(char *const *paths, int n, int channel, int max, char ***ou
 		struct c0_tiff_reader *r;
 		if ((st = c0_tiff_open(paths[i], &r)))
 			break;
-		int64_t nc = c0_tiff_get_info(r)->channel ? 1 : c0_tiff_get_info(r)->channels;
+		const struct c0_tiff_info *in = c0_tiff_get_info(r);
+		int64_t nc = in->channel ? 1 : in->channels;
+		/* channels of one plane each: a stack that a writer labelled by
+		 * channel (tifffile does so for 3D arrays), unless one is asked for */
+		if (!channel && nc > 1 && in->file_pages / nc < 2)
+			nc = 1;
 		c0_tiff_close(r);
 		if (channel > nc)
 			st = c0_fail(C0_EINVAL, "channel %d: %s has %lld channel%s", channel, paths[i], (long long)nc, nc == 1 ? "" : "s");

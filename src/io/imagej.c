@@ -168,3 +168,11 @@ int c0_ij_format(char *buf, size_t n, int64_t channels, int64_t slices, int64_t 
 #undef PUT
 	return (int)k;
 }
+
+int c0_ij_append(char *buf, size_t n, int len, const char *key, double value)
+{
+	if (len < 0 || (size_t)len >= n)
+		return -1;
+	int w = snprintf(buf + len, n - (size_t)len, "%s=%.9g\n", key, value);
+	return w < 0 || (size_t)w >= n - (size_t)len ? -1 : len + w;
+}

@@ -25,6 +25,9 @@ struct c0_ome_layout {
 	int64_t size_c, size_z, size_t_, series, stride_c;
 };
 int c0_ome_layout(const char *xml, struct c0_ome_layout *l);
+/* Appends "key=value\n" to the description of length len in buf; returns
+ * the new length or -1 if buf is too small. */
+int c0_ij_append(char *buf, size_t n, int len, const char *key, double value);
 /* Writes an ImageJ description; returns the length or -1 if buf is too small. */
 int c0_ij_format(char *buf, size_t n, int64_t channels, int64_t slices, int64_t frames,
 		 int calibrated, double z_spacing_um, double finterval_s, double dmin, double dmax);

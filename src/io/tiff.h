@@ -62,6 +62,7 @@ struct c0_tiff_wopts {
 	enum c0_dtype dtype;               /* C0_U8, C0_U16 or C0_F32 */
 	double pixel_size_nm;              /* 0: uncalibrated */
 	double z_spacing_nm;               /* 0: not written */
+	double z_origin_nm;                /* z of the first plane (with z_spacing_nm), ImageJ's zorigin */
 	double frame_interval_s;           /* 0: not written */
 	double display_min, display_max;   /* both 0: not written */
 	int bigtiff;                       /* 1: force BigTIFF; 0: only when needed */

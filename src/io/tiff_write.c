@@ -58,8 +58,12 @@ int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_ti
 	c0_tmp_name(path, w->tmp, sizeof w->tmp);
 	int64_t bytes = w->planes * o->width * o->height * (int64_t)c0_dtype_size(o->dtype);
 	int big = o->bigtiff || c0_tiff_needs_bigtiff(bytes);
-	if (c0_ij_format(w->desc, sizeof w->desc, w->o.channels, w->o.slices, w->o.frames, o->pixel_size_nm > 0,
-			 o->z_spacing_nm / 1000, o->frame_interval_s, o->display_min, o->display_max) < 0) {
+	int dl = c0_ij_format(w->desc, sizeof w->desc, w->o.channels, w->o.slices, w->o.frames, o->pixel_size_nm > 0,
+			      o->z_spacing_nm / 1000, o->frame_interval_s, o->display_min, o->display_max);
+	/* ImageJ's z origin is in slices: slice k is at (k - zorigin) * spacing */
+	if (dl >= 0 && o->z_origin_nm != 0 && o->z_spacing_nm > 0)
+		dl = c0_ij_append(w->desc, sizeof w->desc, dl, "zorigin", -o->z_origin_nm / o->z_spacing_nm);
+	if (dl < 0) {
 		free(w);
 		return c0_fail(C0_EINVAL, "%s: metadata too long", path);
 	}
@@ -73,10 +77,12 @@ int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_ti
 	}
 	TIFFOpenOptionsSetErrorHandlerExtR(oo, on_error, w);
 	TIFFOpenOptionsSetWarningHandlerExtR(oo, on_error, w);
+	errno = 0;
 	w->tif = TIFFOpenExt(w->tmp, big ? "w8" : "w", oo);
+	int err = errno;
 	TIFFOpenOptionsFree(oo);
 	if (!w->tif) {
-		int st = c0_fail(C0_EIO, "%s: cannot create (%s)", path, w->tiffmsg);
+		int st = c0_fail(C0_EIO, "%s: cannot create (%s%s%s)", path, w->tiffmsg, err ? ": " : "", err ? strerror(err) : "");
 		free(w->buf);
 		free(w);
 		return st;
