@@ -118,6 +118,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	static const char *cmds[] = { "run", "support", "matirf" };
 	const int cmd = data[0] % 3;
 	argv[argc++] = (char *)cmds[cmd];
+	/* short solves unless the input asks otherwise (up to the cap) */
+	argv[argc++] = cmd == 1 ? "--iterations" : "--matirf-iterations";
+	argv[argc++] = "30";
 	for (char *p = buf; p < buf + size - 1 && argc < 70;) {
 		size_t l = strcspn(p, "\n");
 		p[l] = '\0';
