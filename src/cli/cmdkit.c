@@ -19,7 +19,7 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	memset(k, 0, sizeof *k);
 	c0_conf_cli_init(&k->m);
 	int no = c0_conf_cli_table(&k->m, params, &k->outdir, &k->force, &k->verbose, k->opts);
-	if (nextra)   /* extra may be NULL: memcpy from NULL is undefined even for 0 bytes */
+	if (nextra)
 		memcpy(k->opts + no, extra, (size_t)nextra * sizeof *extra);
 	spec->opts = k->opts, spec->nopts = no + nextra;
 	int na, rc = c0_opts_parse(spec, argc, argv, &na, k->paths);
