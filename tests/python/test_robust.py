@@ -58,10 +58,14 @@ def test_validation(tmp, s16, s20):
     out = os.path.join(tmp, "v_out")
     base = ["run", "--fwhm", "229", "--angles", "62,66", "-o", out]
     t = time.time()
-    check(refused(cli(*base, s16[0], s20[1]), "stack_q02.tif", "20x16", "16x16"), "(a) run: stacks of different sizes")
-    check(refused(cli("support", "--fwhm", "229", "-o", out, s16[0], s20[1]), "20x16"), "(a) support: sizes checked first")
-    check(refused(cli("intensity", "--fwhm", "229", "--support", s16[0], "-o", out, s16[0], s20[1]), "20x16"),
+    # --verbose prints a progress line per stage: the refusal is the only line, so no work began
+    check(refused(cli(*base, "--verbose", s16[0], s20[1]), "stack_q02.tif", "20x16", "16x16"),
+          "(a) run: stacks of different sizes, before any work")
+    check(refused(cli("support", "--verbose", "--fwhm", "229", "-o", out, s16[0], s20[1]), "20x16"),
+          "(a) support: sizes checked before the first stack's solve")
+    check(refused(cli("intensity", "--verbose", "--fwhm", "229", "--support", s16[0], "-o", out, s16[0], s20[1]), "20x16"),
           "(a) intensity: sizes checked first")
+    check(refused(cli("simulate", "--brightness", "inf", "-o", out), "inf", "finite"), "(i) simulate: infinite parameter")
     check(refused(cli("run", "--fwhm", "inf", "--angles", "62,66", "-o", out, *s16), "--fwhm inf"), "(b) --fwhm inf")
     check(refused(cli("run", "--fwhm", "1e12", "--angles", "62,66", "-o", out, *s16), "--fwhm 1e+12"), "(b) --fwhm 1e12")
     for v in ("0", "-1", "inf"):
@@ -87,7 +91,8 @@ def test_validation(tmp, s16, s20):
     check(refused(cli(*base, "--depth-pool", "inf", *s16), "--depth-pool inf"), "(i) --depth-pool inf")
     few = os.path.join(tmp, "two_frames.tif")
     tifffile.imwrite(few, tifffile.imread(s16[1])[:2])
-    check(refused(cli(*base, "--pixel-size", "100", s16[0], few), "two_frames.tif", "2 frames"), "(a) too few frames, any stack")
+    check(refused(cli(*base, "--verbose", "--pixel-size", "100", s16[0], few), "two_frames.tif", "2 frames"),
+          "(a) too few frames in the second stack, before the first one's work")
     dt = time.time() - t
     check(not os.path.exists(out), "nothing written by refused runs")
     print("refusals: %.2f s for all of them (no solve ran)" % dt, file=sys.stderr)
