@@ -66,6 +66,10 @@ def test_validation(tmp, s16, s20):
     check(refused(cli("intensity", "--verbose", "--fwhm", "229", "--support", s16[0], "-o", out, s16[0], s20[1]), "20x16"),
           "(a) intensity: sizes checked first")
     check(refused(cli("simulate", "--brightness", "inf", "-o", out), "inf", "finite"), "(i) simulate: infinite parameter")
+    mask = os.path.join(tmp, "mask.tif")
+    tifffile.imwrite(mask, (np.arange(256).reshape(16, 16) % 7 == 0).astype(np.uint8))
+    check(refused(cli("eval", "--support", mask, "--support-truth", mask, "--pixel-size", "100", "--radius", "inf"),
+                  "radius inf"), "(i) eval: infinite matching radius")
     check(refused(cli("run", "--fwhm", "inf", "--angles", "62,66", "-o", out, *s16), "--fwhm inf"), "(b) --fwhm inf")
     check(refused(cli("run", "--fwhm", "1e12", "--angles", "62,66", "-o", out, *s16), "--fwhm 1e+12"), "(b) --fwhm 1e12")
     for v in ("0", "-1", "inf"):
