@@ -262,7 +262,7 @@ def test_calibration(tmp, s16):
 with tempfile.TemporaryDirectory() as tmp:
     s16 = simulate(tmp, "d16", 16, 16, 40)
     s20 = simulate(tmp, "d20", 20, 16, 40)
-    big = simulate(tmp, "dbig", 48, 48, 300)
+    big = simulate(tmp, "dbig", 40, 40, 200)
     test_validation(tmp, s16, s20)
     test_nonfinite(tmp, s16)
     test_transaction(tmp, s16, big)
