@@ -99,8 +99,10 @@ static int scan(const char *path, int *empty, char *sub, size_t n)
 	return 0;
 }
 
-/* Removes staging and swap directories beside path left by runs that died. */
-static void clean_stale(const char *parent, const char *base)
+/* Removes staging and swap directories beside path left by runs that died;
+ * a previous result moved aside by a run killed in the middle of its swap
+ * goes back into place when nothing replaced it. */
+static void clean_stale(const char *parent, const char *base, const char *path)
 {
 	DIR *d = opendir(parent);
 	if (!d)
@@ -115,7 +117,10 @@ static void clean_stale(const char *parent, const char *base)
 		if (*end || pid <= 0 || pid == (long)getpid() || !(kill((pid_t)pid, 0) && errno == ESRCH))
 			continue;   /* malformed, ours, or its run is still alive */
 		char p[8192];
+		struct stat sb;
 		snprintf(p, sizeof p, "%s/%s", parent, s);
+		if (!strncmp(s + bl, ".c0old-", 7) && lstat(path, &sb) && errno == ENOENT && !rename(p, path))
+			continue;
 		remove_flat(p);
 	}
 	closedir(d);
@@ -142,6 +147,7 @@ int c0_outdir_open(struct c0_outdir *o, const char *path, int force)
 	const char *base = slash ? slash + 1 : o->path;
 	if (!strcmp(base, ".") || !strcmp(base, "..") || !strcmp(o->path, "/"))
 		return c0_fail(C0_EINVAL, "outdir %s: name the output directory itself (it is replaced as a whole)", path);
+	clean_stale(parent, base, o->path);   /* first: it may put a previous result back */
 	struct stat sb;
 	if (!stat(o->path, &sb)) {
 		if (!S_ISDIR(sb.st_mode))
@@ -164,7 +170,6 @@ int c0_outdir_open(struct c0_outdir *o, const char *path, int force)
 			       errno ? strerror(errno) : "not a directory");
 	if (access(parent, W_OK | X_OK))
 		return c0_fail(C0_EIO, "outdir %s: cannot write in %s: %s", path, parent, strerror(errno));
-	clean_stale(parent, base);
 	snprintf(o->stage, sizeof o->stage, "%s.c0tmp-%ld", o->path, (long)getpid());
 	remove_flat(o->stage);   /* ours from an earlier command in this process */
 	if (mkdir(o->stage, 0777))

@@ -164,6 +164,16 @@ def test_transaction(tmp, s16, big):
     check(p.returncode == 0, "rerun: %s" % p.stderr)
     check(not staging_left(tmp), "(f) the next run removed the dead run's staging: %s" % staging_left(tmp))
     check(sorted(digest(out)) == sorted(before), "(f) --force replaced the old set as a whole (extra file gone)")
+    # killed between moving the old result aside and the new one in: the next run puts it back
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    lost = os.path.join(tmp, "lost_out")
+    os.makedirs(lost + ".c0old-%d" % dead.pid)
+    with open(os.path.join(lost + ".c0old-%d" % dead.pid, "report.json"), "w") as f:
+        f.write("{}\n")
+    p = cli("run", "--fwhm", "229", "--angles", "62,66", "-o", lost, *s16)
+    check(refused(p, "not empty") and os.listdir(lost) == ["report.json"] and not staging_left(tmp),
+          "(f) a result moved aside by a killed swap is restored, not deleted")
     os.makedirs(os.path.join(out, "sub"))
     check(refused(cli("run", "--fwhm", "229", "--angles", "62,66", "--force", "-o", out, *s16), "sub"),
           "(f) --force refuses a directory holding a directory")
