@@ -188,10 +188,14 @@ def test_channels(tmp, s16):
     ome = os.path.join(tmp, "multi.ome.tif")
     tifffile.imwrite(ome, np.stack([a, b], axis=0), ome=True,
                      metadata={"axes": "CTYX", "PhysicalSizeX": 0.1, "PhysicalSizeY": 0.1})
+    series = os.path.join(tmp, "series.ome.tif")   # one OME image series per angle
+    with tifffile.TiffWriter(series, ome=True) as tw:
+        for x in (a, b):
+            tw.write(x, metadata={"axes": "TYX", "PhysicalSizeX": 0.1, "PhysicalSizeY": 0.1})
     fast = ["--fwhm", "229", "--angles", "62,66", "--matirf-iterations", "200"]
     ref = os.path.join(tmp, "ch_ref")
     check(cli("run", *fast, "-o", ref, *s16).returncode == 0, "separate stacks run")
-    for name, f in (("ImageJ", hyper), ("OME", ome)):
+    for name, f in (("ImageJ", hyper), ("OME", ome), ("OME-series", series)):
         o = os.path.join(tmp, "ch_" + name)
         p = cli("run", *fast, "-o", o, f)
         check(p.returncode == 0, "(g) %s 2-channel file runs: %s" % (name, p.stderr))
