@@ -1,6 +1,7 @@
 #include "io/frames.h"
 #include "core/err.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,6 +44,11 @@ int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
 		return c0_fail(C0_EINVAL, "%s: frame %lld out of 0..%lld", f->name, (long long)t, (long long)f->count - 1);
 	const size_t n = (size_t)f->height * f->width;
 	memcpy(dst, f->data + (size_t)t * n, n * sizeof *dst);
+	for (size_t i = 0; i < n; i++)   /* as for float files: NaN or infinity would poison every sum */
+		if (!isfinite(dst[i]))
+			return c0_fail(C0_EINVAL, "%s: frame %lld, pixel (x %zu, y %zu) is %s; non-finite pixels are not supported",
+				       f->name, (long long)t + 1, i % (size_t)f->width, i / (size_t)f->width,
+				       isnan(dst[i]) ? "NaN" : "infinite");
 	return C0_OK;
 }
 
