@@ -5,7 +5,9 @@
  * a leak or undefined behaviour, and leave no staging directory behind.
  * Options that name other output directories or files are dropped (the
  * fuzzer must not write or replace anything outside its scratch), and
- * iteration counts are capped so that one input stays well under a second. */
+ * iteration counts are capped so that one input stays well under a second.
+ * The harness works in its scratch directory (chdir at start): give the
+ * fuzzer absolute corpus and artifact paths. */
 #define _GNU_SOURCE
 #include "cli/commands.h"
 #include "io/tiff.h"
