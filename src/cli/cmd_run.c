@@ -3,6 +3,7 @@
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "io/tiff.h"
+#include "stages/bleach.h"
 #include "stages/depthpool.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -17,14 +18,20 @@
 
 /* The support stacks: 1-based numbers, or the smallest angle (the deepest
  * penetration sees every emitter), or the first stack in 2D mode. */
-static int support_stacks(const int *sel, int nsel, const struct c0_matirf_cli *m, int ns, int *out, int *nout)
+static int support_stacks(const int *sel, int nsel, const struct c0_matirf_cli *m, const int *only, int ns, int *out,
+			  int *nout)
 {
 	if (!nsel) {
-		int best = 0;
-		for (int i = 1; i < m->nangles; i++)
-			if (m->angles[i] < m->angles[best])
+		/* the support-only stacks (below the critical angle) and the smallest TIRF angle */
+		int best = -1, k = 0;
+		for (int i = 0; i < m->nangles; i++)
+			if (only[i])
+				out[k++] = i;
+			else if (best < 0 || m->angles[i] < m->angles[best])
 				best = i;
-		out[0] = best, *nout = 1;
+		if (best >= 0 || !k)
+			out[k++] = best < 0 ? 0 : best;
+		*nout = k;
 		return C0_OK;
 	}
 	for (int k = 0; k < nsel; k++) {
@@ -43,7 +50,9 @@ int cmd_run(int argc, char **argv)
 	struct c0_matirf_cli m = { .c = C0_MATIRF_DEFAULTS };
 	const char *outdir = NULL, *pen = "l1";
 	double emission = 0, na = 0, pool_nm = -1;
-	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0;
+	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0, order[MAXS], norder = 0;
+	const char *bleach = NULL, *acq = "sequential";
+	struct c0_bleach_conf bc = { 0 };
 	const struct c0_opt own[] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &sc.pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, NULL },
@@ -57,6 +66,12 @@ int cmd_run(int argc, char **argv)
 		{ "nu", 0, C0_OPT_DOUBLE, &ic.nu, "F", "intensity discrepancy factor (0: sqrt(T))", NULL, 0, NULL },
 		{ "graph-radius", 0, C0_OPT_DOUBLE, &ic.graph_radius, "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL },
 		{ "depth-pool", 0, C0_OPT_DOUBLE, &pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "the FWHM", 0, NULL },
+		{ "bleach", 0, C0_OPT_STRING, &bleach, "estimate|off|F,...",
+		  "photobleaching across the stacks: estimate the fade and correct each stack's intensity, off, or the known factors (mean population of each stack relative to the start)",
+		  "estimate with --angles, else off", 0, NULL },
+		{ "acquisition", 0, C0_OPT_STRING, &acq, "sequential|interleaved", "how the stacks were recorded: one after another, or frame by frame in turn", NULL, 0, NULL },
+		{ "acquisition-order", 0, C0_OPT_INTS, order, "I,J,...", "the stack numbers (1-based, as given) in the order they were recorded", "as given", MAXS, &norder },
+		{ "gaps", 0, C0_OPT_DOUBLES, bc.gap_frames, "FRAMES,...", "illuminated but unrecorded time between consecutive recorded stacks, in frames (one value: all)", "none", MAXS, &bc.ngaps },
 		{ "baseline", 0, C0_OPT_FLAG, &baseline, NULL, "also reconstruct the standard MA-TIRF volume from the background-corrected means (baseline_*)", NULL, 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
@@ -88,13 +103,31 @@ int cmd_run(int argc, char **argv)
 		else
 			st = c0_fail(C0_EINVAL, "--fwhm: give the PSF FWHM, or --emission and --na");
 	}
+	/* stacks below the critical angle (epi) only join the support */
+	int only[MAXS] = { 0 }, tirf[MAXS], ntirf = 0;
+	struct c0_matirf_cli mt = m;
+	if (!st && three_d && m.nangles != ns)
+		st = c0_fail(C0_EINVAL, "--angles: %d angles for %d stacks (one per stack, same order)", m.nangles, ns);
+	for (int q = 0; !st && q < m.nangles; q++) {
+		only[q] = m.angles[q] <= c0_tirf_critical_deg(&m.c.tirf);
+		if (!only[q])
+			mt.angles[ntirf] = m.angles[q], mt.gains[ntirf] = m.gains[q], tirf[ntirf++] = q;
+	}
+	mt.nangles = ntirf, mt.ngains = m.ngains ? ntirf : 0;
+	if (!st && three_d && m.ngains && m.ngains != ns)
+		st = c0_fail(C0_EINVAL, "--gains: %d gains for %d stacks", m.ngains, ns);
+	if (!st && three_d && ntirf < 2)
+		st = c0_fail(C0_EINVAL, "--angles: MA-TIRF needs at least 2 angles above the critical angle %.2f deg (got %d; stacks below it only join the support)",
+			     c0_tirf_critical_deg(&m.c.tirf), ntirf);
 	if (!st && three_d)
-		st = c0_matirf_cli_finish(&m, ns);
+		st = c0_matirf_cli_finish(&mt, ntirf);
+	if (!st)
+		st = c0_bleach_cli(bleach, acq, order, norder, three_d, ns, &bc);
 	if (pool_nm < 0)
-		pool_nm = sc.fwhm_nm;
+		pool_nm = C0_DEPTH_POOL_FWHM * sc.fwhm_nm;
 	int sup[MAXS], nsup = 0;
 	if (!st)
-		st = support_stacks(sel, nsel, &m, ns, sup, &nsup);
+		st = support_stacks(sel, nsel, &m, only, ns, sup, &nsup);
 	if (!st)
 		st = c0_check_inputs(stacks, ns, outdir);
 	if (!st && !(sc.pixel_nm > 0)) {
@@ -147,28 +180,36 @@ int cmd_run(int argc, char **argv)
 	if (!st)
 		st = c0_run_intensity(&out, &ic, &sc, stacks, ns, mask, NULL, known, ires, baseline && three_d ? corr : NULL, rep);
 	cJSON_AddNumberToObject(times, "intensity", c0_now() - t);
+	t = c0_now();
+	if (!st)
+		st = c0_run_bleach(&bc, stacks, ns, ires, baseline && three_d ? corr : NULL, only, rep);
+	cJSON_AddNumberToObject(times, "bleaching", c0_now() - t);
 	if (!st && three_d) {
 		const float *img[MAXS];
 		const int Ly = ires[0].Ly, Lx = ires[0].Lx;
 		/* window of about pool_nm fine pixels, odd */
 		int h = (int)lround((pool_nm / (sc.pixel_nm / sc.srf) - 1) / 2);
 		t = c0_now();
-		for (int q = 0; !st && q < ns; q++) {
-			img[q] = ires[q].x;
+		for (int i = 0; !st && i < ntirf; i++) {
+			const int q = tirf[i];
+			img[i] = ires[q].x;
 			if (h <= 0)
 				continue;
-			pooled[q] = malloc((size_t)Ly * Lx * sizeof(float));
-			st = pooled[q] ? c0_pool_window(ires[q].x, mask, Ly, Lx, h, pooled[q]) : C0_ENOMEM;
+			pooled[i] = malloc((size_t)Ly * Lx * sizeof(float));
+			st = pooled[i] ? c0_pool_window(ires[q].x, mask, Ly, Lx, h, pooled[i]) : C0_ENOMEM;
 		}
 		if (!st)
-			st = c0_run_matirf(&out, &m, h > 0 ? (const float *const *)pooled : img, h > 0 ? img : NULL, Ly, Lx,
+			st = c0_run_matirf(&out, &mt, h > 0 ? (const float *const *)pooled : img, h > 0 ? img : NULL, Ly, Lx,
 					   sc.pixel_nm / sc.srf, "", "matirf", &vres, rep);
 		if (!st)
 			cJSON_AddNumberToObject(cJSON_GetObjectItem(rep, "matirf"), "depth_pool_window_px", h > 0 ? 2 * h + 1 : 0);
 		cJSON_AddNumberToObject(times, "matirf", c0_now() - t);
 		if (!st && baseline) {
 			t = c0_now();
-			st = c0_run_matirf(&out, &m, (const float *const *)corr, NULL, ires[0].Ny, ires[0].Nx, sc.pixel_nm, "baseline_",
+			const float *bimg[MAXS];
+			for (int i = 0; i < ntirf; i++)
+				bimg[i] = corr[tirf[i]];
+			st = c0_run_matirf(&out, &mt, bimg, NULL, ires[0].Ny, ires[0].Nx, sc.pixel_nm, "baseline_",
 					   "baseline_matirf", &bres, rep);
 			cJSON_AddNumberToObject(times, "baseline_matirf", c0_now() - t);
 		}
@@ -186,6 +227,15 @@ int cmd_run(int argc, char **argv)
 		for (int k = 0; k < nsup; k++)
 			s1[k] = sup[k] + 1;
 		c0_report_add_array(p, "support_stacks", s1, nsup);
+		int k = 0;
+		for (int q = 0; three_d && q < ns; q++)
+			if (only[q])
+				s1[k++] = q + 1;
+		if (k) {
+			c0_report_add_array(p, "support_only_stacks", s1, k);
+			cJSON_AddStringToObject(p, "support_only_note",
+						"stacks at or below the critical angle have no evanescent field: their supports join the union, and they are left out of the MA-TIRF fit");
+		}
 		st = c0_report_write(rep, c0_outdir_file(&out, "report.json"));
 	}
 	for (int k = 0; k < nsup; k++)

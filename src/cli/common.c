@@ -337,3 +337,83 @@ int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const fl
 	cJSON_AddNumberToObject(j, "seconds", res->seconds);
 	return C0_OK;
 }
+
+int c0_bleach_cli(const char *mode, const char *acq, const int *order, int norder, int three_d, int n,
+		  struct c0_bleach_conf *c)
+{
+	if (!mode)
+		c->mode = three_d ? C0_BLEACH_ESTIMATE : C0_BLEACH_OFF;
+	else if (!strcmp(mode, "estimate"))
+		c->mode = C0_BLEACH_ESTIMATE;
+	else if (!strcmp(mode, "off"))
+		c->mode = C0_BLEACH_OFF;
+	else {
+		c->mode = C0_BLEACH_KNOWN;
+		const char *p = mode;
+		char *end;
+		while (*p && c->nfactors < C0_BLEACH_MAX) {
+			c->factor[c->nfactors++] = strtod(p, &end);
+			if (end == p || (*end && *end != ','))
+				return c0_fail(C0_EINVAL, "--bleach %s: expected estimate, off or a comma-separated list of factors", mode);
+			p = *end ? end + 1 : end;
+		}
+	}
+	if (!strcmp(acq, "sequential") || !strcmp(acq, "interleaved"))
+		c->interleaved = !strcmp(acq, "interleaved");
+	else
+		return c0_fail(C0_EINVAL, "--acquisition %s: expected sequential or interleaved", acq);
+	c->norder = norder;
+	for (int i = 0; i < norder && i < C0_BLEACH_MAX; i++)
+		c->order[i] = order[i] - 1;
+	return c0_bleach_check(c, n);
+}
+
+int c0_run_bleach(const struct c0_bleach_conf *c, char **stacks, int n, struct c0_intensity_result *res,
+		  float **corrected, const int *support_only, cJSON *rep)
+{
+	double B[C0_BLEACH_MAX] = { 0 };
+	for (int q = 0; q < n; q++) {
+		double s = 0;
+		for (size_t i = 0; i < (size_t)res[q].Ny * res[q].Nx; i++)
+			s += res[q].b[i];
+		B[q] = s;
+	}
+	struct c0_bleach_result br;
+	int st = c0_bleach_run(c, n, stacks, B, &br);
+	if (st)
+		return st;
+	for (int q = 0; q < n; q++) {
+		const float g = (float)(1 / br.factor[q]);
+		for (size_t i = 0; i < (size_t)res[q].Ly * res[q].Lx; i++)
+			res[q].x[i] *= g;
+		for (size_t i = 0; corrected && corrected[q] && i < (size_t)res[q].Ny * res[q].Nx; i++)
+			corrected[q][i] *= g;
+	}
+	static const char *modes[] = { "estimated", "given", "off" };
+	cJSON *o = cJSON_AddObjectToObject(rep, "bleaching");
+	cJSON_AddStringToObject(o, "correction", modes[c->mode]);
+	cJSON_AddStringToObject(o, "acquisition", c->interleaved ? "interleaved" : "sequential");
+	double v[C0_BLEACH_MAX];
+	for (int i = 0; i < n; i++)
+		v[i] = c->norder ? c->order[i] + 1 : i + 1;
+	c0_report_add_array(o, "acquisition_order", v, n);
+	if (c->ngaps)
+		c0_report_add_array(o, "gaps_frames", c->gap_frames, c->ngaps);
+	if (c->mode == C0_BLEACH_ESTIMATE) {
+		cJSON_AddNumberToObject(o, "rate_per_frame", br.k);
+		cJSON_AddNumberToObject(o, "rate_sd_per_frame", br.k_sd);
+		for (int q = 0; q < n; q++)
+			v[q] = br.k_stack[q] == br.k_stack[q] ? br.k_stack[q] : 0;
+		c0_report_add_array(o, "rate_per_frame_by_stack", v, n);
+		c0_report_add_array(o, "start_frame", br.start, n);
+		c0_report_add_array(o, "signal_per_frame", br.signal, n);
+	}
+	c0_report_add_array(o, "factors", br.factor, n);
+	int first = c->norder ? c->order[0] : 0, last = c->norder ? c->order[n - 1] : n - 1;
+	cJSON_AddNumberToObject(o, "fade_last_vs_first", 1 - br.factor[last] / br.factor[first]);
+	(void)support_only;
+	cJSON_AddStringToObject(o, "meaning",
+		c->mode == C0_BLEACH_OFF ? "no correction: a fade across the stacks would read as depth"
+		: "each stack's intensity was divided by its factor (its mean population relative to the start of the acquisition) before the MA-TIRF fit; intensity_qNN.tif are the uncorrected means");
+	return C0_OK;
+}

@@ -52,3 +52,17 @@ int c0_matirf_cli_finish(struct c0_matirf_cli *m, int nimages);
 int c0_run_matirf(struct c0_outdir *out, const struct c0_matirf_cli *m, const float *const *img,
 		  const float *const *own, int ny, int nx, double pixel_nm, const char *prefix, const char *key,
 		  struct c0_matirf_result *res, cJSON *rep);
+
+#include "stages/bleach.h"
+
+/* run's bleaching options into c: mode ("estimate", "off" or factors; NULL:
+ * estimate when three_d), acquisition ("sequential" or "interleaved") and
+ * the 1-based recording order; checks them against the n stacks. */
+int c0_bleach_cli(const char *mode, const char *acq, const int *order, int norder, int three_d, int n,
+		  struct c0_bleach_conf *c);
+/* Estimates the fade (stages/bleach.h) with each stack's background from
+ * res, divides each intensity res[q].x (and corrected[q], when given) by its
+ * factor, and fills rep["bleaching"]. The intensity files are written
+ * before: they are the stacks' own means. */
+int c0_run_bleach(const struct c0_bleach_conf *c, char **stacks, int n, struct c0_intensity_result *res,
+		  float **corrected, const int *support_only, cJSON *rep);
