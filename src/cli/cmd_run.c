@@ -5,6 +5,7 @@
 #include "io/tiff.h"
 #include "stages/bleach.h"
 #include "stages/depthpool.h"
+#include "stages/psfimage.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -48,7 +49,7 @@ int cmd_run(int argc, char **argv)
 	struct c0_support_conf sc = C0_SUPPORT_DEFAULTS;
 	struct c0_intensity_conf ic = C0_INTENSITY_DEFAULTS;
 	struct c0_matirf_cli m = { .c = C0_MATIRF_DEFAULTS };
-	const char *outdir = NULL, *pen = "l1";
+	const char *outdir = NULL, *pen = "l1", *psf = NULL;
 	double emission = 0, na = 0, pool_nm = -1;
 	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0, order[MAXS], norder = 0;
 	const char *bleach = NULL, *acq = "sequential";
@@ -57,6 +58,7 @@ int cmd_run(int argc, char **argv)
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &sc.pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, NULL },
 		{ "fwhm", 0, C0_OPT_DOUBLE, &sc.fwhm_nm, "NM", "PSF full width at half maximum", "0.51 emission / NA", 0, NULL },
+		{ "psf", 0, C0_OPT_STRING, &psf, "IMAGE.tif", "measured PSF (a bead, or the mean of several centred ones): its Gaussian FWHM, instead of --fwhm", "none", 0, NULL },
 		{ "emission", 0, C0_OPT_DOUBLE, &emission, "NM", "emission wavelength (with --na, instead of --fwhm)", "none", 0, NULL },
 		{ "na", 0, C0_OPT_DOUBLE, &na, "NA", "numerical aperture of the objective (with --emission)", "none", 0, NULL },
 		{ "srf", 0, C0_OPT_INT, &sc.srf, "R", "super-resolution factor: fine pixel = pixel size / R", NULL, 0, NULL },
@@ -97,7 +99,9 @@ int cmd_run(int argc, char **argv)
 		sc.penalty = !strcmp(pen, "l1") ? C0_PENALTY_L1 : C0_PENALTY_CEL0;
 	else
 		st = c0_fail(C0_EINVAL, "--penalty %s: expected l1 or cel0", pen);
-	if (!st && !(sc.fwhm_nm > 0)) {
+	if (!st && psf && (sc.fwhm_nm > 0 || emission > 0))
+		st = c0_fail(C0_EINVAL, "--psf %s: give the PSF width once (--psf, --fwhm or --emission with --na)", psf);
+	if (!st && !psf && !(sc.fwhm_nm > 0)) {
 		if (emission > 0 && na > 0)
 			sc.fwhm_nm = 0.51 * emission / na;
 		else
@@ -139,6 +143,10 @@ int cmd_run(int argc, char **argv)
 				st = c0_fail(C0_EINVAL, "--pixel-size: %s has no pixel calibration; give the camera pixel size in nm", stacks[0]);
 		}
 	}
+	struct c0_psf_fit pf;
+	double psf_px = 0;
+	if (!st && psf && !(st = c0_psf_fit_file(psf, &pf, &psf_px)))   /* uncalibrated: the camera's pixels */
+		sc.fwhm_nm = pf.fwhm_px * (psf_px > 0 ? psf_px : sc.pixel_nm);
 	ic.pixel_nm = sc.pixel_nm, ic.fwhm_nm = sc.fwhm_nm, ic.srf = sc.srf;
 	if (!st)
 		st = c0_intensity_check(&ic);
@@ -220,6 +228,18 @@ int cmd_run(int argc, char **argv)
 		cJSON_AddNumberToObject(p, "pixel_size_nm", sc.pixel_nm);
 		cJSON_AddNumberToObject(p, "fine_pixel_nm", sc.pixel_nm / sc.srf);
 		cJSON_AddNumberToObject(p, "fwhm_nm", sc.fwhm_nm);
+		if (psf) {
+			cJSON *o = cJSON_AddObjectToObject(p, "psf_image");
+			cJSON_AddStringToObject(o, "file", psf);
+			cJSON_AddNumberToObject(o, "pixel_size_nm", psf_px > 0 ? psf_px : sc.pixel_nm);
+			cJSON_AddStringToObject(o, "pixel_size_from", psf_px > 0 ? "its calibration" : "the stacks (the image has none)");
+			cJSON_AddNumberToObject(o, "fwhm_px", pf.fwhm_px);
+			cJSON_AddNumberToObject(o, "centre_x_px", pf.cx);
+			cJSON_AddNumberToObject(o, "centre_y_px", pf.cy);
+			cJSON_AddNumberToObject(o, "background", pf.background);
+			cJSON_AddNumberToObject(o, "rms_residual_relative", pf.rel_rms);
+			cJSON_AddStringToObject(o, "method", "least-squares fit of a pixel-integrated Gaussian plus a constant to the mean of its planes");
+		}
 		cJSON_AddNumberToObject(p, "srf", sc.srf);
 		if (three_d)
 			cJSON_AddNumberToObject(p, "depth_pool_nm", pool_nm);

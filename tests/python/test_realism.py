@@ -153,7 +153,45 @@ def test_orders(tmp):
         check(all(abs(a / b - 1) < 0.03 for a, b in zip(f, ft)) and f == sorted(f), "factors follow the given order: %s vs %s" % (f, ft))
 
 
+def psf_image(path, fwhm_nm, px_nm, cx, cy, size=21, planes=3, seed=0):
+    """pixel-integrated Gaussian bead on a background, Poisson noise, ImageJ-calibrated"""
+    from math import erf, sqrt
+    s = fwhm_nm / px_nm / (2 * sqrt(2 * np.log(2)))
+    e = np.vectorize(lambda a: erf(a / (sqrt(2) * s)))
+    edges = np.arange(size + 1, dtype=float)
+    gx, gy = np.diff(e(edges - cx)) / 2, np.diff(e(edges - cy)) / 2
+    img = 100 + 5000 * np.outer(gy, gx)
+    rng = np.random.default_rng(seed)
+    stack = rng.poisson(img, (planes, size, size)).astype(np.uint16)
+    tifffile.imwrite(path, stack, imagej=True, resolution=(1000 / px_nm, 1000 / px_nm), metadata={"unit": "um"})
+
+
+def test_psf(tmp):
+    """the PSF width from a measured bead image (the paper's 292 nm at 106 nm pixels)"""
+    data, sim, stacks = simulate(tmp, "psfdata", "--width", "24", "--height", "24", "--frames", "100", "--angles", "62,66")
+    bead = os.path.join(tmp, "bead.tif")
+    psf_image(bead, 292, 106, 10.3, 9.8)
+    out = os.path.join(tmp, "psf_run")
+    p = cli("run", "--psf", bead, "--angles", "62,66", "-o", out, *stacks)
+    check(p.returncode == 0, "run --psf: %s" % p.stderr)
+    if p.returncode == 0:
+        rep = json.load(open(os.path.join(out, "report.json")))["parameters"]
+        f = rep["fwhm_nm"]
+        print("PSF image of FWHM 292 nm at 106 nm: fitted %.1f nm" % f, file=sys.stderr)
+        check(abs(f - 292) <= 0.03 * 292, "fitted FWHM %.1f within 3%% of 292 nm" % f)
+        check(abs(rep["psf_image"]["pixel_size_nm"] - 106) < 1e-3 and abs(rep["psf_image"]["centre_x_px"] - 10.3) < 0.1,
+              "the fit reports its pixel size and centre (%s)" % rep["psf_image"])
+    out2 = os.path.join(tmp, "psf_bad")
+    check(refused(cli("run", "--psf", bead, "--fwhm", "229", "--angles", "62,66", "-o", out2, *stacks), "--psf"),
+          "--psf with --fwhm refused")
+    flat = os.path.join(tmp, "flat.tif")
+    tifffile.imwrite(flat, np.full((16, 16), 7, np.uint16))
+    check(refused(cli("run", "--psf", flat, "--angles", "62,66", "-o", out2, *stacks), "--psf", "flat.tif"), "a flat PSF image refused")
+    check(not os.path.exists(out2), "nothing written for refused PSF images")
+
+
 with tempfile.TemporaryDirectory() as tmp:
+    test_psf(tmp)
     test_bad_inputs(tmp)
     test_orders(tmp)
     test_support_only(tmp)
