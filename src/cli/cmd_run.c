@@ -49,7 +49,7 @@ int cmd_run(int argc, char **argv)
 	struct c0_support_conf sc = C0_SUPPORT_DEFAULTS;
 	struct c0_intensity_conf ic = C0_INTENSITY_DEFAULTS;
 	struct c0_matirf_cli m = { .c = C0_MATIRF_DEFAULTS };
-	const char *outdir = NULL, *pen = "l1", *psf = NULL;
+	const char *outdir = NULL, *pen = "l1", *psf = NULL, *disc = "relative";
 	double emission = 0, na = 0, pool_nm = -1;
 	int force = 0, verbose = 0, baseline = 0, sel[MAXS], nsel = 0, order[MAXS], norder = 0;
 	const char *bleach = NULL, *acq = "sequential";
@@ -66,6 +66,9 @@ int cmd_run(int argc, char **argv)
 		{ "penalty", 0, C0_OPT_STRING, &pen, "l1|cel0", "support sparsity penalty", NULL, 0, NULL },
 		{ "lambda", 0, C0_OPT_DOUBLE, &sc.lambda_rel, "F", "support regularisation relative to lambda_max", "1e-2 for l1, 3e-5 for cel0", 0, NULL },
 		{ "nu", 0, C0_OPT_DOUBLE, &ic.nu, "F", "intensity discrepancy factor (0: sqrt(T))", NULL, 0, NULL },
+		{ "discrepancy", 0, C0_OPT_STRING, &disc, "relative|plain",
+		  "intensity mu: residual = the model's floor plus the noise level (relative), or the noise level alone (plain)", NULL, 0, NULL },
+		{ "mu", 0, C0_OPT_DOUBLE, &ic.mu, "M", "fixed intensity smoothness weight instead of the automatic choice", "0 (automatic)", 0, NULL },
 		{ "graph-radius", 0, C0_OPT_DOUBLE, &ic.graph_radius, "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL },
 		{ "depth-pool", 0, C0_OPT_DOUBLE, &pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "the FWHM", 0, NULL },
 		{ "bleach", 0, C0_OPT_STRING, &bleach, "estimate|off|F,...",
@@ -99,6 +102,9 @@ int cmd_run(int argc, char **argv)
 		sc.penalty = !strcmp(pen, "l1") ? C0_PENALTY_L1 : C0_PENALTY_CEL0;
 	else
 		st = c0_fail(C0_EINVAL, "--penalty %s: expected l1 or cel0", pen);
+	if (!st && strcmp(disc, "relative") && strcmp(disc, "plain"))
+		st = c0_fail(C0_EINVAL, "--discrepancy %s: expected relative or plain", disc);
+	ic.relative = !strcmp(disc, "relative");
 	if (!st && psf && (sc.fwhm_nm > 0 || emission > 0))
 		st = c0_fail(C0_EINVAL, "--psf %s: give the PSF width once (--psf, --fwhm or --emission with --na)", psf);
 	if (!st && !psf && !(sc.fwhm_nm > 0)) {

@@ -216,8 +216,13 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 		cJSON_AddNumberToObject(j, "mu", s->mu);
 		cJSON_AddNumberToObject(j, "residual2", s->residual2);
 		cJSON_AddNumberToObject(j, "discrepancy_target2", s->target2);
-		static const char *dp[] = { "met", "below: even the smallest mu leaves a larger residual",
-					    "above: even the largest mu leaves a smaller residual", "not converged" };
+		if (ic->relative && s->dp_status >= 0)
+			cJSON_AddNumberToObject(j, "residual_floor2", s->floor2);
+		static const char *dp[] = {
+			"met",
+			"below: even the smallest mu leaves a residual above the target, so the intensity is as little smoothed as allowed (give --mu to smooth more)",
+			"above: even the largest mu leaves a residual below the target, so the intensity is as smooth as allowed (lower --nu or give --mu for more detail)",
+			"not converged: mu is the last one tried (give --mu to fix it)" };
 		cJSON_AddStringToObject(j, "discrepancy", s->dp_status < 0 ? "fixed mu" : dp[s->dp_status]);
 		cJSON_AddNumberToObject(j, "solves", s->solves);
 		cJSON_AddNumberToObject(j, "cg_iterations", s->cg_iters);
@@ -230,6 +235,11 @@ int c0_run_intensity(struct c0_outdir *out, const struct c0_intensity_conf *ic, 
 	cJSON_AddNumberToObject(p, "beta", ic->beta);
 	cJSON_AddNumberToObject(p, "nu", ic->nu);
 	cJSON_AddNumberToObject(p, "fixed_mu", ic->mu);
+	cJSON_AddStringToObject(p, "mu_rule", ic->mu > 0 ? "fixed" : ic->relative ? "relative discrepancy" : "plain discrepancy");
+	cJSON_AddStringToObject(p, "mu_rule_meaning",
+		ic->mu > 0 ? "mu as given"
+		: ic->relative ? "mu is the largest smoothness whose residual exceeds the model's floor (the residual at mu = 1e-3) by no more than the noise explains (nu^2 H W sigma2 / T): smoothing that costs less than the noise is kept. The floor is the model error (continuous positions on the fine grid, background shape), larger than the noise on real data, which is why the plain principle is never met there. Larger --nu smooths more; --mu fixes it."
+		: "mu makes the residual equal to the noise level nu^2 H W sigma2 / T; on data whose model error exceeds the noise this is never met and mu stays at its smallest value");
 	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
 	return C0_OK;
 }

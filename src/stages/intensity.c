@@ -223,10 +223,24 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 		st = solve(&p, sol);
 		res->dp_status = -1;
 	} else {
-		struct dp d = { &p, sol, res->target2, NAN, 0 };
+		/* the residual that the model reaches at all (the smallest mu): on real
+		 * data and continuous positions it exceeds the noise level, and the
+		 * plain principle is never met; the relative one lets the smoothness
+		 * cost as much residual above that floor as the noise explains */
+		const double tmin = log(C0_INTENSITY_MU_MIN);
+		res->floor2 = 0;
+		if (c->relative) {
+			p.mu = C0_INTENSITY_MU_MIN;
+			if (!(st = solve(&p, sol)))
+				res->floor2 = residual2(&p, sol);
+			memset(sol, 0, sizeof *sol * nv);
+			if (st)
+				goto out;
+		}
+		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, 0 };
 		double t;
 		int evals;
-		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), log(1e-3), log(1e8), 0.01 * res->target2, 40, &t, &evals);
+		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
 		st = d.fail ? C0_ENOMEM : C0_OK;
 		if (!st && fabs(p.mu - exp(t)) > 1e-12 * p.mu) {   /* make sol belong to the returned mu */
 			p.mu = exp(t);

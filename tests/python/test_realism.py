@@ -69,6 +69,9 @@ def test_depth(tmp):
         check(0.14 <= fade <= 0.21, "seed %d: the simulated fade by the last stack is the paper's (%.3f)" % (seed, fade))
         f, ft = rep["bleaching"]["factors"], sim["estimates"]["bleaching"]["stack_factors"]
         check(all(abs(a / b - 1) < 0.02 for a, b in zip(f, ft)), "seed %d: stack factors %s match the simulated %s" % (seed, f, ft))
+        dis = [i["discrepancy"] for i in rep["intensity"]]
+        check(all(x == "met" for x in dis) and rep["intensity_parameters"]["mu_rule"] == "relative discrepancy",
+              "seed %d: the intensity's mu rule is met on every stack (%s)" % (seed, dis))
         if seed == 1:
             rep0, d0 = run(tmp, "off%d" % seed, data, sim, stacks, "--bleach", "off")
             if rep0 is not None:
