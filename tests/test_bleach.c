@@ -65,7 +65,7 @@ static void test_check(void)
 	c.norder = 2;
 	CHECK(c0_bleach_check(&c, 3) == C0_EINVAL && strstr(c0_errmsg(), "2 stack numbers for 3"));
 	struct c0_bleach_conf g = { .ngaps = 3, .gap_frames = { 1, 2, 3 } };
-	CHECK(c0_bleach_check(&g, 3) == C0_EINVAL && strstr(c0_errmsg(), "--gaps"));
+	CHECK(c0_bleach_check(&g, 3) == C0_EINVAL && strstr(c0_errmsg(), "gaps_frames"));
 	g.ngaps = 2, g.gap_frames[1] = -1;
 	CHECK(c0_bleach_check(&g, 3) == C0_EINVAL && strstr(c0_errmsg(), "negative"));
 	struct c0_bleach_conf f = { .mode = C0_BLEACH_KNOWN, .nfactors = 2, .factor = { 1, 0 } };

@@ -1,5 +1,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli/commands.h"
+#include "cli/confopts.h"
 #include "core/err.h"
 #include "core/progress.h"
 #include "c0_version.h"
@@ -24,7 +25,9 @@ static const struct {
 
 int c0_cli_error(const char *cmd)
 {
-	fprintf(stderr, "col0rme %s: error: %s\n", cmd, c0_errmsg());
+	char msg[2048];
+	c0_cli_flags(c0_errmsg(), msg, sizeof msg);   /* the library names parameters; we show flags */
+	fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
 	return 1;
 }
 

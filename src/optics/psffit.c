@@ -46,7 +46,7 @@ static double golden(struct fitctx *f, double *p, double lo, double hi, double *
 int c0_psf_fit_image(const float *img, int w, int h, const char *name, struct c0_psf_fit *out)
 {
 	if (w < 5 || h < 5)
-		return c0_fail(C0_EINVAL, "--psf %s: %dx%d pixels; need at least 5x5 around the bead", name, w, h);
+		return c0_fail(C0_EINVAL, "psf_image %s: %dx%d pixels; need at least 5x5 around the bead", name, w, h);
 	/* start: the brightest pixel, the median as background, the width from the area above half maximum */
 	size_t n = (size_t)w * h, imax = 0;
 	float *sorted = c0_alloc(n, sizeof *sorted);
@@ -71,7 +71,7 @@ int c0_psf_fit_image(const float *img, int w, int h, const char *name, struct c0
 	free(sorted);
 	const double peak = img[imax] - med;
 	if (!(peak > 0))
-		return c0_fail(C0_EINVAL, "--psf %s: no peak above the background", name);
+		return c0_fail(C0_EINVAL, "psf_image %s: no peak above the background", name);
 	int above = 0;
 	for (size_t i = 0; i < n; i++)
 		above += img[i] - med > peak / 2;
@@ -94,7 +94,7 @@ int c0_psf_fit_image(const float *img, int w, int h, const char *name, struct c0
 	out->rel_rms = gpk > 0 ? sqrt(fmax(r, 0) / (double)n) / gpk : INFINITY;
 	free(f.gx), free(f.gy);
 	if (!(f.A > 0) || s > fmin(w, h) / 2.0)
-		return c0_fail(C0_EINVAL, "--psf %s: no Gaussian spot fits (width %.2f px in a %dx%d image); crop the image around one bead",
+		return c0_fail(C0_EINVAL, "psf_image %s: no Gaussian spot fits (width %.2f px in a %dx%d image); crop the image around one bead",
 			       name, s, w, h);
 	return C0_OK;
 }

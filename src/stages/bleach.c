@@ -1,5 +1,5 @@
 #include "stages/bleach.h"
-#include "io/tiff.h"
+#include "io/frames.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -10,33 +10,33 @@
 int c0_bleach_check(const struct c0_bleach_conf *c, int n)
 {
 	if (n > C0_BLEACH_MAX)
-		return c0_fail(C0_EINVAL, "bleaching: at most %d stacks", C0_BLEACH_MAX);
+		return c0_fail(C0_EINVAL, "bleach: at most %d stacks", C0_BLEACH_MAX);
 	if (c->norder) {
 		if (c->norder != n)
-			return c0_fail(C0_EINVAL, "--acquisition-order: %d stack numbers for %d stacks (give each stack once, in recording order)",
+			return c0_fail(C0_EINVAL, "acquisition_order: %d stack numbers for %d stacks (give each stack once, in recording order)",
 				       c->norder, n);
 		int seen[C0_BLEACH_MAX] = { 0 };
 		for (int i = 0; i < n; i++) {
 			if (c->order[i] < 0 || c->order[i] >= n)
-				return c0_fail(C0_EINVAL, "--acquisition-order: %d is not a stack number (1..%d)", c->order[i] + 1, n);
+				return c0_fail(C0_EINVAL, "acquisition_order: %d is not a stack number (1..%d)", c->order[i] + 1, n);
 			if (seen[c->order[i]]++)
-				return c0_fail(C0_EINVAL, "--acquisition-order: stack %d appears twice", c->order[i] + 1);
+				return c0_fail(C0_EINVAL, "acquisition_order: stack %d appears twice", c->order[i] + 1);
 		}
 	}
 	if (c->ngaps && c->interleaved)
-		return c0_fail(C0_EINVAL, "--gaps: interleaved stacks have no gaps between them");
+		return c0_fail(C0_EINVAL, "gaps_frames: interleaved stacks have no gaps between them");
 	if (c->ngaps > 1 && c->ngaps != n - 1)
-		return c0_fail(C0_EINVAL, "--gaps: %d gaps for %d stacks (give one, or one between each pair of consecutive stacks: %d)",
+		return c0_fail(C0_EINVAL, "gaps_frames: %d gaps for %d stacks (give one, or one between each pair of consecutive stacks: %d)",
 			       c->ngaps, n, n - 1);
 	for (int i = 0; i < c->ngaps; i++)
 		if (!(c->gap_frames[i] >= 0))
-			return c0_fail(C0_EINVAL, "--gaps: gap %d is negative or not a number", i + 1);
+			return c0_fail(C0_EINVAL, "gaps_frames: gap %d is negative or not a number", i + 1);
 	if (c->mode == C0_BLEACH_KNOWN) {
 		if (c->nfactors != n)
-			return c0_fail(C0_EINVAL, "--bleach: %d factors for %d stacks", c->nfactors, n);
+			return c0_fail(C0_EINVAL, "bleach_factors: %d factors for %d stacks", c->nfactors, n);
 		for (int i = 0; i < n; i++)
 			if (!(c->factor[i] > 0))
-				return c0_fail(C0_EINVAL, "--bleach: factor %d is %g, must be > 0", i + 1, c->factor[i]);
+				return c0_fail(C0_EINVAL, "bleach_factors: factor %d is %g, must be > 0", i + 1, c->factor[i]);
 	}
 	return C0_OK;
 }
@@ -72,7 +72,7 @@ int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double 
 		}
 	}
 	if (!(wsum > 0))
-		return c0_fail(C0_EINVAL, "bleaching: no stack has signal above its background to measure the fade from (use --bleach off or give the factors)");
+		return c0_fail(C0_EINVAL, "bleaching: no stack has signal above its background to measure the fade from (set bleach off, or give bleach_factors)");
 	res->k = wk / wsum;
 	res->k_sd = 1 / sqrt(wsum);
 	return C0_OK;
@@ -95,35 +95,30 @@ void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, 
 	}
 }
 
-static int frame_sums(const char *path, double **S, int64_t *T)
+static int frame_sums(struct c0_frames *f, double **S, int64_t *T)
 {
-	struct c0_tiff_reader *r;
-	int st = c0_tiff_open(path, &r);
-	if (st)
-		return st;
-	const struct c0_tiff_info *in = c0_tiff_get_info(r);
-	const size_t np = (size_t)in->width * in->height;
-	float *f = c0_alloc(np, sizeof *f);
-	*T = in->pages;
-	*S = c0_alloc((size_t)in->pages, sizeof **S);
-	if (!f || !*S)
+	const size_t np = (size_t)f->width * f->height;
+	float *v = c0_alloc(np, sizeof *v);
+	int st = C0_OK;
+	*T = f->count;
+	*S = c0_alloc((size_t)f->count, sizeof **S);
+	if (!v || !*S)
 		st = C0_ENOMEM;
-	for (int64_t t = 0; !st && t < in->pages; t++) {
-		if ((st = c0_tiff_read_f32(r, t, f)))
+	for (int64_t t = 0; !st && t < f->count; t++) {
+		if ((st = c0_frames_read(f, t, v)))
 			break;
 		double s = 0;
 		for (size_t i = 0; i < np; i++)
-			s += f[i];
+			s += v[i];
 		(*S)[t] = s;
 	}
-	free(f);
-	c0_tiff_close(r);
+	free(v);
 	if (st)
 		free(*S), *S = NULL;
 	return st;
 }
 
-int c0_bleach_run(const struct c0_bleach_conf *c, int n, char **stacks, const double *B, struct c0_bleach_result *res)
+int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res)
 {
 	memset(res, 0, sizeof *res);
 	int st = c0_bleach_check(c, n);
@@ -139,11 +134,11 @@ int c0_bleach_run(const struct c0_bleach_conf *c, int n, char **stacks, const do
 	int fail = 0;
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int q = 0; q < n; q++)
-		if (frame_sums(stacks[q], &S[q], &T[q]))
+		if (frame_sums(&f[q], &S[q], &T[q]))
 #pragma omp atomic write
 			fail = 1;
 	if (fail)   /* the per-thread messages are lost: say which step failed */
-		st = c0_fail(C0_EIO, "bleaching: could not read the frames of the stacks");
+		st = c0_fail(C0_EIO, "bleach: could not read the frames of the stacks");
 	if (!st)
 		st = c0_bleach_fit(n, (const double *const *)S, T, B, res);
 	if (!st)

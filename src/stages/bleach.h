@@ -40,14 +40,16 @@ struct c0_bleach_result {
 };
 
 /* The order is a permutation of the n stacks, the gap count 0, 1 or n - 1
- * and the gaps >= 0, the factors n positive values; error names the option. */
+ * and the gaps >= 0, the factors n positive values; errors name the
+ * parameter (acquisition_order, gaps_frames, bleach_factors). */
 int c0_bleach_check(const struct c0_bleach_conf *c, int n);
 /* k from the frame sums S[q] (T[q] values each) and the background's sum
  * per frame B[q] (n stacks). */
 int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res);
 /* res->start and res->factor for rate k (res->k) and the frame counts. */
 void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
-/* The whole step for stacks on disk: one pass each for its frame sums, then
+/* The whole step for the stacks f: one pass each for its frame sums, then
  * the fit (mode estimate) and the factors; mode known copies the factors,
  * mode off sets them to 1. */
-int c0_bleach_run(const struct c0_bleach_conf *c, int n, char **stacks, const double *B, struct c0_bleach_result *res);
+struct c0_frames;
+int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res);

@@ -28,14 +28,14 @@ static double lambda_rel(const struct c0_support_conf *c)
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name)
 {
 	if (!(c->pixel_nm > 0))
-		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
+		return c0_fail(C0_EINVAL, "pixel_nm %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
 	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
 	if (st)
 		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
-		return c0_fail(C0_EINVAL, "--lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
+		return c0_fail(C0_EINVAL, "lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
 	if (c->fista.maxit < 1 || !(c->fista.tol > 0))
-		return c0_fail(C0_EINVAL, "--iterations / --tol must be positive");
+		return c0_fail(C0_EINVAL, "iterations %d / tol %g: must be positive", c->fista.maxit, c->fista.tol);
 	int d = c0_support_lag(c);
 	if (W < 2 * d + 1 || H < 2 * d + 1)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels is smaller than the PSF band (%d x %d pixels for lag %d)",
@@ -179,16 +179,14 @@ out:
 	return st;
 }
 
-int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-			struct c0_cov *cov, double *seconds)
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov *cov, double *seconds)
 {
-	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
-	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
 	if (st)
 		return st;
 	double t0 = c0_now();
 	struct c0_cov_acc *acc;
-	if ((st = c0_cov_acc_new((int)in->width, (int)in->height, c0_support_lag(c), &acc)))
+	if ((st = c0_cov_acc_new(in->width, in->height, c0_support_lag(c), &acc)))
 		return st;
 	float *frame = c0_alloc((size_t)in->width * in->height, sizeof *frame);
 	if (!frame) {
@@ -196,9 +194,9 @@ int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *
 		return C0_ENOMEM;
 	}
 	struct c0_progress pr;
-	c0_progress_begin(&pr, "covariance", (double)in->pages);
-	for (int64_t t = 0; t < in->pages && !st; t++) {
-		st = c0_tiff_read_f32(rd, t, frame);
+	c0_progress_begin(&pr, "covariance", (double)in->count);
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
 		if (!st)
 			st = c0_cov_acc_add(acc, frame);
 		c0_progress_update(&pr, (double)t + 1);
@@ -214,11 +212,10 @@ int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *
 	return st;
 }
 
-int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name, double **mean,
-		  int64_t *frames, double *seconds)
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double **mean, int64_t *frames,
+		  double *seconds)
 {
-	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
-	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
 	if (st)
 		return st;
 	double t0 = c0_now();
@@ -230,9 +227,9 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 		return C0_ENOMEM;
 	}
 	struct c0_progress pr;
-	c0_progress_begin(&pr, "mean", (double)in->pages);
-	for (int64_t t = 0; t < in->pages && !st; t++) {
-		st = c0_tiff_read_f32(rd, t, frame);
+	c0_progress_begin(&pr, "mean", (double)in->count);
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
 		for (size_t i = 0; !st && i < n; i++)
 			(*mean)[i] += frame[i];
 		c0_progress_update(&pr, (double)t + 1);
@@ -240,21 +237,20 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 	c0_progress_end(&pr);
 	free(frame);
 	for (size_t i = 0; !st && i < n; i++)
-		(*mean)[i] /= (double)in->pages;
+		(*mean)[i] /= (double)in->count;
 	if (st)
 		free(*mean), *mean = NULL;
-	*frames = in->pages;
+	*frames = in->count;
 	*seconds = c0_now() - t0;
 	return st;
 }
 
-int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-		     struct c0_support_result *res)
+int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
 	struct c0_cov cov;
 	double tc;
-	int st = c0_stack_covariance(c, rd, name, &cov, &tc);
+	int st = c0_stack_covariance(c, in, &cov, &tc);
 	if (st)
 		return st;
 	struct c0_progress ps;

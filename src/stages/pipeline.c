@@ -1,0 +1,651 @@
+/* 3D-COL0RME as one call: support from the support stacks, intensity and
+ * background of every stack on the union of their masks, and with angles
+ * the MA-TIRF volume from the (pooled) intensities, plus the standard
+ * MA-TIRF baseline from the background-corrected means when asked. */
+#include "stages/pipeline.h"
+#include "stages/bleach.h"
+#include "stages/depthpool.h"
+#include "core/clock.h"
+#include "core/err.h"
+#include "core/mem.h"
+#include "core/progress.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int c0_result_new(const char *command, int n, const char *const *names, const int *is_file, struct c0_result **out)
+{
+	*out = NULL;
+	if (n < 1 || n > C0_MAX_STACKS)
+		return c0_fail(C0_EINVAL, "stacks: %d given, expected 1..%d", n, C0_MAX_STACKS);
+	struct c0_result *r = c0_alloc(1, sizeof *r);
+	if (!r || !(r->names = c0_alloc((size_t)n, sizeof *r->names)) || !(r->rep = c0_report_new(command, 0, NULL))) {
+		c0_result_free(r);
+		return C0_ENOMEM;
+	}
+	r->n = n;
+	for (int i = 0; i < n; i++) {
+		snprintf(r->names[i], sizeof r->names[i], "%s", names[i]);
+		r->paths[i] = is_file[i] ? r->names[i] : NULL;
+	}
+	r->timings = cJSON_AddObjectToObject(r->rep, "timings_s");
+	*out = r;
+	return C0_OK;
+}
+
+void c0_result_set_argv(struct c0_result *r, int argc, char **argv)
+{
+	cJSON *a = cJSON_CreateArray();
+	for (int i = 0; i < argc; i++)
+		cJSON_AddItemToArray(a, cJSON_CreateString(argv[i]));
+	cJSON_ReplaceItemInObject(r->rep, "argv", a);
+}
+
+void c0_result_free(struct c0_result *r)
+{
+	if (!r)
+		return;
+	for (int k = 0; r->sres && k < r->nsup; k++)
+		c0_support_result_free(&r->sres[k]);
+	for (int q = 0; q < r->n; q++) {
+		if (r->ires)
+			c0_intensity_result_free(&r->ires[q]);
+		if (r->corrected)
+			free(r->corrected[q]);
+	}
+	free(r->sres), free(r->ires), free(r->corrected), free(r->mask), free(r->names), free(r->json);
+	c0_matirf_result_free(&r->vol), c0_matirf_result_free(&r->base);
+	cJSON_Delete(r->rep);
+	free(r);
+}
+
+int c0_stacks_open(const struct c0_stack *s, int n, struct c0_frames *f)
+{
+	int st = C0_OK, i;
+	for (i = 0; i < n && !st; i++) {
+		char name[32];
+		snprintf(name, sizeof name, "array %d", i + 1);
+		if (s[i].path)
+			st = c0_frames_open(&f[i], s[i].path);
+		else
+			st = c0_frames_wrap(&f[i], s[i].data, s[i].frames, s[i].height, s[i].width, s[i].pixel_nm, name);
+		if (!st && s[i].pixel_nm > 0)
+			f[i].pixel_nm = s[i].pixel_nm;
+		if (!st && (f[i].width != f[0].width || f[i].height != f[0].height))
+			st = c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s (%dx%d)", f[i].name, f[i].width, f[i].height,
+				     f[0].name, f[0].width, f[0].height);
+	}
+	if (st)
+		c0_stacks_close(f, i);
+	return st;
+}
+
+void c0_stacks_close(struct c0_frames *f, int n)
+{
+	for (int i = 0; i < n; i++)
+		c0_frames_close(&f[i]);
+}
+
+int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, double *pixel_nm)
+{
+	*pixel_nm = c->pixel_nm > 0 ? c->pixel_nm : f[0].pixel_nm;
+	if (!(*pixel_nm > 0))
+		return c0_fail(C0_EINVAL, "pixel_nm: %s has no pixel calibration; give the camera pixel size in nm", f[0].name);
+	return C0_OK;
+}
+
+int c0_step_support(struct c0_result *r, const struct c0_support_conf *c, struct c0_frames *f)
+{
+	cJSON *arr = cJSON_AddArrayToObject(r->rep, "support");
+	if (!(r->sres = c0_alloc((size_t)r->nsup, sizeof *r->sres)))
+		return C0_ENOMEM;
+	double t = c0_now();
+	for (int k = 0; k < r->nsup; k++) {
+		int i = r->sup[k];
+		int st = c0_support_stack(c, &f[i], &r->sres[k]);
+		if (st)
+			return st;
+		const struct c0_support_result *s = &r->sres[k];
+		cJSON *o = cJSON_CreateObject();
+		cJSON_AddStringToObject(o, "stack", r->names[i]);
+		cJSON_AddNumberToObject(o, "frames", (double)s->frames);
+		cJSON_AddNumberToObject(o, "lag_px", s->lag);
+		cJSON_AddNumberToObject(o, "lags", s->nlag);
+		cJSON_AddNumberToObject(o, "lambda", s->lambda);
+		cJSON_AddNumberToObject(o, "lambda_max", s->lambda_max);
+		cJSON_AddNumberToObject(o, "lambda_relative", s->lambda_max > 0 ? s->lambda / s->lambda_max : 0);
+		cJSON_AddNumberToObject(o, "normalisation", s->norm);
+		cJSON_AddNumberToObject(o, "noise_variance", s->sigma2);
+		cJSON_AddNumberToObject(o, "iterations", s->iters);
+		cJSON_AddBoolToObject(o, "converged", s->converged);
+		cJSON_AddNumberToObject(o, "support_pixels", s->support_pixels);
+		cJSON_AddNumberToObject(o, "covariance_s", s->t_cov);
+		cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);
+		cJSON_AddNumberToObject(o, "solve_s", s->t_solve);
+		c0_report_add_array(o, "objective", s->hist, s->nhist);
+		cJSON_AddItemToArray(arr, o);
+	}
+	cJSON *p = cJSON_AddObjectToObject(r->rep, "support_parameters");
+	cJSON_AddNumberToObject(p, "pixel_size_nm", c->pixel_nm);
+	cJSON_AddNumberToObject(p, "fwhm_nm", c->fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", c->srf);
+	cJSON_AddStringToObject(p, "penalty", c->penalty == C0_PENALTY_L1 ? "l1" : "cel0");
+	cJSON_AddNumberToObject(p, "max_iterations", c->fista.maxit);
+	cJSON_AddNumberToObject(p, "tol", c->fista.tol);
+	r->pixel_nm = c->pixel_nm, r->srf = c->srf;
+	r->Ly = r->sres[0].Ly, r->Lx = r->sres[0].Lx;
+	const size_t L = (size_t)r->Ly * r->Lx;
+	if (!(r->mask = c0_alloc(L, 1)))
+		return C0_ENOMEM;
+	int count = 0;
+	for (size_t i = 0; i < L; i++) {
+		for (int k = 0; k < r->nsup; k++)
+			r->mask[i] |= r->sres[k].mask[i];
+		count += r->mask[i];
+	}
+	cJSON_AddNumberToObject(r->rep, "support_pixels_union", count);
+	cJSON_AddNumberToObject(r->timings, "support", c0_now() - t);
+	return C0_OK;
+}
+
+/* One stack: its mean from the support step when that ran on it, else one
+ * streaming pass (the covariance when the noise variance has to be
+ * estimated, else just the mean); then the solve. */
+static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_support_conf *sc, struct c0_frames *f,
+			 const uint8_t *mask, double s2, const struct c0_support_result *known,
+			 struct c0_intensity_result *res, float **corrected, int64_t *frames, double *seconds)
+{
+	const double *mean;
+	double *own = NULL;          /* the mean when this function read it */
+	int H, W, st = C0_OK;
+	if (known) {
+		mean = known->mean, *frames = known->frames, s2 = known->sigma2, *seconds = 0;
+		H = known->Ly / sc->srf, W = known->Lx / sc->srf;
+	} else {
+		H = f->height, W = f->width;
+		if (s2 > 0) {
+			st = c0_stack_mean(sc, f, &own, frames, seconds);
+		} else {
+			struct c0_cov cov = { 0 };
+			st = c0_stack_covariance(sc, f, &cov, seconds);
+			if (!st) {
+				*frames = cov.frames;
+				st = c0_support_noise(sc, &cov, mask, &s2);
+				own = cov.mean, cov.mean = NULL;
+			}
+			c0_cov_free(&cov);
+		}
+		mean = own;
+	}
+	if (!st)
+		st = c0_intensity_solve(ic, mean, H, W, *frames, mask, s2, res);
+	if (!st && corrected) {
+		size_t nc = (size_t)H * W;
+		if (!(*corrected = malloc(nc * sizeof **corrected)))
+			st = C0_ENOMEM;
+		for (size_t p = 0; !st && p < nc; p++)
+			(*corrected)[p] = (float)(mean[p] - res->b[p]);
+	}
+	free(own);
+	return st;
+}
+
+int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
+		      struct c0_frames *f, const double *sigma2, int corrected)
+{
+	const int n = r->n;
+	const struct c0_support_result *known[C0_MAX_STACKS] = { 0 };
+	for (int k = 0; r->sres && k < r->nsup; k++)
+		known[r->sup[k]] = &r->sres[k];
+	if (f[0].height * sc->srf != r->Ly || f[0].width * sc->srf != r->Lx)
+		return c0_fail(C0_EINVAL, "%s: %dx%d pixels at srf %d do not match the %dx%d support", f[0].name, f[0].width,
+			       f[0].height, sc->srf, r->Lx, r->Ly);
+	/* the stacks are independent: solve them side by side */
+	int64_t frames[C0_MAX_STACKS];
+	double tc[C0_MAX_STACKS], t = c0_now();
+	int sts[C0_MAX_STACKS];
+	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
+	r->ires = c0_alloc((size_t)n, sizeof *r->ires);
+	if (corrected)
+		r->corrected = c0_alloc((size_t)n, sizeof *r->corrected);
+	if (!msg || !r->ires || (corrected && !r->corrected)) {
+		free(msg);
+		return C0_ENOMEM;
+	}
+	struct c0_progress pr;
+	int done = 0;
+	c0_progress_begin(&pr, "intensity (stacks)", n);
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)   /* one stack: its own loops get the threads */
+	for (int i = 0; i < n; i++) {
+		sts[i] = intensity_one(ic, sc, &f[i], r->mask, sigma2 ? sigma2[i] : 0, known[i], &r->ires[i],
+				       corrected ? &r->corrected[i] : NULL, &frames[i], &tc[i]);
+		if (sts[i])   /* error messages are per thread */
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+#pragma omp critical(c0_intensity_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	c0_progress_end(&pr);
+	for (int i = 0; i < n; i++)
+		if (sts[i]) {
+			int st = c0_fail(sts[i], "%s", msg[i]);
+			free(msg);
+			return st;
+		}
+	free(msg);
+	r->pixel_nm = ic->pixel_nm, r->srf = ic->srf;
+	cJSON *arr = cJSON_AddArrayToObject(r->rep, "intensity");
+	for (int i = 0; i < n; i++) {
+		const struct c0_intensity_result *s = &r->ires[i];
+		cJSON *j = cJSON_CreateObject();
+		cJSON_AddStringToObject(j, "stack", r->names[i]);
+		cJSON_AddNumberToObject(j, "frames", (double)frames[i]);
+		cJSON_AddNumberToObject(j, "noise_variance", s->sigma2);
+		cJSON_AddNumberToObject(j, "mu", s->mu);
+		cJSON_AddNumberToObject(j, "residual2", s->residual2);
+		cJSON_AddNumberToObject(j, "discrepancy_target2", s->target2);
+		if (ic->relative && s->dp_status >= 0)
+			cJSON_AddNumberToObject(j, "residual_floor2", s->floor2);
+		static const char *dp[] = {
+			"met",
+			"below: even the smallest mu leaves a residual above the target, so the intensity is as little smoothed as allowed (give mu to smooth more)",
+			"above: even the largest mu leaves a residual below the target, so the intensity is as smooth as allowed (lower nu or give mu for more detail)",
+			"not converged: mu is the last one tried (give mu to fix it)" };
+		cJSON_AddStringToObject(j, "discrepancy", s->dp_status < 0 ? "fixed mu" : dp[s->dp_status]);
+		cJSON_AddNumberToObject(j, "solves", s->solves);
+		cJSON_AddNumberToObject(j, "cg_iterations", s->cg_iters);
+		cJSON_AddNumberToObject(j, "seconds", s->seconds + tc[i]);
+		cJSON_AddItemToArray(arr, j);
+	}
+	cJSON *p = cJSON_AddObjectToObject(r->rep, "intensity_parameters");
+	static const char *bg[] = { "none", "constant", "smooth" };
+	cJSON_AddStringToObject(p, "background", bg[ic->background]);
+	cJSON_AddNumberToObject(p, "beta", ic->beta);
+	cJSON_AddNumberToObject(p, "nu", ic->nu);
+	cJSON_AddNumberToObject(p, "fixed_mu", ic->mu);
+	cJSON_AddStringToObject(p, "mu_rule", ic->mu > 0 ? "fixed" : ic->relative ? "relative discrepancy" : "plain discrepancy");
+	cJSON_AddStringToObject(p, "mu_rule_meaning",
+		ic->mu > 0 ? "mu as given"
+		: ic->relative ? "mu is the largest smoothness whose residual exceeds the model's floor (the residual at mu = 1e-3) by no more than the noise explains (nu^2 H W sigma2 / T): smoothing that costs less than the noise is kept. The floor is the model error (continuous positions on the fine grid, background shape), larger than the noise on real data, which is why the plain principle is never met there. Larger nu smooths more; mu fixes it."
+		: "mu makes the residual equal to the noise level nu^2 H W sigma2 / T; on data whose model error exceeds the noise this is never met and mu stays at its smallest value");
+	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
+	cJSON_AddNumberToObject(r->timings, "intensity", c0_now() - t);
+	return C0_OK;
+}
+
+int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline)
+{
+	struct c0_matirf_result *res = baseline ? &r->base : &r->vol;
+	const char *key = baseline ? "baseline_matirf" : "matirf";
+	const int nq = c->nangles;
+	double t = c0_now();
+	int st = c0_matirf_solve(m, nq, c->angles, c->ngains ? c->gains : NULL, img, ny, nx, res);
+	if (st)
+		return st;
+	if (own) {
+		c0_pool_rescale(res->f, res->nz, ny, nx, nq, own, img);
+		for (size_t p = 0; p < (size_t)ny * nx; p++) {
+			double s = 0;
+			for (int j = 0; j < res->nz; j++)
+				s += res->f[j * (size_t)ny * nx + p];
+			res->total[p] = (float)s;
+		}
+	}
+	if (!baseline)
+		r->vol_pixel_nm = pixel_nm;
+	r->z0_nm = m->z0_nm, r->dz_nm = m->dz_nm;
+	cJSON *j = cJSON_AddObjectToObject(r->rep, key);
+	c0_report_add_array(j, "angles_deg", c->angles, nq);
+	if (c->ngains)
+		c0_report_add_array(j, "gains", c->gains, c->ngains);
+	double pen[C0_MAX_STACKS];
+	for (int q = 0; q < nq; q++)
+		c0_tirf_p(&m->tirf, c->angles[q], &pen[q]), pen[q] = 1 / pen[q];
+	c0_report_add_array(j, "penetration_depth_nm", pen, nq);
+	cJSON_AddNumberToObject(j, "critical_angle_deg", c0_tirf_critical_deg(&m->tirf));
+	cJSON_AddNumberToObject(j, "n_glass", m->tirf.n_glass);
+	cJSON_AddNumberToObject(j, "n_sample", m->tirf.n_sample);
+	cJSON_AddNumberToObject(j, "wavelength_nm", m->tirf.wavelength_nm);
+	cJSON_AddNumberToObject(j, "s_fraction", m->tirf.s_fraction);
+	c0_report_add_array(j, "z_nm", res->z_nm, res->nz);
+	if (!cJSON_GetObjectItem(r->rep, "z_nm"))
+		c0_report_add_array(r->rep, "z_nm", res->z_nm, res->nz);
+	cJSON_AddStringToObject(j, "regulariser", m->reg == C0_REG_TV ? "tv" : "hessian");
+	cJSON_AddNumberToObject(j, "kappa", m->kappa);
+	cJSON_AddNumberToObject(j, "axial_weight", m->wz);
+	cJSON_AddNumberToObject(j, "sparsity", m->sparsity);
+	cJSON_AddNumberToObject(j, "data_scale", res->scale);
+	cJSON_AddNumberToObject(j, "iterations", res->iters);
+	cJSON_AddBoolToObject(j, "converged", res->converged);
+	cJSON_AddNumberToObject(j, "seconds", res->seconds);
+	cJSON_AddNumberToObject(r->timings, key, c0_now() - t);
+	return C0_OK;
+}
+
+/* The support stacks: 1-based numbers, or the smallest angle (the deepest
+ * penetration sees every emitter), or the first stack in 2D mode. */
+static int support_stacks(const struct c0_run_conf *c, const int *only, int n, struct c0_result *r)
+{
+	if (!c->nsupport_stacks) {
+		/* the support-only stacks (at or below the critical angle) and the smallest TIRF angle */
+		int best = -1, k = 0;
+		for (int i = 0; i < c->nangles; i++)
+			if (only[i])
+				r->sup[k++] = i;
+			else if (best < 0 || c->angles[i] < c->angles[best])
+				best = i;
+		if (best >= 0 || !k)
+			r->sup[k++] = best < 0 ? 0 : best;
+		r->nsup = k;
+		return C0_OK;
+	}
+	for (int k = 0; k < c->nsupport_stacks; k++) {
+		if (c->support_stacks[k] < 1 || c->support_stacks[k] > n)
+			return c0_fail(C0_EINVAL, "support_stacks: %d is not a stack number (1..%d)", c->support_stacks[k], n);
+		r->sup[k] = c->support_stacks[k] - 1;
+	}
+	r->nsup = c->nsupport_stacks;
+	return C0_OK;
+}
+
+/* The volume from the intensities, each pooled over a window of about
+ * pool_nm (odd, in fine pixels) on the support. */
+static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *tirf, const struct c0_stage_confs *s)
+{
+	const int nq = ct->nangles, Ly = r->Ly, Lx = r->Lx;
+	const size_t L = (size_t)Ly * Lx, Nc = r->ires[0].Ny * (size_t)r->ires[0].Nx;
+	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 };
+	const double fine = s->support.pixel_nm / s->support.srf;
+	int h = (int)lround((s->pool_nm / fine - 1) / 2), st = C0_OK;
+	for (int i = 0; !st && i < nq; i++) {
+		const int q = tirf[i];
+		const float g = (float)(1 / r->bleach_factor[q]);
+		if (!(own[i] = malloc(L * sizeof(float)))) {
+			st = C0_ENOMEM;
+			break;
+		}
+		for (size_t p = 0; p < L; p++)
+			own[i][p] = r->ires[q].x[p] * g;
+		if (ct->baseline && !(st = (base[i] = malloc(Nc * sizeof(float))) ? C0_OK : C0_ENOMEM))
+			for (size_t p = 0; p < Nc; p++)
+				base[i][p] = r->corrected[q][p] * g;
+		if (st || h <= 0)
+			continue;
+		pooled[i] = malloc(L * sizeof(float));
+		st = pooled[i] ? c0_pool_window(own[i], r->mask, Ly, Lx, h, pooled[i]) : C0_ENOMEM;
+	}
+	if (!st)
+		st = c0_step_matirf(r, ct, &s->matirf, h > 0 ? (const float *const *)pooled : (const float *const *)own,
+				    h > 0 ? (const float *const *)own : NULL, Ly, Lx, fine, 0);
+	if (!st)
+		cJSON_AddNumberToObject(cJSON_GetObjectItem(r->rep, "matirf"), "depth_pool_window_px", h > 0 ? 2 * h + 1 : 0);
+	if (!st && ct->baseline)
+		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
+				    s->support.pixel_nm, 1);
+	for (int i = 0; i < nq; i++)
+		free(own[i]), free(pooled[i]), free(base[i]);
+	return st;
+}
+
+static void bleach_conf(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
+{
+	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF : C0_BLEACH_ESTIMATE,
+				       .interleaved = c->acquisition == C0_ACQ_INTERLEAVED, .norder = c->nacquisition_order,
+				       .ngaps = c->ngaps_frames, .nfactors = c->nbleach_factors };
+	for (int i = 0; i < c->nacquisition_order && i < C0_BLEACH_MAX; i++)
+		bc->order[i] = c->acquisition_order[i] - 1;
+	for (int i = 0; i < c->ngaps_frames && i < C0_BLEACH_MAX; i++)
+		bc->gap_frames[i] = c->gaps_frames[i];
+	for (int i = 0; i < c->nbleach_factors && i < C0_BLEACH_MAX; i++)
+		bc->factor[i] = c->bleach_factors[i];
+}
+
+int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f)
+{
+	const int n = r->n;
+	double t = c0_now(), B[C0_MAX_STACKS] = { 0 };
+	struct c0_bleach_conf bc;
+	bleach_conf(c, &bc);
+	for (int q = 0; q < n; q++)
+		for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
+			B[q] += r->ires[q].b[i];
+	struct c0_bleach_result br;
+	int st = c0_bleach_run(&bc, n, f, B, &br);
+	if (st)
+		return st;
+	for (int q = 0; q < n; q++)
+		r->bleach_factor[q] = br.factor[q];
+	static const char *modes[] = { "estimated", "given", "off" };
+	cJSON *o = cJSON_AddObjectToObject(r->rep, "bleaching");
+	cJSON_AddStringToObject(o, "correction", modes[bc.mode]);
+	cJSON_AddStringToObject(o, "acquisition", bc.interleaved ? "interleaved" : "sequential");
+	double v[C0_MAX_STACKS];
+	for (int i = 0; i < n; i++)
+		v[i] = bc.norder ? bc.order[i] + 1 : i + 1;
+	c0_report_add_array(o, "acquisition_order", v, n);
+	if (bc.ngaps)
+		c0_report_add_array(o, "gaps_frames", bc.gap_frames, bc.ngaps);
+	if (bc.mode == C0_BLEACH_ESTIMATE) {
+		cJSON_AddNumberToObject(o, "rate_per_frame", br.k);
+		cJSON_AddNumberToObject(o, "rate_sd_per_frame", br.k_sd);
+		for (int q = 0; q < n; q++)
+			v[q] = br.k_stack[q] == br.k_stack[q] ? br.k_stack[q] : 0;
+		c0_report_add_array(o, "rate_per_frame_by_stack", v, n);
+		c0_report_add_array(o, "start_frame", br.start, n);
+		c0_report_add_array(o, "signal_per_frame", br.signal, n);
+	}
+	c0_report_add_array(o, "factors", br.factor, n);
+	const int first = bc.norder ? bc.order[0] : 0, last = bc.norder ? bc.order[n - 1] : n - 1;
+	cJSON_AddNumberToObject(o, "fade_last_vs_first", 1 - br.factor[last] / br.factor[first]);
+	cJSON_AddStringToObject(o, "meaning",
+		bc.mode == C0_BLEACH_OFF ? "no correction: a fade across the stacks would read as depth"
+		: "each stack's intensity was divided by its factor (its mean population relative to the start of the acquisition) before the MA-TIRF fit; intensity_qNN.tif are the stacks' own means");
+	cJSON_AddNumberToObject(r->timings, "bleaching", c0_now() - t);
+	return C0_OK;
+}
+
+static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
+	       struct c0_result *r)
+{
+	const struct c0_stage_confs s = *sc;
+	const int three_d = c->nangles > 0;
+	int st = C0_OK;
+	/* stacks at or below the critical angle (epi) only join the support:
+	 * the MA-TIRF step sees ct, the TIRF stacks' angles and gains */
+	int only[C0_MAX_STACKS] = { 0 }, tirf[C0_MAX_STACKS], ntirf = 0;
+	struct c0_run_conf ct = *c;
+	if (three_d && c->nangles != n)
+		st = c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, n);
+	if (!st && three_d && c->ngains && c->ngains != n)
+		st = c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, n);
+	const double crit = c0_tirf_critical_deg(&s.matirf.tirf);
+	for (int q = 0; !st && three_d && q < n; q++) {
+		only[q] = c->angles[q] <= crit;
+		if (!only[q])
+			ct.angles[ntirf] = c->angles[q], ct.gains[ntirf] = c->gains[q], tirf[ntirf++] = q;
+	}
+	ct.nangles = ntirf, ct.ngains = c->ngains ? ntirf : 0;
+	if (!st && three_d && ntirf < 2)
+		st = c0_fail(C0_EINVAL, "angles: MA-TIRF needs at least 2 angles above the critical angle %.2f deg (got %d; stacks below it only join the support)",
+			     crit, ntirf);
+	if (!st && three_d)
+		st = c0_run_conf_matirf_check(&ct, &s.matirf, ntirf);
+	if (!st && three_d) {   /* the acquisition options, before any work */
+		struct c0_bleach_conf bc;
+		bleach_conf(c, &bc);
+		st = c0_bleach_check(&bc, n);
+	}
+	if (!st && c->nnoise_variance)
+		st = c0_fail(C0_EINVAL, "noise_variance: not used by the whole method (the support step estimates it)");
+	if (!st)
+		st = support_stacks(c, only, n, r);
+	if (!st)
+		st = c0_step_support(r, &s.support, f);
+	int any = 0;
+	for (size_t i = 0; !st && i < (size_t)r->Ly * r->Lx; i++)
+		any |= r->mask[i];
+	if (!st && !any)
+		st = c0_fail(C0_EINVAL, "the support is empty: no emitter found (try a smaller lambda)");
+	if (!st)
+		st = c0_step_intensity(r, &s.intensity, &s.support, f, NULL, c->baseline && three_d);
+	for (int q = 0; q < n; q++)
+		r->bleach_factor[q] = 1;
+	if (!st && three_d)
+		st = c0_step_bleach(r, c, f);
+	if (!st && three_d)
+		st = volume(r, &ct, tirf, &s);
+	if (st)
+		return st;
+	cJSON *p = cJSON_AddObjectToObject(r->rep, "parameters");
+	cJSON_AddStringToObject(p, "mode", three_d ? "3D" : "2D");
+	cJSON_AddNumberToObject(p, "pixel_size_nm", s.support.pixel_nm);
+	cJSON_AddNumberToObject(p, "fine_pixel_nm", s.support.pixel_nm / s.support.srf);
+	cJSON_AddNumberToObject(p, "fwhm_nm", s.support.fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", s.support.srf);
+	if (three_d)
+		cJSON_AddNumberToObject(p, "depth_pool_nm", s.pool_nm);
+	double s1[C0_MAX_STACKS];
+	for (int k = 0; k < r->nsup; k++)
+		s1[k] = r->sup[k] + 1;
+	c0_report_add_array(p, "support_stacks", s1, r->nsup);
+	int k = 0;
+	for (int q = 0; q < n; q++)
+		if (only[q])
+			s1[k++] = q + 1;
+	if (k) {
+		c0_report_add_array(p, "support_only_stacks", s1, k);
+		cJSON_AddStringToObject(p, "support_only_note",
+					"stacks at or below the critical angle have no evanescent field: their supports join the union, and they are left out of the MA-TIRF fit");
+	}
+	if (s.psf_fitted) {
+		cJSON *o = cJSON_AddObjectToObject(p, "psf_image");
+		cJSON_AddStringToObject(o, "file", c->psf_image);
+		cJSON_AddNumberToObject(o, "pixel_size_nm", s.psf_pixel_nm > 0 ? s.psf_pixel_nm : s.support.pixel_nm);
+		cJSON_AddStringToObject(o, "pixel_size_from", s.psf_pixel_nm > 0 ? "its calibration" : "the stacks (the image has none)");
+		cJSON_AddNumberToObject(o, "fwhm_px", s.psf.fwhm_px);
+		cJSON_AddNumberToObject(o, "centre_x_px", s.psf.cx);
+		cJSON_AddNumberToObject(o, "centre_y_px", s.psf.cy);
+		cJSON_AddNumberToObject(o, "background", s.psf.background);
+		cJSON_AddNumberToObject(o, "rms_residual_relative", s.psf.rel_rms);
+		cJSON_AddStringToObject(o, "method", "least-squares fit of a pixel-integrated Gaussian plus a constant to the mean of its planes");
+	}
+	return C0_OK;
+}
+
+int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
+		  struct c0_frames *f, struct c0_stage_confs *sc, struct c0_result **out)
+{
+	*out = NULL;
+	if (n < 1 || n > C0_MAX_STACKS || !stacks || !c)
+		return c0_fail(C0_EINVAL, "stacks: %d given, expected 1..%d", n, C0_MAX_STACKS);
+	int st = c0_stacks_open(stacks, n, f);
+	if (st)
+		return st;
+	const char *names[C0_MAX_STACKS];
+	int is_file[C0_MAX_STACKS];
+	double pixel_nm;
+	for (int i = 0; i < n; i++)
+		names[i] = f[i].name, is_file[i] = stacks[i].path != NULL;
+	st = c0_stacks_pixel(c, f, &pixel_nm);
+	if (!st)
+		st = c0_run_conf_stages(c, pixel_nm, sc);
+	if (!st)
+		st = c0_result_new(command, n, names, is_file, out);
+	if (st)
+		c0_stacks_close(f, n);
+	return st;
+}
+
+int c0_run(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)
+{
+	struct c0_frames f[C0_MAX_STACKS];
+	struct c0_stage_confs sc;
+	struct c0_result *r;
+	int st = c0_pipe_begin("run", c, stacks, n, f, &sc, &r);
+	if (st)
+		return st;
+	st = run(c, &sc, f, n, r);
+	c0_stacks_close(f, n);
+	if (st) {
+		c0_result_free(r);
+		return st;
+	}
+	*out = r;
+	return C0_OK;
+}
+
+int c0_result_nstacks(const struct c0_result *r)
+{
+	return r->n;
+}
+
+static void dims(int *h, int *w, int hv, int wv)
+{
+	if (h)
+		*h = hv;
+	if (w)
+		*w = wv;
+}
+
+const uint8_t *c0_result_support(const struct c0_result *r, int *h, int *w)
+{
+	dims(h, w, r->Ly, r->Lx);
+	return r->mask;
+}
+
+const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *w)
+{
+	if (!r->ires || q < 0 || q >= r->n)
+		return NULL;
+	dims(h, w, r->ires[q].Ly, r->ires[q].Lx);
+	return r->ires[q].x;
+}
+
+const float *c0_result_background(const struct c0_result *r, int q, int *h, int *w)
+{
+	if (!r->ires || q < 0 || q >= r->n)
+		return NULL;
+	dims(h, w, r->ires[q].Ny, r->ires[q].Nx);
+	return r->ires[q].b;
+}
+
+static const float *vol(const struct c0_matirf_result *v, int *nz, int *h, int *w)
+{
+	if (nz)
+		*nz = v->nz;
+	dims(h, w, v->ny, v->nx);
+	return v->f;
+}
+
+const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w)
+{
+	return vol(&r->vol, nz, h, w);
+}
+
+const float *c0_result_baseline_volume(const struct c0_result *r, int *nz, int *h, int *w)
+{
+	return vol(&r->base, nz, h, w);
+}
+
+const float *c0_result_depth(const struct c0_result *r, int *h, int *w)
+{
+	dims(h, w, r->vol.ny, r->vol.nx);
+	return r->vol.depth;
+}
+
+const double *c0_result_z_nm(const struct c0_result *r, int *nz)
+{
+	if (nz)
+		*nz = r->vol.nz;
+	return r->vol.z_nm;
+}
+
+const char *c0_result_report_json(const struct c0_result *r)
+{
+	struct c0_result *m = (struct c0_result *)r;   /* the text is a cache of the report */
+	if (!m->json)
+		m->json = cJSON_Print(r->rep);
+	return m->json;
+}
