@@ -154,7 +154,7 @@ static double residual2(struct prob *p, const double *sol)
 	return s;
 }
 
-struct dp { struct prob *p; double *sol, target, tprev; int fail; };
+struct dp { struct prob *p; double *sol, target, tprev, tmin; int fail; };
 
 static double discrepancy(void *ctx, double t)
 {
@@ -163,7 +163,7 @@ static double discrepancy(void *ctx, double t)
 	/* Warm start from the last mu only when it is far (a factor e or more):
 	 * from a near one the start may already meet the CG tolerance and not
 	 * move, and the residual would step instead of rising with mu. */
-	if (!(fabs(t - d->tprev) >= 1))
+	if (!(fabs(t - d->tprev) >= 1) || t <= d->tmin)   /* at the smallest mu: as the floor was solved */
 		memset(d->sol, 0, sizeof *d->sol * (size_t)(d->p->n + d->p->nb));
 	d->tprev = t;
 	if (solve(d->p, d->sol))
@@ -237,7 +237,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 			if (st)
 				goto out;
 		}
-		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, 0 };
+		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, 0 };
 		double t;
 		int evals;
 		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
