@@ -130,7 +130,8 @@ def test_bad_inputs(tmp):
 def test_orders(tmp):
     """the simulator's orders: restart leaves no fade across stacks, interleaved
     spreads it evenly, gaps add fade; run's estimate follows a given order"""
-    small = ["--width", "32", "--height", "32", "--frames", "200", "--tau-bleach", "5"]
+    small = ["--width", "32", "--height", "32", "--frames", "200", "--tau-bleach", "5"] if MODE == "full" else \
+        ["--width", "20", "--height", "20", "--frames", "100", "--tau-bleach", "2"]
     default = ["--width", "48", "--height", "48", "--frames", "300"]
     fades = {}
     for order in ("sequential", "interleaved", "restart"):
