@@ -43,6 +43,12 @@ static double golden(struct fitctx *f, double *p, double lo, double hi, double *
 	return rss(f, *cx, *cy, *s);
 }
 
+static int cmpf(const void *a, const void *b)
+{
+	float x = *(const float *)a, y = *(const float *)b;
+	return (x > y) - (x < y);
+}
+
 int c0_psf_fit_image(const float *img, int w, int h, const char *name, struct c0_psf_fit *out)
 {
 	if (w < 5 || h < 5)
@@ -57,17 +63,8 @@ int c0_psf_fit_image(const float *img, int w, int h, const char *name, struct c0
 		if (img[i] > img[imax])
 			imax = i;
 	}
-	double med = 0;
-	{   /* median by partial selection is not worth it here: the images are small */
-		for (size_t i = 1; i < n; i++) {
-			float v = sorted[i];
-			size_t j = i;
-			while (j > 0 && sorted[j - 1] > v)
-				sorted[j] = sorted[j - 1], j--;
-			sorted[j] = v;
-		}
-		med = sorted[n / 2];
-	}
+	qsort(sorted, n, sizeof *sorted, cmpf);
+	const double med = sorted[n / 2];
 	free(sorted);
 	const double peak = img[imax] - med;
 	if (!(peak > 0))
