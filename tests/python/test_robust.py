@@ -84,8 +84,8 @@ def test_validation(tmp, s16, s20):
     check(cli(*base, "--pixel-size", "100", "--matirf-iterations", "50", s16[0], other).returncode == 0,
           "(c) --pixel-size overrides differing calibrations")
     shutil.rmtree(out, ignore_errors=True)
-    p = cli("run", "--fwhm", "229", "--angles", "50,66", "-o", out, *s16)
-    check(refused(p, "--angles: angle 50 deg is not between the critical angle"), "(d) message keeps the angle")
+    p = cli("run", "--fwhm", "229", "--angles", "95,66", "-o", out, *s16)
+    check(refused(p, "--angles: angle 95 deg is not between the critical angle"), "(d) message keeps the angle")
     check("--angles: --angles" not in p.stderr, "(d) message not garbled: %r" % p.stderr)
     check(refused(cli("run", "--emission", "510", "--na", "2", "--angles", "62,66", "-o", out, *s16), "--na 2", "--n-glass"),
           "(i) NA above the immersion index")
