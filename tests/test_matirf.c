@@ -211,7 +211,7 @@ static void test_fused(void)
 		for (int i = 0; i < n * n; i++)
 			img[q][i] = amp[i] > 0 ? (float)(1000 * amp[i] * exp(-p * depth[i]) * (1 + 0.1 * c0_rng_normal(&rng))) : 0;
 	}
-	c.pdhg.maxit = 300, c.pdhg.tol = -1;   /* no stop */
+	c.pdhg.maxit = 300, c.pdhg.tol = 1e-30;   /* no stop */
 	c.solver = C0_MATIRF_DIAG;
 	struct c0_matirf_result a, b;
 	CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &a) == C0_OK);
