@@ -2,6 +2,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -11,6 +12,7 @@ struct c0_cov_acc {
 	struct c0_cov c;
 	double *shift;      /* first frame: sums are of y - shift, which keeps them small */
 	double *s1;
+	double *st;         /* sum over frames of t (y - shift): the linear trend */
 	double *blk;        /* BLOCK frames, shifted */
 	int nb;
 };
@@ -33,8 +35,9 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 	c->mean = c0_alloc(n, sizeof(double));
 	a->shift = c0_alloc(n, sizeof(double));
 	a->s1 = c0_alloc(n, sizeof(double));
+	a->st = c0_alloc(n, sizeof(double));
 	a->blk = c0_alloc(n * BLOCK, sizeof(double));
-	if (!c->dy || !c->dx || !c->r || !c->mean || !a->shift || !a->s1 || !a->blk) {
+	if (!c->dy || !c->dx || !c->r || !c->mean || !a->shift || !a->s1 || !a->st || !a->blk) {
 		c0_cov_acc_free(a);
 		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, c->nlag);
 	}
@@ -58,7 +61,7 @@ void c0_cov_acc_free(struct c0_cov_acc *a)
 	if (!a)
 		return;
 	c0_cov_free(&a->c);
-	free(a->shift), free(a->s1), free(a->blk);
+	free(a->shift), free(a->s1), free(a->st), free(a->blk);
 	free(a);
 }
 
@@ -94,9 +97,11 @@ int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
 		for (size_t i = 0; i < n; i++)
 			a->shift[i] = frame[i];
 	double *dst = a->blk + a->nb * n;
+	const double t = (double)c->frames;
 	for (size_t i = 0; i < n; i++) {
 		dst[i] = frame[i] - a->shift[i];
 		a->s1[i] += dst[i];
+		a->st[i] += t * dst[i];
 	}
 	c->frames++;
 	if (++a->nb == BLOCK)
@@ -116,15 +121,22 @@ int c0_cov_acc_finish(struct c0_cov_acc *a, struct c0_cov *out)
 	const int W = c->W, H = c->H;
 	const size_t n = (size_t)W * H;
 	const double T = (double)c->frames;
-	for (size_t i = 0; i < n; i++)
+	/* a per-pixel linear trend (bleaching, slow drift of the lamp) is not
+	 * fluctuation: remove it. With a_i = sum_t (t - tbar) y_i and
+	 * Stt = sum_t (t - tbar)^2, the detrended cross-product is
+	 * sum (y_i - ybar_i)(y_j - ybar_j) - a_i a_j / Stt, over T - 2 degrees of freedom. */
+	const double tbar = (T - 1) / 2, Stt = T * (T * T - 1) / 12;
+	for (size_t i = 0; i < n; i++) {
 		c->mean[i] = a->s1[i] / T;       /* shifted mean */
+		a->st[i] = (a->st[i] - tbar * a->s1[i]) / sqrt(Stt);   /* a_i / sqrt(Stt) */
+	}
 	for (int l = 0; l < c->nlag; l++) {
 		const int dy = c->dy[l], dx = c->dx[l];
 		for (int y = 0; y + dy < H; y++)
 			for (int x = dx < 0 ? -dx : 0; x < (dx > 0 ? W - dx : W); x++) {
 				size_t i = (size_t)y * W + x, j = (size_t)(y + dy) * W + x + dx;
 				double *r = c->r + (size_t)l * n + i;
-				*r = (*r - T * c->mean[i] * c->mean[j]) / (T - 1);
+				*r = (*r - T * c->mean[i] * c->mean[j] - a->st[i] * a->st[j]) / (T - 2);
 			}
 	}
 	for (size_t i = 0; i < n; i++)

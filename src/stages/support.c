@@ -35,8 +35,12 @@ int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t fram
 		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
 		return c0_fail(C0_EINVAL, "lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
-	if (c->fista.maxit < 1 || !(c->fista.tol > 0))
+	if (c->fista.maxit < 1 || !(c->fista.tol > 0 && isfinite(c->fista.tol)))
 		return c0_fail(C0_EINVAL, "iterations %d / tol %g: must be positive", c->fista.maxit, c->fista.tol);
+	if (c->penalty == C0_PENALTY_CEL0 && c->cel0_outer < 1)
+		return c0_fail(C0_EINVAL, "reweightings %d: must be at least 1", c->cel0_outer);
+	if (c->lag < 0 || c->lag > 1000)
+		return c0_fail(C0_EINVAL, "lag %d: must be 0 (from the PSF) to 1000 pixels", c->lag);
 	int d = c0_support_lag(c);
 	if (W < 2 * d + 1 || H < 2 * d + 1)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels is smaller than the PSF band (%d x %d pixels for lag %d)",
