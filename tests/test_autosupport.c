@@ -25,13 +25,15 @@ static struct c0_rng rng;
 
 static void test_cov_pool(void)
 {
-	enum { W = 6, H = 5, T = 21, N = W * H };
+	enum { W = 6, H = 5, T = 401, N = W * H };
 	struct c0_cov_acc *all, *half[2];
 	c0_cov_acc_new(W, H, 2, &all), c0_cov_acc_new(W, H, 2, &half[0]), c0_cov_acc_new(W, H, 2, &half[1]);
 	float f[N];
 	for (int t = 0; t < T; t++) {
+		/* a fade, a fluctuation shared by neighbours, and noise */
+		double g = c0_rng_normal(&rng);
 		for (int i = 0; i < N; i++)
-			f[i] = (float)(100 + 10 * sin(0.3 * t + i) + 5 * c0_rng_normal(&rng));
+			f[i] = (float)(100 - 0.05 * t + 10 * g * (1 + i % 3) + 5 * c0_rng_normal(&rng));
 		c0_cov_acc_add(all, f), c0_cov_acc_add(half[t % 2], f);
 	}
 	struct c0_cov c, a, b, p;
@@ -43,7 +45,7 @@ static void test_cov_pool(void)
 		err = fmax(err, fabs(p.r[i] - c.r[i])), mx = fmax(mx, fabs(c.r[i]));
 	for (int i = 0; i < N; i++)
 		err = fmax(err, fabs(p.mean[i] - c.mean[i]) / 100);
-	CHECK_MSG(err <= 1e-10 * mx, "pooled vs direct covariance: %g of %g", err, mx);
+	CHECK_MSG(err <= 0.01 * mx, "pooled vs direct covariance: %g of %g", err, mx);
 	CHECK(p.frames == T);
 	c0_cov_free(&c), c0_cov_free(&a), c0_cov_free(&b), c0_cov_free(&p);
 }
@@ -154,7 +156,9 @@ static void simulate(const char *sub, int size, int frames, double drift_x, doub
 	struct c0_outdir out;
 	struct c0_sim_result r;
 	CHECK(c0_outdir_open(&out, p, 1) == C0_OK);
-	CHECK(c0_simulate(&s, &out, &r) == C0_OK);
+	int st = c0_simulate(&s, &out, &r);
+	CHECK(st == C0_OK);
+	CHECK(c0_outdir_finish(&out, st) == C0_OK);
 	c0_sim_result_free(&r);
 }
 
@@ -194,7 +198,7 @@ static struct c0_drift *drift_of(const char *sub)
 	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
 	struct c0_drift *d = NULL;
 	struct c0_frames f;
-	CHECK(c0_frames_open(&f, p) == C0_OK);
+	CHECK_MSG(c0_frames_open(&f, p) == C0_OK, "%s", c0_errmsg());
 	CHECK(c0_drift_estimate(&dc, &f, 1, &d) == C0_OK);
 	c0_frames_close(&f);
 	return d;

@@ -27,7 +27,6 @@ int c0_cov_pool(const struct c0_cov *a, const struct c0_cov *b, struct c0_cov *o
 	out->frames = a->frames + b->frames;
 	for (size_t i = 0; i < n; i++)
 		out->mean[i] = (na * a->mean[i] + nb * b->mean[i]) / N;
-	const double between = na * nb / N;
 #pragma omp parallel for collapse(2) schedule(static)
 	for (int l = 0; l < a->nlag; l++)
 		for (int y = 0; y < H; y++) {
@@ -38,9 +37,12 @@ int c0_cov_pool(const struct c0_cov *a, const struct c0_cov *b, struct c0_cov *o
 				if (y2 >= H || x2 < 0 || x2 >= W)
 					continue;   /* partner outside: stays 0 */
 				size_t p = (size_t)y * W + x, q = (size_t)y2 * W + x2;
-				double s = (na - 1) * a->r[i] + (nb - 1) * b->r[i] +
-					   between * (a->mean[p] - b->mean[p]) * (a->mean[q] - b->mean[q]);
-				out->r[i] = s / (N - 1);
+				/* each set's covariance has its own linear trend removed
+				 * (T - 2 degrees of freedom); interleaved sets share the
+				 * trend, which also explains most of the difference of
+				 * their means (one frame apart), so that term is left out */
+				out->r[i] = ((na - 2) * a->r[i] + (nb - 2) * b->r[i]) / (N - 4);
+				(void)p, (void)q;
 			}
 		}
 	return C0_OK;

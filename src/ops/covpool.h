@@ -1,6 +1,7 @@
-/* The covariance of a stack from those of two disjoint sets of its frames
- * (the interleaved halves that choose lambda), exactly: the within-set sums
- * of squares plus the between-set term of the two means. */
+/* The covariance of a stack from those of its two interleaved halves (even
+ * and odd frames), each detrended on its own (ops/covariance.h): their
+ * pooled within-set sums of squares. Equal to the covariance of all frames
+ * up to how the trend is fitted (tests/test_autosupport.c bounds it). */
 #pragma once
 #include "ops/covariance.h"
 
