@@ -15,7 +15,7 @@
 
 #define MAXQ 64
 #define REFINE 2   /* rounds of refinement against the mean of all blocks */
-#define SIGNIF 4   /* an axis is corrected when its drift exceeds this many noise sds */
+#define SIGNIF 6   /* an axis is corrected when its drift exceeds this many noise sds */
 
 struct hook {
 	struct c0_drift *d;
@@ -147,13 +147,14 @@ static void shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
  * their shifts, and each block is re-measured after its own shift has been
  * undone, so that the sub-pixel fit works near zero where it is unbiased.
  * The trajectory stays relative to the first block. */
-static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
+/* REFINE rounds on blocks k0..k1-1 against the mean of those blocks moved back */
+static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1)
 {
 	const size_t n = (size_t)d->H * d->W;
 	int st = C0_OK;
-	for (int round = 0; round < REFINE && d->nb > 1 && !st; round++) {
+	for (int round = 0; round < REFINE && k1 - k0 > 1 && !st; round++) {
 		memset(ref, 0, n * sizeof *ref);
-		for (int k = 0; k < d->nb && !st; k++) {
+		for (int k = k0; k < k1 && !st; k++) {
 			memcpy(tmp, d->bm[k], n * sizeof *tmp);
 			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
 			for (size_t i = 0; i < n; i++)
@@ -161,7 +162,7 @@ static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
 		}
 		spectrum(x, ref);
 		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
-		for (int k = 0; k < d->nb && !st; k++) {
+		for (int k = k0; k < k1 && !st; k++) {
 			memcpy(tmp, d->bm[k], n * sizeof *tmp);
 			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
 			for (size_t i = 0; i < n; i++)
@@ -170,9 +171,25 @@ static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
 			shift_of(x, ref, &rx, &ry);
 			d->bx[k] += rx, d->by[k] += ry;
 		}
-		for (int k = d->nb - 1; k >= 0; k--)
-			d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
 	}
+	return st;
+}
+
+static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
+{
+	int st = C0_OK, k0 = 0;
+	/* each stack against the mean of its own blocks: an angle changes the
+	 * image (depth-dependent excitation), which a correlation across angles
+	 * would read as a shift */
+	for (int q = 0; q < d->nq && !st; q++) {
+		int k1 = k0;
+		while (k1 < d->nb && d->bt[k1] < (double)(d->start[q] + d->frames[q]))
+			k1++;
+		st = refine_range(d, x, ref, tmp, k0, k1);
+		k0 = k1;
+	}
+	for (int k = d->nb - 1; k >= 0; k--)
+		d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
 	/* an axis whose shifts stay within SIGNIF noise sds of zero has no
 	 * drift we can tell from the estimates' own noise: undoing it would
 	 * only add jitter. The noise sd comes from second differences, which a
@@ -208,7 +225,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 	struct xcorr x = { 0 };
 	double *sum = NULL;
 	float *frame = NULL;
-	int st = C0_OK, cap = 0;
+	int st = C0_OK, cap = 0, prev0 = 0;
 	int64_t g = 0;
 	for (int q = 0; q < n && !st; q++) {
 		struct c0_frames *r = &f[q];
@@ -245,6 +262,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 			if (!a || !b2 || !c2 || !m2)
 				st = c0_fail(C0_ENOMEM, "drift: out of memory");
 		}
+		const int this0 = d->nb;   /* this stack's first block */
 		struct c0_progress pr;
 		c0_progress_begin(&pr, "drift", (double)T);
 		for (int64_t k = 0; k < nb && !st; k++) {
@@ -270,9 +288,17 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 			/* chained: each block against the one before, so that a large
 			 * total drift is followed in small steps */
 			double bx = 0, by = 0;
-			if (d->nb > 0) {
+			if (d->nb > 0 && k > 0) {
 				shift_of(&x, sum, &bx, &by);
 				bx += d->bx[d->nb - 1], by += d->by[d->nb - 1];
+			} else if (d->nb > 0) {
+				/* a new stack (another angle): continue the trajectory at
+				 * the previous stack's mean rate (first to last block)
+				 * rather than correlate across angles */
+				const int j = d->nb - 1, i = prev0;
+				double u = j > i ? ((double)g + 0.5 * (double)(t2 - 1) - d->bt[j]) / (d->bt[j] - d->bt[i]) : 0;
+				bx = d->bx[j] + u * (d->bx[j] - d->bx[i]);
+				by = d->by[j] + u * (d->by[j] - d->by[i]);
 			}
 			spectrum(&x, sum);
 			memcpy(x.ref, x.sp, x.ns * sizeof *x.ref);
@@ -289,6 +315,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 			d->nb++;
 		}
 		c0_progress_end(&pr);
+		prev0 = this0;
 		d->frames[q] = T, d->start[q] = g;
 		d->hooks[q].d = d, d->hooks[q].q = q;
 		g += T;

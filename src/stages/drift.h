@@ -6,7 +6,7 @@
  * The blocks are first chained (each against the one before), then refined
  * against the mean of all blocks moved back. The blocks' shifts are linearly interpolated between block centres (and
  * extrapolated from the nearest two beyond them) to every frame. An axis
- * whose shifts all stay within 4 sds of the estimates' own noise is left
+ * whose shifts all stay within 6 sds of the estimates' own noise is left
  * uncorrected (undoing noise only adds jitter). */
 #pragma once
 #include <stddef.h>
@@ -38,7 +38,7 @@ struct c0_drift_info {
 	const double *bt, *bx, *by; /* block centre (frame index over all stacks), shift (px) */
 	double max_px, seconds;
 	double noise_px[2];         /* sd of one block's shift (x, y), from second differences */
-	int corrected[2];           /* 0: the axis' drift stayed within 4 noise sds, left uncorrected */
+	int corrected[2];           /* 0: the axis' drift stayed within 6 noise sds, left uncorrected */
 };
 void c0_drift_get_info(const struct c0_drift *d, struct c0_drift_info *out);
 
