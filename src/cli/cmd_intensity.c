@@ -36,7 +36,7 @@ int cmd_intensity(int argc, char **argv)
 		"Estimate each stack's mean intensity on the support (fine grid) and its smooth background\n"
 		"(coarse grid), with the smoothness weight set by the discrepancy principle. Writes\n"
 		"OUTDIR/intensity_qNN.tif, OUTDIR/background_qNN.tif and OUTDIR/report.json.",
-		opts, C0_NOPTS(opts), 1, 64 };
+		opts, C0_NOPTS(opts), 1, 64, 1 };
 	char **stacks = malloc(sizeof(char *) * (size_t)argc);
 	int ns, rc = c0_opts_parse(&spec, argc, argv, &ns, stacks);
 	if (rc) {

@@ -31,7 +31,7 @@ int cmd_matirf(int argc, char **argv)
 		"OUTDIR/volume.tif (float32, depth bins x H x W, z spacing = bin width),\n"
 		"OUTDIR/depth.tif (intensity-weighted mean depth, nm), OUTDIR/depth.png (depth colour\n"
 		"code with colour bar) and OUTDIR/report.json (\"z_nm\": bin centres).",
-		opts, C0_NOPTS(opts), 2, 64 };
+		opts, C0_NOPTS(opts), 2, 64, 1 };
 	char *imgs[64];
 	int ni, rc = c0_opts_parse(&spec, argc, argv, &ni, imgs);
 	if (rc)

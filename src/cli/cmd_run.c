@@ -72,7 +72,7 @@ int cmd_run(int argc, char **argv)
 		"[i p/r, (i+1) p/r) nm from the top-left corner), rx.tif, intensity_qNN.tif (fine),\n"
 		"background_qNN.tif (coarse), volume.tif (depth bins x fine grid), depth.tif,\n"
 		"depth.png and report.json (every parameter and estimate; \"z_nm\": bin centres).",
-		opts, C0_NOPTS(opts), 1, MAXS };
+		opts, C0_NOPTS(opts), 1, MAXS, 1 };
 	char *stacks[MAXS];
 	int ns, rc = c0_opts_parse(&spec, argc, argv, &ns, stacks);
 	if (rc)

@@ -37,7 +37,7 @@ int cmd_support(int argc, char **argv)
 		"(COL0RME); with several stacks the support is the union. Writes OUTDIR/support.tif\n"
 		"(uint8 0/1; fine pixel (i, j) covers [i p/r, (i+1) p/r) nm from the top-left corner),\n"
 		"OUTDIR/rx.tif (float32 emitter variance, one plane per stack) and OUTDIR/report.json.",
-		opts, C0_NOPTS(opts), 1, -1 };
+		opts, C0_NOPTS(opts), 1, -1, 1 };
 	char **stacks = malloc(sizeof(char *) * (size_t)argc);
 	int ns, rc = c0_opts_parse(&spec, argc, argv, &ns, stacks);
 	if (rc) {

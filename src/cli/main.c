@@ -2,6 +2,7 @@
 #include "cli/commands.h"
 #include "core/err.h"
 #include "core/progress.h"
+#include "core/threads.h"
 #include "c0_version.h"
 
 #include <stdio.h>
@@ -39,6 +40,7 @@ static void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
+	c0_threads_startup(argv);
 	if (argc < 2) {
 		usage(stderr);
 		return 2;

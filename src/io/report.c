@@ -2,6 +2,7 @@
 #include "io/report.h"
 #include "io/atomic.h"
 #include "core/err.h"
+#include "core/threads.h"
 #include "c0_version.h"
 
 #include <stdio.h>
@@ -30,6 +31,9 @@ cJSON *c0_report_new(const char *command, int argc, char **argv)
 	gmtime_r(&now, &tm);
 	strftime(ts, sizeof ts, "%Y-%m-%dT%H:%M:%SZ", &tm);
 	cJSON_AddStringToObject(r, "created", ts);
+	cJSON_AddNumberToObject(r, "threads", c0_threads_get());
+	const char *wp = getenv("OMP_WAIT_POLICY");
+	cJSON_AddStringToObject(r, "omp_wait_policy", wp ? wp : "");
 	return r;
 }
 
