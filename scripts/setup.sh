@@ -5,7 +5,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PKGS=(build-essential cmake pkg-config libtiff-dev libtiff-tools libcjson-dev libpng-dev
-      python3-numpy python3-tifffile clang libclang-rt-14-dev libomp-14-dev)
+      python3-numpy python3-tifffile clang libclang-rt-14-dev libomp-14-dev
+      libopenmpi-dev openmpi-bin)
 
 missing=()
 for p in "${PKGS[@]}"; do

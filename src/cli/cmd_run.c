@@ -54,6 +54,7 @@ int cmd_run(int argc, char **argv)
 		{ "support-angles", 0, C0_OPT_INTS, sel, "I,J", "1-based stack numbers whose supports are joined", "the smallest angle", MAXS, &nsel },
 		{ "penalty", 0, C0_OPT_STRING, &pen, "l1|cel0", "support sparsity penalty", NULL, 0, NULL },
 		{ "lambda", 0, C0_OPT_DOUBLE, &sc.lambda_rel, "F", "support regularisation relative to lambda_max", "1e-2 for l1, 3e-5 for cel0", 0, NULL },
+		{ "tile", 0, C0_OPT_INT, &sc.tile, "PX", "support tile side in camera pixels (tiles overlap by two lags)", "256, or the image when smaller", 0, NULL },
 		{ "nu", 0, C0_OPT_DOUBLE, &ic.nu, "F", "intensity discrepancy factor (0: sqrt(T))", NULL, 0, NULL },
 		{ "graph-radius", 0, C0_OPT_DOUBLE, &ic.graph_radius, "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL },
 		{ "depth-pool", 0, C0_OPT_DOUBLE, &pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "the FWHM", 0, NULL },

@@ -28,6 +28,7 @@ int cmd_support(int argc, char **argv)
 		{ "iterations", 0, C0_OPT_INT, &c.fista.maxit, "N", "maximum FISTA iterations (per reweighting for cel0)", NULL, 0, NULL },
 		{ "tol", 0, C0_OPT_DOUBLE, &c.fista.tol, "F", "stop when the relative change of the iterate falls below this", NULL, 0, NULL },
 		{ "reweightings", 0, C0_OPT_INT, &c.cel0_outer, "N", "CEL0 reweighting steps", NULL, 0, NULL },
+		{ "tile", 0, C0_OPT_INT, &c.tile, "PX", "tile side in camera pixels (tiles overlap by two lags)", "256, or the image when smaller", 0, NULL },
 		{ "lag", 0, C0_OPT_INT, &c.lag, "PX", "covariance lag radius in pixels", "ceil(6 sigma / pixel)", 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },

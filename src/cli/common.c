@@ -67,6 +67,9 @@ int c0_run_support(struct c0_support_conf *c, char **stacks, int n, struct c0_su
 		cJSON_AddNumberToObject(o, "noise_variance", s->sigma2);
 		cJSON_AddNumberToObject(o, "iterations", s->iters);
 		cJSON_AddBoolToObject(o, "converged", s->converged);
+		cJSON_AddNumberToObject(o, "duality_gap", s->gap);
+		cJSON_AddNumberToObject(o, "tiles", s->tiles);
+		cJSON_AddNumberToObject(o, "tile_px", s->tile);
 		cJSON_AddNumberToObject(o, "support_pixels", s->support_pixels);
 		cJSON_AddNumberToObject(o, "covariance_s", s->t_cov);
 		cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);

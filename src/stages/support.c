@@ -5,9 +5,12 @@
 #include "core/err.h"
 #include "core/mem.h"
 #include "core/progress.h"
+#include "core/comm.h"
+#include "stages/tiles.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
 
 int c0_support_lag(const struct c0_support_conf *c)
@@ -37,6 +40,10 @@ int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t fram
 	if (c->fista.maxit < 1 || !(c->fista.tol > 0))
 		return c0_fail(C0_EINVAL, "--iterations / --tol must be positive");
 	int d = c0_support_lag(c);
+	if (c->tile && c->tile < 2 * d + 1)
+		return c0_fail(C0_EINVAL, "--tile %d: smaller than the PSF band (%d pixels for lag %d)", c->tile, 2 * d + 1, d);
+	if (c->tile && c->tile > (W > H ? W : H))
+		return c0_fail(C0_EINVAL, "--tile %d: larger than the %dx%d image of %s", c->tile, W, H, name);
 	if (W < 2 * d + 1 || H < 2 * d + 1)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels is smaller than the PSF band (%d x %d pixels for lag %d)",
 			       name, W, H, 2 * d + 1, 2 * d + 1, d);
@@ -57,6 +64,7 @@ struct ctx {
 	double trR, R2, HW;
 	double *Ax;
 	const uint8_t *mask;     /* if set, x is free only here */
+	double lam;
 };
 
 /* f(x) = min_s 1/2 ||R - M(x) - s I||^2 (s in closed form) and its gradient */
@@ -77,12 +85,46 @@ static double smooth(void *vctx, const double *x, double *g)
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
 
+/* Relative duality gap of the l1 problem at x >= 0 (with s in closed form):
+ * the residual rho = R - A x - s I scaled into the dual feasible set,
+ * theta = rho / max(1, max_a (A^T rho)_a / lam), gives
+ *   D = <R, theta> - ||theta||^2 / 2 <= P* <= P = ||rho||^2 / 2 + lam sum x,
+ * and every term is one of the sums the objective needs already. */
+static double gap(void *vctx, const double *x)
+{
+	struct ctx *c = vctx;
+	const struct c0_covop *op = c->op;
+	const size_t L = (size_t)op->Ly * op->Lx;
+	c0_covop_normal(c->op, x, c->Ax);
+	double xc = 0, xax = 0, xn = 0, x1 = 0;
+#pragma omp parallel for reduction(+ : xc, xax, xn, x1) if (L > 100000)
+	for (size_t i = 0; i < L; i++)
+		xc += x[i] * c->C[i], xax += x[i] * c->Ax[i], xn += x[i] * op->n[i], x1 += x[i];
+	const double s = fmax(0, (c->trR - xn) / c->HW);
+	double worst = 0;      /* max_a (A^T rho)_a = max_a -g_a */
+#pragma omp parallel for reduction(max : worst) if (L > 100000)
+	for (size_t i = 0; i < L; i++)
+		worst = fmax(worst, c->C[i] - c->Ax[i] - s * op->n[i]);
+	const double f = 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
+	const double P = f + c->lam * x1, k = fmax(1, worst / c->lam);
+	const double D = (c->R2 - xc - s * c->trR) / k - f / (k * k);
+	return (P - D) / fmax(P, 1e-300);
+}
+
+/* A tile solves with the whole image's normalisation and lambda, so that
+ * every tile answers the same question. */
+struct scale {
+	double norm;     /* largest pixel variance of the image */
+	double lam;      /* absolute lambda (normalised units) */
+	int lmax_only;   /* stop after lambda_max (for the image's lambda_max) */
+};
+
 static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
-		 struct c0_support_result *res);
+		 const struct scale *g, struct c0_support_result *res);
 
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
 {
-	return solve(c, cov, NULL, res);
+	return solve(c, cov, NULL, NULL, res);
 }
 
 int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2)
@@ -92,14 +134,14 @@ int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, 
 	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
 	struct c0_support_result r;
 	memset(&r, 0, sizeof r);
-	int st = solve(&cc, cov, mask, &r);
+	int st = solve(&cc, cov, mask, NULL, &r);
 	*sigma2 = r.sigma2;
 	c0_support_result_free(&r);
 	return st;
 }
 
 static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
-		 struct c0_support_result *res)
+		 const struct scale *g, struct c0_support_result *res)
 {
 	double t0 = c0_now();
 	const int W = cov->W, H = cov->H, r = c->srf;
@@ -124,12 +166,14 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	double mx = 0;
 	for (size_t i = 0; i < n; i++)
 		mx = fmax(mx, cov->r[i]);
+	if (g)
+		mx = g->norm;
 	if (!(mx > 0)) {
 		st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
 		goto out;
 	}
 	res->norm = mx;
-	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, mask };
+	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, mask, 0 };
 	for (int l = 0; l < cov->nlag; l++) {
 		double w = c0_cov_weight(cov, l);
 		for (size_t i = 0; i < n; i++) {
@@ -151,9 +195,12 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 			lmax = fmax(lmax, gi * gi / (2 * op.n[i] * op.n[i]));
 	}
 	res->lambda_max = lmax;
-	res->lambda = mask ? 0 : lambda_rel(c) * lmax;
+	if (g && g->lmax_only)
+		goto out;
+	res->lambda = mask ? 0 : g ? g->lam : lambda_rel(c) * lmax;
 	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
-	if (lmax > 0 || mask) {
+	ctx.lam = res->lambda;
+	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
 		if (c->penalty == C0_PENALTY_L1 || mask)
 			st = c0_fista_nn(smooth, &ctx, L, op.lip, NULL, res->lambda, x, &c->fista, &info);
 		else
@@ -162,7 +209,8 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	if (st)
 		goto out;
 	res->iters = info.iters;
-	res->converged = lmax > 0 ? info.converged : 1;
+	res->converged = lmax > res->lambda || mask ? info.converged : 1;
+	res->gap = c->penalty == C0_PENALTY_L1 && !mask && lmax > res->lambda ? gap(&ctx, x) : 0;
 	res->nhist = info.iters < res->nhist ? info.iters : res->nhist;
 	double xn = 0;
 	for (size_t i = 0; i < L; i++) {
@@ -248,24 +296,187 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 	return st;
 }
 
+/* One tile: its window's covariance from the accumulator (rows from ya),
+ * solved with the image's scale; with lmax_only just its lambda_max. */
+static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tile *t,
+		      const struct scale *g, struct c0_support_result *tr)
+{
+	struct c0_cov cov;
+	memset(tr, 0, sizeof *tr);
+	int st = c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &cov);
+	if (!st)
+		st = solve(c, &cov, NULL, g, tr);
+	if (!st && !g->lmax_only)
+		tr->mean = cov.mean, cov.mean = NULL;
+	c0_cov_free(&cov);
+	return st;
+}
+
+/* Runs fn over this process's tiles side by side (one tile per thread: the
+ * solvers' own loops then run serially, so a tile's numbers do not depend
+ * on how many threads or processes share the work). */
+static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
+		     int k0, int k1, const struct scale *g, struct c0_support_result *res, double *lmax, double *tile_s2,
+		     double *tile_stats)
+{
+	const int r = c->srf, Lx = tl->t[tl->n - 1].x0 + tl->t[tl->n - 1].w;
+	int fail = C0_OK;
+	char msg[512] = "";
+	struct c0_progress pr;
+	int done = 0;
+	c0_progress_begin(&pr, g->lmax_only ? "support (lambda_max)" : "support (tiles)", k1 - k0);
+#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
+	for (int k = k0; k < k1; k++) {
+		const struct c0_tile *t = &tl->t[k];
+		struct c0_support_result tr;
+		int st = tile_solve(c, acc, ya, t, g, &tr);
+		if (!st && g->lmax_only)
+			lmax[k] = tr.lambda_max;
+		if (!st && !g->lmax_only) {
+			/* keep the interior: fine rows and columns inside the window */
+			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+			for (int y = 0; y < t->ih * r; y++) {
+				const size_t src = (size_t)(oy * r + y) * tr.Lx + (size_t)ox * r;
+				const size_t dst = (size_t)(t->iy0 * r + y) * (Lx * r) + (size_t)t->ix0 * r;
+				memcpy(res->mask + dst, tr.mask + src, (size_t)t->iw * r);
+				memcpy(res->rx + dst, tr.rx + src, (size_t)t->iw * r * sizeof(float));
+			}
+			for (int y = 0; y < t->ih; y++)
+				memcpy(res->mean + (size_t)(t->iy0 + y) * Lx + t->ix0, tr.mean + (size_t)(oy + y) * t->w + ox,
+				       (size_t)t->iw * sizeof(double));
+			tile_s2[k] = tr.sigma2;
+			double *ts = tile_stats + 4 * (size_t)k;
+			ts[0] = tr.iters, ts[1] = tr.converged, ts[2] = tr.gap, ts[3] = tr.lambda_max;
+#pragma omp critical(c0_support_hist)
+			for (int i = 0; i < res->nhist; i++)      /* a finished tile keeps its last value */
+				res->hist[i] += tr.nhist ? tr.hist[i < tr.nhist ? i : tr.nhist - 1] : 0;
+		}
+		if (st) {
+#pragma omp critical(c0_support_fail)
+			if (!fail)
+				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+		c0_support_result_free(&tr);
+#pragma omp critical(c0_support_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	c0_progress_end(&pr);
+	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
+}
+
+int c0_support_tile_size(const struct c0_support_conf *c, int W, int H)
+{
+	int big = W > H ? W : H;
+	return c->tile > 0 ? c->tile : C0_SUPPORT_TILE < big ? C0_SUPPORT_TILE : big;
+}
+
 int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
 		     struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
-	struct c0_cov cov;
-	double tc;
-	int st = c0_stack_covariance(c, rd, name, &cov, &tc);
+	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
+	const int W = (int)in->width, H = (int)in->height, r = c->srf, d = c0_support_lag(c);
+	int st = c0_support_check(c, W, H, in->pages, name);
 	if (st)
 		return st;
-	struct c0_progress ps;
-	c0_progress_begin(&ps, "support", 1);
-	st = c0_support_solve(c, &cov, res);
-	c0_progress_end(&ps);
-	res->t_cov = tc;
-	if (!st) {
-		res->mean = cov.mean;
-		cov.mean = NULL;
+	double t0 = c0_now();
+	/* the tile grid (halo: two lags), and this process's share of it */
+	struct c0_tiling tl;
+	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
+		return st;
+	const int rank = c0_comm_rank(), size = c0_comm_size();
+	int k0, k1, ya, yb, ia, ib;
+	c0_tiling_share(&tl, rank, size, &k0, &k1, &ya, &yb, &ia, &ib);
+	const int rows = yb - ya;
+	/* one pass over the frames, each reading only this process's rows */
+	struct c0_cov_acc *acc = NULL;
+	float *frame = NULL;
+	if (rows > 0) {
+		st = c0_cov_acc_new(W, rows, d, &acc);
+		if (!st)
+			st = c0_cov_acc_set_block(acc, c0_cov_block_frames((size_t)W * H));
+		if (!st && !(frame = c0_alloc((size_t)W * rows, sizeof *frame)))
+			st = C0_ENOMEM;
+		struct c0_progress pr;
+		c0_progress_begin(&pr, "covariance", (double)in->pages);
+		for (int64_t t = 0; t < in->pages && !st; t++) {
+			st = c0_tiff_read_rows_f32(rd, t, ya, rows, frame);
+			if (!st)
+				st = c0_cov_acc_add(acc, frame);
+			c0_progress_update(&pr, (double)t + 1);
+		}
+		c0_progress_end(&pr);
+		free(frame);
 	}
-	c0_cov_free(&cov);
+	res->t_cov = c0_now() - t0;
+	double t1 = c0_now();
+	/* the image's normalisation: its largest pixel variance */
+	double norm = 0;
+	for (int y = ia; !st && y < ib; y++)
+		for (int x = 0; x < W; x++)
+			norm = fmax(norm, c0_cov_acc_variance(acc, y - ya, x));
+	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
+	double *lmax = c0_alloc(nt, sizeof *lmax), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
+	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->pages;
+	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
+	res->mask = c0_alloc(L, 1);
+	res->rx = c0_alloc(L, sizeof *res->rx);
+	res->mean = c0_alloc((size_t)W * H, sizeof *res->mean);
+	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
+	if (!st && (!lmax || !s2 || !stats || !res->mask || !res->rx || !res->mean || !res->hist))
+		st = C0_ENOMEM;
+	if (!(st = c0_comm_status(st))) {
+		c0_comm_max(&norm, 1);
+		if (!(norm > 0))
+			st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+	}
+	/* lambda relative to the image's lambda_max: the largest of the tiles' */
+	struct scale g = { norm, 0, 1 };
+	if (!st)
+		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+	if (!st) {
+		c0_comm_max(lmax, tl.n);
+		for (int k = 0; k < tl.n; k++)
+			res->lambda_max = fmax(res->lambda_max, lmax[k]);
+		res->lambda = lambda_rel(c) * res->lambda_max;
+		res->norm = norm;
+		g.lam = res->lambda, g.lmax_only = 0;
+		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+	}
+	c0_cov_acc_free(acc);
+	/* rank 0 gathers the interiors (each tile's numbers come from one rank,
+	 * so sums over tiles are made in tile order, whatever the ranks) */
+	if (!st) {
+		c0_comm_sum(s2, tl.n);
+		c0_comm_sum(stats, 4 * tl.n);
+		c0_comm_sum(res->hist, res->nhist);
+		st = c0_comm_gather_rows(res->mask, (size_t)W * r, ia * r, (ib - ia) * r);
+		if (!st)
+			st = c0_comm_gather_rows(res->rx, (size_t)W * r * sizeof(float), ia * r, (ib - ia) * r);
+		if (!st)
+			st = c0_comm_gather_rows(res->mean, (size_t)W * sizeof(double), ia, ib - ia);
+	}
+	if (!st) {
+		double area = 0;
+		res->converged = 1;
+		for (int k = 0; k < tl.n; k++) {
+			const struct c0_tile *t = &tl.t[k];
+			const double *ts = stats + 4 * (size_t)k;
+			res->sigma2 += s2[k] * t->ih * t->iw, area += (double)t->ih * t->iw;
+			res->iters = ts[0] > res->iters ? (int)ts[0] : res->iters;
+			res->converged &= ts[1] > 0;
+			res->gap = fmax(res->gap, ts[2]);
+		}
+		res->sigma2 /= area;
+		res->nhist = res->iters < res->nhist ? res->iters : res->nhist;
+		for (size_t i = 0; i < L; i++)
+			res->support_pixels += res->mask[i];
+		res->tiles = tl.n, res->tile = c0_support_tile_size(c, W, H);
+	}
+	free(lmax), free(s2), free(stats);
+	c0_tiling_free(&tl);
+	res->t_solve = c0_now() - t1;
+	if (st)
+		c0_support_result_free(res);
 	return st;
 }
