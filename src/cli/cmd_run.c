@@ -7,6 +7,7 @@
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/comm.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -110,10 +111,12 @@ int cmd_run(int argc, char **argv)
 	ic.pixel_nm = sc.pixel_nm, ic.fwhm_nm = sc.fwhm_nm, ic.srf = sc.srf;
 	if (!st)
 		st = c0_intensity_check(&ic);
+	/* with MPI every rank takes part in the support step; rank 0 does the rest */
+	const int root = c0_comm_rank() == 0;
 	struct c0_outdir out;
-	if (!st)
+	if (!st && root)
 		st = c0_outdir_open(&out, outdir, force);
-	if (st)
+	if ((st = c0_comm_status(st)))
 		return c0_cli_error("run");
 
 	cJSON *rep = c0_report_new("run", argc, argv);
@@ -130,6 +133,12 @@ int cmd_run(int argc, char **argv)
 	const struct c0_support_result *known[MAXS] = { 0 };
 	double t = c0_now();
 	st = c0_run_support(&sc, sstacks, nsup, sres, rep);
+	if (!root) {
+		for (int k = 0; k < nsup; k++)
+			c0_support_result_free(&sres[k]);
+		cJSON_Delete(rep);
+		return st ? c0_cli_error("run") : 0;
+	}
 	if (!st)
 		st = c0_write_support(&out, &sc, sres, nsup, rep);
 	const size_t L = (size_t)sres[0].Ly * sres[0].Lx;

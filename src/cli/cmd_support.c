@@ -8,6 +8,7 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/comm.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -57,24 +58,27 @@ int cmd_support(int argc, char **argv)
 	struct c0_outdir out;
 	struct c0_support_result *res = c0_alloc((size_t)ns, sizeof *res);
 	cJSON *rep = c0_report_new("support", argc, argv);
+	/* with MPI every rank takes part in the solve; rank 0 writes */
+	const int root = c0_comm_rank() == 0;
 	int st = c0_check_inputs(stacks, ns, outdir);
-	if (!st)
+	if (!st && root)
 		st = c0_outdir_open(&out, outdir, force);
-	if (st) {
+	if ((st = c0_comm_status(st))) {
 		free(stacks), free(res), cJSON_Delete(rep);
 		return c0_cli_error("support");
 	}
 	st = c0_run_support(&c, stacks, ns, res, rep);
-	if (!st)
+	if (!st && root)
 		st = c0_write_support(&out, &c, res, ns, rep);
-	if (!st)
+	if (!st && root)
 		st = c0_report_write(rep, c0_outdir_file(&out, "report.json"));
 	for (int i = 0; i < ns; i++)
 		c0_support_result_free(&res[i]);
 	free(res), cJSON_Delete(rep);
 	free(stacks);
 	if (st) {
-		c0_outdir_rollback(&out);
+		if (root)
+			c0_outdir_rollback(&out);
 		return c0_cli_error("support");
 	}
 	return 0;

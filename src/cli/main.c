@@ -3,6 +3,7 @@
 #include "core/err.h"
 #include "core/progress.h"
 #include "core/threads.h"
+#include "core/comm.h"
 #include "c0_version.h"
 
 #include <stdio.h>
@@ -25,7 +26,8 @@ static const struct {
 
 int c0_cli_error(const char *cmd)
 {
-	fprintf(stderr, "col0rme %s: error: %s\n", cmd, c0_errmsg());
+	if (c0_comm_rank() == 0)      /* every rank has the message */
+		fprintf(stderr, "col0rme %s: error: %s\n", cmd, c0_errmsg());
 	return 1;
 }
 
@@ -60,8 +62,13 @@ int main(int argc, char **argv)
 			verbose = 1;
 	c0_progress_enable(verbose || isatty(STDERR_FILENO));
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-		if (!strcmp(argv[1], commands[i].name))
-			return commands[i].run(argc - 1, argv + 1);
+		if (!strcmp(argv[1], commands[i].name)) {
+			if (c0_comm_init(&argc, &argv))
+				return c0_cli_error(argv[1]);
+			int rc = commands[i].run(argc - 1, argv + 1);
+			c0_comm_finalize();
+			return rc;
+		}
 	fprintf(stderr, "col0rme: error: unknown command '%s'\n", argv[1]);
 	usage(stderr);
 	return 2;
