@@ -1,5 +1,144 @@
-/* col0rme public API: plain structs in, plain arrays out, status codes. */
-#pragma once
+/* col0rme public API: 3D-COL0RME on multi-angle TIRF stacks in one call.
+ * Plain structs in, plain arrays out, status codes; self-contained (C11).
+ *
+ *   struct c0_run_conf c;
+ *   c0_run_conf_init(&c);                          documented defaults
+ *   c0_run_conf_set(&c, "angles", "62,64,66");     or set the fields
+ *   struct c0_stack s[3] = { { .path = "q1.tif" }, ... };  or .data = T x H x W floats
+ *   struct c0_result *r;
+ *   if (c0_run(&c, s, 3, &r)) fprintf(stderr, "%s\n", c0_last_error());
+ *   const float *vol = c0_result_volume(r, &nz, &h, &w);
+ *   c0_result_write(r, "out", 0);                   the files `col0rme run` writes
+ *   c0_result_free(r);
+ *
+ * Images are row-major, x fastest: image[y*W + x], stack[t][y][x],
+ * volume[z][y][x]. Lengths in nm. Errors leave one line in c0_last_error()
+ * that names the parameter (as in c0_run_conf_set) or the file at fault. */
+#ifndef COL0RME_H
+#define COL0RME_H
 
-#include "core/err.h"
-#include "io/tiff.h"
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum c0_status {
+	C0_OK = 0,
+	C0_EINVAL,       /* bad parameter or argument */
+	C0_EIO,          /* cannot open, read, write or rename a file */
+	C0_EFORMAT,      /* a file is not what it claims or is damaged */
+	C0_EUNSUPPORTED, /* a valid file we do not handle (RGB, complex, ...) */
+	C0_ENOMEM,
+};
+
+enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
+enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
+enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
+
+#define C0_MAX_STACKS 64
+
+/* Every parameter of the method. Each field's name is its parameter name
+ * (c0_run_conf_set, messages); the comment gives its default. */
+struct c0_run_conf {
+	/* optics and grid */
+	double pixel_nm;       /* 0: camera pixel size in the sample; 0: the first stack's (c0_stack.pixel_nm, else its TIFF calibration) */
+	double fwhm_nm;        /* 0: PSF full width at half maximum; 0: 0.51 emission_nm / na */
+	double emission_nm;    /* 0: emission wavelength (with na, when fwhm_nm is 0) */
+	double na;             /* 0: numerical aperture of the objective (with emission_nm) */
+	int srf;               /* 4: super-resolution factor, fine pixel = pixel_nm / srf */
+	/* support (sparse covariance) */
+	int support_stacks[C0_MAX_STACKS]; /* 1-based numbers of the stacks whose supports are joined */
+	int nsupport_stacks;   /* 0: the stack with the smallest angle (the first in 2D mode) */
+	enum c0_penalty penalty; /* l1 */
+	double lambda;         /* 0: regularisation relative to lambda_max; 0: 1e-2 for l1, 3e-5 for cel0 */
+	int lag;               /* 0: covariance lag radius in pixels; 0: ceil(6 sigma / pixel) */
+	int iterations;        /* 2000: maximum FISTA iterations (per reweighting for cel0) */
+	double tol;            /* 1e-5: FISTA stops when the iterate's relative change is below this */
+	int reweightings;      /* 10: CEL0 reweighting steps */
+	int tile;              /* 0: support tile side in camera pixels (tiles overlap by two lags); 0: 256, or the image when smaller */
+	/* intensity and background per stack */
+	enum c0_background background; /* smooth */
+	double beta;           /* 20: background smoothness weight (coarse grid) */
+	double nu;             /* 1: discrepancy factor, residual^2 = nu^2 H W sigma2 / T; 0: sqrt(T) */
+	double mu;             /* 0: smoothness weight by the discrepancy principle; > 0: fixed */
+	double cg_tol;         /* 1e-3: CG relative residual */
+	int cg_iterations;     /* 500: CG steps per active-set round */
+	double graph_radius;   /* 2.25: smoothness couples support pixels up to this far apart (fine pixels, 1..4) */
+	double noise_variance[C0_MAX_STACKS]; /* per-stack noise variance (camera units^2) */
+	int nnoise_variance;   /* 0: estimated on the support */
+	/* MA-TIRF axial reconstruction (3D mode when angles are given) */
+	double angles[C0_MAX_STACKS]; /* incidence angle in the glass of each stack (deg), same order */
+	int nangles;           /* 0: 2D COL0RME (support and intensities only) */
+	double gains[C0_MAX_STACKS]; /* per-angle gain calibration (multiplies I0) */
+	int ngains;            /* 0: 1 for every angle */
+	double n_glass;        /* 1.518: refractive index of the coverslip and immersion */
+	double n_sample;       /* 1.33: refractive index of the sample */
+	double wavelength_nm;  /* 488: excitation wavelength in vacuum */
+	double s_fraction;     /* 0.75: share of s-polarised excitation in I0 */
+	double z_range_nm[3];  /* 0, 400, 20: depth bins min, max, step */
+	enum c0_reg reg;       /* tv: regulariser, total variation or Hessian-Schatten */
+	double kappa;          /* 3e-2: regularisation weight (images scaled to a maximum of 1) */
+	double sparsity;       /* 3e-2: weight of the l1 term that keeps few depths per pixel */
+	double axial_weight;   /* 0: axial weight of the regulariser relative to lateral */
+	int matirf_iterations; /* 3000: maximum primal-dual iterations */
+	double matirf_tol;     /* 1e-4: primal-dual stopping tolerance */
+	double depth_pool_nm;  /* -1: window over which intensities are summed for each pixel's depth; -1: fwhm_nm, 0: off */
+	int baseline;          /* 0: 1 also reconstructs the standard MA-TIRF volume from the background-corrected means */
+};
+
+#define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = 2000, .tol = 1e-5, \
+	.reweightings = 10, .background = C0_BG_SMOOTH, .beta = 20, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
+	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
+	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = 3e-2, .sparsity = 3e-2, \
+	.matirf_iterations = 3000, .matirf_tol = 1e-4, .depth_pool_nm = -1 }
+
+void c0_run_conf_init(struct c0_run_conf *c);
+/* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),
+ * names ("cel0"), flags ("1", "0"). Unknown name or bad value: C0_EINVAL and
+ * a message naming the parameter. */
+int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value);
+/* The parameters in order (i = 0, 1, ... until NULL): name, and its help
+ * line with the default. */
+const char *c0_run_conf_param(int i, const char **doc);
+
+/* One stack: a TIFF file (path) or float32 frames in memory (data, frames x
+ * height x width, row-major, owned by the caller). pixel_nm 0: the file's
+ * calibration, else the conf's. */
+struct c0_stack {
+	const char *path;
+	const float *data;
+	int frames, height, width;
+	double pixel_nm;
+};
+
+struct c0_result;
+
+/* The whole method: support, intensity and background of each stack, and
+ * with angles the MA-TIRF volume (and the baseline when asked). */
+int c0_run(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out);
+/* Writes the files `col0rme run` writes into outdir (created; must be empty
+ * unless force; never the directory of an input). On failure nothing is left. */
+int c0_result_write(const struct c0_result *r, const char *outdir, int force);
+
+/* Arrays owned by the result (NULL when absent or q out of range). */
+int c0_result_nstacks(const struct c0_result *r);
+const uint8_t *c0_result_support(const struct c0_result *r, int *h, int *w);          /* union of the masks, fine grid */
+const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *w);   /* stack q (0-based), fine grid */
+const float *c0_result_background(const struct c0_result *r, int q, int *h, int *w);  /* stack q, camera grid */
+const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w);    /* NULL in 2D mode */
+const float *c0_result_depth(const struct c0_result *r, int *h, int *w);              /* mean depth (nm), 0 where empty */
+const float *c0_result_baseline_volume(const struct c0_result *r, int *nz, int *h, int *w); /* camera grid; with baseline */
+const double *c0_result_z_nm(const struct c0_result *r, int *nz);                     /* depth bin centres */
+const char *c0_result_report_json(const struct c0_result *r); /* report.json: every parameter, estimate, timing */
+void c0_result_free(struct c0_result *r);
+
+/* This thread's last error line. */
+const char *c0_last_error(void);
+/* "MAJOR.MINOR.PATCH" */
+const char *c0_version(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -127,7 +127,7 @@ static void test_discrepancy(void)
 	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, 0, &res) != C0_OK && strstr(c0_errmsg(), "noise variance"));
 	c0_intensity_result_free(&res);
 	c.fwhm_nm = 0;
-	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) != C0_OK && strstr(c0_errmsg(), "--fwhm"));
+	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) != C0_OK && strstr(c0_errmsg(), "fwhm_nm"));
 	c0_psi_omega_free(&P);
 	free(m), free(x), free(y);
 }

@@ -253,9 +253,9 @@ static void test_refusals(void)
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
 	double bad[2] = { 55, 65 };
 	CHECK(c0_matirf_check(&c, 2, bad) == C0_EINVAL && strstr(c0_errmsg(), "critical"));
-	CHECK(c0_matirf_check(&c, 1, ANG) == C0_EINVAL && strstr(c0_errmsg(), "--angles"));
+	CHECK(c0_matirf_check(&c, 1, ANG) == C0_EINVAL && strstr(c0_errmsg(), "angles"));
 	c.dz_nm = 0;
-	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "--z-range"));
+	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "z_range_nm"));
 }
 
 int main(void)

@@ -330,11 +330,11 @@ static void test_wrong_inputs(void)
 	CHECK(c0_support_check(&c, 10, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "smaller than the PSF band"));
 	CHECK(c0_support_check(&c, 64, 64, 2, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "at least 3"));
 	c.pixel_nm = 0;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--pixel-size"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "pixel_nm"));
 	c.pixel_nm = 100, c.fwhm_nm = -1;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--fwhm"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "fwhm_nm"));
 	c.fwhm_nm = 229, c.srf = 0;
-	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "--srf"));
+	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "srf"));
 }
 
 /* Gaussian read noise only (no Poisson): the estimated noise variance is the read noise's */
@@ -391,13 +391,13 @@ static void test_accuracy(void)
 	c0_sim_result_free(&sr);
 	char p[256];
 	snprintf(p, sizeof p, "%s/stack_q01.tif", dir);
-	struct c0_tiff_reader *rd;
-	CHECK(c0_tiff_open(p, &rd) == C0_OK);
+	struct c0_frames fr;
+	CHECK(c0_frames_open(&fr, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
 	c.pixel_nm = 100, c.fwhm_nm = 229;
 	struct c0_support_result res;
-	CHECK(c0_support_stack(&c, rd, p, &res) == C0_OK);
-	c0_tiff_close(rd);
+	CHECK(c0_support_stack(&c, &fr, &res) == C0_OK);
+	c0_frames_close(&fr);
 	snprintf(p, sizeof p, "%s/truth_support.tif", dir);
 	struct c0_tiff_info in;
 	float *t;

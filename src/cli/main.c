@@ -1,5 +1,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli/commands.h"
+#include "cli/confopts.h"
 #include "core/err.h"
 #include "core/progress.h"
 #include "core/threads.h"
@@ -26,8 +27,10 @@ static const struct {
 
 int c0_cli_error(const char *cmd)
 {
-	if (c0_comm_rank() == 0)      /* every rank has the message */
-		fprintf(stderr, "col0rme %s: error: %s\n", cmd, c0_errmsg());
+	char msg[2048];
+	c0_cli_flags(c0_errmsg(), msg, sizeof msg);   /* the library names parameters; we show flags */
+	if (c0_comm_rank() == 0)      /* under MPI every rank has the message */
+		fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
 	return 1;
 }
 

@@ -3,14 +3,7 @@
  * line in c0_errmsg() that names the file or parameter at fault. */
 #pragma once
 
-enum c0_status {
-	C0_OK = 0,
-	C0_EINVAL,      /* bad parameter or argument */
-	C0_EIO,         /* cannot open, read, write or rename a file */
-	C0_EFORMAT,     /* a file is not what it claims or is damaged */
-	C0_EUNSUPPORTED,/* a valid file we do not handle (RGB, complex, ...) */
-	C0_ENOMEM,
-};
+#include "col0rme.h"   /* the status codes */
 
 /* Record a message (printf-style) and return code. */
 int c0_fail(int code, const char *fmt, ...) __attribute__((format(printf, 2, 3)));

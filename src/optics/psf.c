@@ -8,11 +8,11 @@
 int c0_psf_check(double pixel_nm, double fwhm_nm, int srf)
 {
 	if (!(pixel_nm > 0))
-		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm)", pixel_nm);
+		return c0_fail(C0_EINVAL, "pixel_nm %g: must be positive (nm)", pixel_nm);
 	if (!(fwhm_nm > 0))
-		return c0_fail(C0_EINVAL, "--fwhm %g: must be positive (nm)", fwhm_nm);
+		return c0_fail(C0_EINVAL, "fwhm_nm %g: must be positive (nm)", fwhm_nm);
 	if (srf < 1 || srf > 16)
-		return c0_fail(C0_EINVAL, "--srf %d: must be 1..16", srf);
+		return c0_fail(C0_EINVAL, "srf %d: must be 1..16", srf);
 	return C0_OK;
 }
 

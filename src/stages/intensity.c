@@ -16,9 +16,9 @@ int c0_intensity_check(const struct c0_intensity_conf *c)
 	if (st)
 		return st;
 	if (!(c->beta >= 0) || !(c->nu >= 0) || !(c->mu >= 0))
-		return c0_fail(C0_EINVAL, "--beta, --nu and --mu must be >= 0");
+		return c0_fail(C0_EINVAL, "beta %g, nu %g, mu %g: each must be >= 0", c->beta, c->nu, c->mu);
 	if (!(c->graph_radius >= 1 && c->graph_radius <= 4))
-		return c0_fail(C0_EINVAL, "--graph-radius %g: must be in [1, 4] fine pixels", c->graph_radius);
+		return c0_fail(C0_EINVAL, "graph_radius %g: must be in [1, 4] fine pixels", c->graph_radius);
 	return C0_OK;
 }
 
@@ -180,7 +180,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 	if (st)
 		return st;
 	if (c->mu == 0 && !(sigma2 > 0))
-		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give --mu)", sigma2);
+		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give mu)", sigma2);
 	struct prob p = { .c = c, .ybar = ybar, .NN = Ny * Nx };
 	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), mask, c->graph_radius)))
 		return st;

@@ -13,7 +13,7 @@
 
 #include <stdint.h>
 
-enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };
+#include "col0rme.h"   /* enum c0_background */
 
 struct c0_intensity_conf {
 	double pixel_nm, fwhm_nm;  /* required */

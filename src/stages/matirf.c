@@ -21,18 +21,18 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (st)
 		return st;
 	if (nq < 2 || nq > MAXQ)
-		return c0_fail(C0_EINVAL, "--angles: MA-TIRF needs 2..%d angles (got %d)", MAXQ, nq);
+		return c0_fail(C0_EINVAL, "angles: MA-TIRF needs 2..%d angles (got %d)", MAXQ, nq);
 	for (int q = 0; q < nq; q++) {
 		double p;
 		if (c0_tirf_p(&c->tirf, angles[q], &p))
-			return c0_fail(C0_EINVAL, "--angles: %s", c0_errmsg());
+			return c0_fail(C0_EINVAL, "angles: %s", c0_errmsg());
 	}
 	if (!(c->dz_nm > 0) || !(c->z1_nm > c->z0_nm) || c->z0_nm < 0)
-		return c0_fail(C0_EINVAL, "--z-range %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
+		return c0_fail(C0_EINVAL, "z_range_nm %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
-		return c0_fail(C0_EINVAL, "--z-range: more than 512 depth bins");
+		return c0_fail(C0_EINVAL, "z_range_nm: more than 512 depth bins");
 	if (!(c->kappa >= 0) || !(c->wz >= 0) || !(c->sparsity >= 0))
-		return c0_fail(C0_EINVAL, "--kappa, --axial-weight and --sparsity must be >= 0");
+		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: each must be >= 0", c->kappa, c->wz, c->sparsity);
 	return C0_OK;
 }
 

@@ -12,7 +12,7 @@
 #include "optics/tirf.h"
 #include "solve/pdhg.h"
 
-enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };
+#include "col0rme.h"   /* enum c0_reg */
 
 struct c0_matirf_conf {
 	struct c0_tirf tirf;

@@ -31,19 +31,19 @@ static double lambda_rel(const struct c0_support_conf *c)
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name)
 {
 	if (!(c->pixel_nm > 0))
-		return c0_fail(C0_EINVAL, "--pixel-size %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
+		return c0_fail(C0_EINVAL, "pixel_nm %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
 	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
 	if (st)
 		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
-		return c0_fail(C0_EINVAL, "--lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
+		return c0_fail(C0_EINVAL, "lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
 	if (c->fista.maxit < 1 || !(c->fista.tol > 0))
-		return c0_fail(C0_EINVAL, "--iterations / --tol must be positive");
+		return c0_fail(C0_EINVAL, "iterations %d / tol %g: must be positive", c->fista.maxit, c->fista.tol);
 	int d = c0_support_lag(c);
 	if (c->tile && c->tile < 2 * d + 1)
-		return c0_fail(C0_EINVAL, "--tile %d: smaller than the PSF band (%d pixels for lag %d)", c->tile, 2 * d + 1, d);
+		return c0_fail(C0_EINVAL, "tile %d: smaller than the PSF band (%d pixels for lag %d)", c->tile, 2 * d + 1, d);
 	if (c->tile && c->tile > (W > H ? W : H))
-		return c0_fail(C0_EINVAL, "--tile %d: larger than the %dx%d image of %s", c->tile, W, H, name);
+		return c0_fail(C0_EINVAL, "tile %d: larger than the %dx%d image of %s", c->tile, W, H, name);
 	if (W < 2 * d + 1 || H < 2 * d + 1)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels is smaller than the PSF band (%d x %d pixels for lag %d)",
 			       name, W, H, 2 * d + 1, 2 * d + 1, d);
@@ -227,16 +227,14 @@ out:
 	return st;
 }
 
-int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-			struct c0_cov *cov, double *seconds)
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov *cov, double *seconds)
 {
-	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
-	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
 	if (st)
 		return st;
 	double t0 = c0_now();
 	struct c0_cov_acc *acc;
-	if ((st = c0_cov_acc_new((int)in->width, (int)in->height, c0_support_lag(c), &acc)))
+	if ((st = c0_cov_acc_new(in->width, in->height, c0_support_lag(c), &acc)))
 		return st;
 	float *frame = c0_alloc((size_t)in->width * in->height, sizeof *frame);
 	if (!frame) {
@@ -244,9 +242,9 @@ int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *
 		return C0_ENOMEM;
 	}
 	struct c0_progress pr;
-	c0_progress_begin(&pr, "covariance", (double)in->pages);
-	for (int64_t t = 0; t < in->pages && !st; t++) {
-		st = c0_tiff_read_f32(rd, t, frame);
+	c0_progress_begin(&pr, "covariance", (double)in->count);
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
 		if (!st)
 			st = c0_cov_acc_add(acc, frame);
 		c0_progress_update(&pr, (double)t + 1);
@@ -262,11 +260,10 @@ int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *
 	return st;
 }
 
-int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name, double **mean,
-		  int64_t *frames, double *seconds)
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double **mean, int64_t *frames,
+		  double *seconds)
 {
-	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
-	int st = c0_support_check(c, (int)in->width, (int)in->height, in->pages, name);
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
 	if (st)
 		return st;
 	double t0 = c0_now();
@@ -278,9 +275,9 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 		return C0_ENOMEM;
 	}
 	struct c0_progress pr;
-	c0_progress_begin(&pr, "mean", (double)in->pages);
-	for (int64_t t = 0; t < in->pages && !st; t++) {
-		st = c0_tiff_read_f32(rd, t, frame);
+	c0_progress_begin(&pr, "mean", (double)in->count);
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
 		for (size_t i = 0; !st && i < n; i++)
 			(*mean)[i] += frame[i];
 		c0_progress_update(&pr, (double)t + 1);
@@ -288,10 +285,10 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *rd, co
 	c0_progress_end(&pr);
 	free(frame);
 	for (size_t i = 0; !st && i < n; i++)
-		(*mean)[i] /= (double)in->pages;
+		(*mean)[i] /= (double)in->count;
 	if (st)
 		free(*mean), *mean = NULL;
-	*frames = in->pages;
+	*frames = in->count;
 	*seconds = c0_now() - t0;
 	return st;
 }
@@ -370,13 +367,11 @@ int c0_support_tile_size(const struct c0_support_conf *c, int W, int H)
 	return c->tile > 0 ? c->tile : C0_SUPPORT_TILE < big ? C0_SUPPORT_TILE : big;
 }
 
-int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd, const char *name,
-		     struct c0_support_result *res)
+int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
-	const struct c0_tiff_info *in = c0_tiff_get_info(rd);
-	const int W = (int)in->width, H = (int)in->height, r = c->srf, d = c0_support_lag(c);
-	int st = c0_support_check(c, W, H, in->pages, name);
+	const int W = in->width, H = in->height, r = c->srf, d = c0_support_lag(c);
+	int st = c0_support_check(c, W, H, in->count, in->name);
 	if (st)
 		return st;
 	double t0 = c0_now();
@@ -398,9 +393,9 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd,
 		if (!st && !(frame = c0_alloc((size_t)W * rows, sizeof *frame)))
 			st = C0_ENOMEM;
 		struct c0_progress pr;
-		c0_progress_begin(&pr, "covariance", (double)in->pages);
-		for (int64_t t = 0; t < in->pages && !st; t++) {
-			st = c0_tiff_read_rows_f32(rd, t, ya, rows, frame);
+		c0_progress_begin(&pr, "covariance", (double)in->count);
+		for (int64_t t = 0; t < in->count && !st; t++) {
+			st = c0_frames_read_rows(in, t, ya, rows, frame);
 			if (!st)
 				st = c0_cov_acc_add(acc, frame);
 			c0_progress_update(&pr, (double)t + 1);
@@ -417,7 +412,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *rd,
 			norm = fmax(norm, c0_cov_acc_variance(acc, y - ya, x));
 	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
 	double *lmax = c0_alloc(nt, sizeof *lmax), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
-	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->pages;
+	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->mask = c0_alloc(L, 1);
 	res->rx = c0_alloc(L, sizeof *res->rx);

@@ -5,11 +5,11 @@
 #pragma once
 #include "ops/covariance.h"
 #include "solve/fista.h"
-#include "io/tiff.h"
+#include "io/frames.h"
 
 #include <stdint.h>
 
-enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };
+#include "col0rme.h"   /* enum c0_penalty */
 
 struct c0_support_conf {
 	double pixel_nm;           /* camera pixel size (required) */
@@ -55,20 +55,18 @@ double c0_support_default_lambda(enum c0_penalty p);
  * interiors; iters: the most of any tile; converged: every tile did. With
  * one tile (images up to the tile size) this is the plain whole-image
  * solve. Under MPI the result is complete on rank 0. */
-int c0_support_stack(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
-		     struct c0_support_result *res);
+int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *f, struct c0_support_result *res);
 /* Solves from a finished covariance (which is left unchanged). */
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res);
 void c0_support_result_free(struct c0_support_result *r);
 /* The tile side used for a WxH image. */
 int c0_support_tile_size(const struct c0_support_conf *c, int W, int H);
 /* One streaming pass: banded covariance (lag from the PSF) and temporal mean. */
-int c0_stack_covariance(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name,
-			struct c0_cov *cov, double *seconds);
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *f, struct c0_cov *cov, double *seconds);
 /* One streaming pass for the temporal mean only (allocated), when the noise
  * variance is already known and the covariance is not needed. */
-int c0_stack_mean(const struct c0_support_conf *c, struct c0_tiff_reader *r, const char *name, double **mean,
-		  int64_t *frames, double *seconds);
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double **mean, int64_t *frames,
+		  double *seconds);
 /* Noise variance of a stack whose support is known: the same model with
  * r_x free on the mask only and no penalty (100 iterations). */
 int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2);

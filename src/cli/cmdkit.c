@@ -1,0 +1,49 @@
+#include "cli/cmdkit.h"
+#include "cli/commands.h"
+#include "core/err.h"
+#include "core/comm.h"
+
+#include <string.h>
+
+int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
+		 int nextra, int argc, char **argv)
+{
+	memset(k, 0, sizeof *k);
+	c0_conf_cli_init(&k->m);
+	int no = c0_conf_cli_table(&k->m, params, &k->outdir, &k->force, &k->verbose, k->opts);
+	if (nextra)
+		memcpy(k->opts + no, extra, (size_t)nextra * sizeof *extra);
+	spec->opts = k->opts, spec->nopts = no + nextra;
+	int rc = c0_opts_parse(spec, argc, argv, &k->n, k->paths);
+	if (rc)
+		return rc;
+	for (int i = 0; i < k->n; i++)
+		k->stacks[i].path = k->paths[i];
+	if (c0_conf_cli_finish(&k->m)) {
+		c0_cli_error(spec->name);
+		return 2;
+	}
+	return 0;
+}
+
+/* Under MPI every rank computes and rank 0 alone writes. */
+int c0_cli_open(struct c0_cli *k)
+{
+	int st = c0_outdir_check_inputs(k->outdir, (const char *const *)k->paths, k->n);
+	if (!st && c0_comm_rank() == 0)
+		st = c0_outdir_open(&k->out, k->outdir, k->force);
+	k->opened = !st && c0_comm_rank() == 0;
+	return c0_comm_status(st);
+}
+
+int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, int argc, char **argv)
+{
+	if (!st && c0_comm_rank() == 0) {
+		c0_result_set_argv(r, argc, argv);
+		st = c0_result_write_to(r, &k->out);
+	}
+	if (st && k->opened)
+		c0_outdir_rollback(&k->out);
+	c0_result_free(r);
+	return st ? c0_cli_error(cmd) : 0;
+}

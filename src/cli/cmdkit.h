@@ -1,0 +1,30 @@
+/* The frame shared by the commands that run the method: their options
+ * (-o, the parameters they take, --force, --verbose, extra rows), the
+ * stacks named on the command line, the output directory, and the end
+ * (write the result or roll back, print the error). */
+#pragma once
+#include "cli/confopts.h"
+#include "stages/pipeline.h"
+
+struct c0_cli {
+	struct c0_conf_cli m;
+	const char *outdir;
+	int force, verbose;
+	struct c0_opt opts[64];
+	char *paths[C0_MAX_STACKS];
+	struct c0_stack stacks[C0_MAX_STACKS];
+	int n;
+	struct c0_outdir out;
+	int opened;
+};
+
+/* Parses argv with spec (whose opts are filled here from params and the
+ * nextra rows of extra); then the named choices. 0: go on; 1: help was
+ * printed (exit 0); 2: an error was printed. */
+int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
+		 int nextra, int argc, char **argv);
+/* The output directory: not an input's, empty unless --force. */
+int c0_cli_open(struct c0_cli *k);
+/* Writes r (with argv in its report) when st is 0, else rolls back; frees
+ * r; returns the exit code, printing the error. */
+int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, int argc, char **argv);

@@ -1,0 +1,32 @@
+/* Command-line options for the parameters of struct c0_run_conf: one row
+ * per parameter (flag, help), which each command picks by parameter name,
+ * and the map back from parameter names to flags for error messages. */
+#pragma once
+#include "col0rme.h"
+#include "cli/opts.h"
+
+#include <stddef.h>
+
+struct c0_conf_cli {
+	struct c0_run_conf c;
+	const char *penalty, *background, *reg;  /* the named choices, set by name at the end */
+	int nz;                                  /* values given to --z-range */
+};
+
+/* The MA-TIRF parameters of 'run' and 'matirf', in help order. */
+#define C0_MATIRF_PARAMS "angles", "n_glass", "n_sample", "wavelength_nm", "s_fraction", "gains", "z_range_nm", "reg", \
+	"kappa", "sparsity", "axial_weight", "matirf_iterations"
+
+void c0_conf_cli_init(struct c0_conf_cli *m);
+/* Appends the rows of the NULL-terminated parameter names to o (room
+ * needed: one per name); returns how many. */
+int c0_conf_cli_opts(struct c0_conf_cli *m, const char *const *params, struct c0_opt *o);
+/* A command's whole table: -o, the parameters' rows, --force, --verbose
+ * (room needed: the names plus 3); returns the row count. */
+int c0_conf_cli_table(struct c0_conf_cli *m, const char *const *params, const char **outdir, int *force, int *verbose,
+		      struct c0_opt *o);
+/* After parsing: the named choices into m->c, --z-range's length. */
+int c0_conf_cli_finish(struct c0_conf_cli *m);
+/* msg with the parameter names it cites as flags ("fwhm_nm 0: ..." ->
+ * "--fwhm 0: ..."). */
+void c0_cli_flags(const char *msg, char *buf, size_t n);

@@ -1,0 +1,64 @@
+#include "io/frames.h"
+#include "core/err.h"
+
+#include <stdio.h>
+#include <string.h>
+
+int c0_frames_open(struct c0_frames *f, const char *path)
+{
+	memset(f, 0, sizeof *f);
+	int st = c0_tiff_open(path, &f->tiff);
+	if (st)
+		return st;
+	const struct c0_tiff_info *in = c0_tiff_get_info(f->tiff);
+	if (in->width > 1 << 20 || in->height > 1 << 20) {
+		c0_frames_close(f);
+		return c0_fail(C0_EUNSUPPORTED, "%s: %lldx%lld frames are too large", path, (long long)in->width,
+			       (long long)in->height);
+	}
+	f->count = in->pages, f->height = (int)in->height, f->width = (int)in->width;
+	f->pixel_nm = in->pixel_size_nm;
+	snprintf(f->name, sizeof f->name, "%s", path);
+	return C0_OK;
+}
+
+int c0_frames_wrap(struct c0_frames *f, const float *data, int64_t count, int height, int width, double pixel_nm,
+		   const char *name)
+{
+	memset(f, 0, sizeof *f);
+	snprintf(f->name, sizeof f->name, "%s", name);
+	if (!data || count < 1 || height < 1 || width < 1)
+		return c0_fail(C0_EINVAL, "%s: %lld frames of %dx%d pixels at %p: need data and positive sizes", name,
+			       (long long)count, width, height, (const void *)data);
+	f->data = data, f->count = count, f->height = height, f->width = width, f->pixel_nm = pixel_nm;
+	return C0_OK;
+}
+
+int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
+{
+	if (f->tiff)
+		return c0_tiff_read_f32(f->tiff, t, dst);
+	if (t < 0 || t >= f->count)
+		return c0_fail(C0_EINVAL, "%s: frame %lld out of 0..%lld", f->name, (long long)t, (long long)f->count - 1);
+	const size_t n = (size_t)f->height * f->width;
+	memcpy(dst, f->data + (size_t)t * n, n * sizeof *dst);
+	return C0_OK;
+}
+
+int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *dst)
+{
+	if (f->tiff)
+		return c0_tiff_read_rows_f32(f->tiff, t, y0, ny, dst);
+	if (t < 0 || t >= f->count || y0 < 0 || ny < 1 || y0 + ny > f->height)
+		return c0_fail(C0_EINVAL, "%s: frame %lld rows %d..%d out of range", f->name, (long long)t, y0, y0 + ny - 1);
+	const size_t n = (size_t)f->height * f->width;
+	memcpy(dst, f->data + (size_t)t * n + (size_t)y0 * f->width, (size_t)ny * f->width * sizeof *dst);
+	return C0_OK;
+}
+
+void c0_frames_close(struct c0_frames *f)
+{
+	if (f->tiff)
+		c0_tiff_close(f->tiff);
+	f->tiff = NULL, f->data = NULL;
+}

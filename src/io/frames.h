@@ -1,0 +1,26 @@
+/* A stack of frames to stream, from a TIFF file or from a float32 array in
+ * memory (T x H x W, row-major), read one frame at a time either way. */
+#pragma once
+#include "io/tiff.h"
+
+#include <stdint.h>
+
+struct c0_frames {
+	int64_t count;                 /* frames */
+	int height, width;
+	double pixel_nm;               /* 0: uncalibrated */
+	char name[256];                /* the path, or what the caller named the array (messages) */
+	struct c0_tiff_reader *tiff;   /* a file, or */
+	const float *data;             /* an array the caller owns */
+};
+
+int c0_frames_open(struct c0_frames *f, const char *path);
+/* Wraps data without copying; it must outlive f. */
+int c0_frames_wrap(struct c0_frames *f, const float *data, int64_t count, int height, int width, double pixel_nm,
+		   const char *name);
+/* Frame t (0-based) into dst (height x width values). */
+int c0_frames_read(struct c0_frames *f, int64_t t, float *dst);
+/* Rows y0..y0+ny-1 of frame t into dst (ny x width): a file reads only the
+ * strips that hold them (each MPI rank reads its own rows). */
+int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *dst);
+void c0_frames_close(struct c0_frames *f);

@@ -1,0 +1,76 @@
+/* The whole method as one call (include/col0rme.h), and the steps it is
+ * made of, which the single-step commands use too: each step adds its
+ * arrays and its part of the report to a c0_result, and c0_result_write
+ * writes whatever the result holds. */
+#pragma once
+#include "col0rme.h"
+#include "stages/support.h"
+#include "stages/intensity.h"
+#include "stages/matirf.h"
+#include "io/frames.h"
+#include "io/outdir.h"
+#include "io/report.h"
+
+struct c0_stage_confs {
+	struct c0_support_conf support;
+	struct c0_intensity_conf intensity;
+	struct c0_matirf_conf matirf;
+	double pool_nm;              /* depth pooling window (nm), 0: off */
+};
+
+/* The stages' configs from c at camera pixel size pixel_nm (fwhm_nm resolved,
+ * intensity parameters checked). */
+int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_stage_confs *s);
+/* The MA-TIRF config alone (no optics needed). */
+void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m);
+/* Angles and gains against nimages, then the MA-TIRF config m. */
+int c0_run_conf_matirf_check(const struct c0_run_conf *c, const struct c0_matirf_conf *m, int nimages);
+
+struct c0_result {
+	cJSON *rep;                  /* the report, filled step by step */
+	char *json;                  /* its text, made on demand */
+	int n;                       /* stacks */
+	char (*names)[256];          /* n: path or "array N" (report, messages) */
+	const char *paths[C0_MAX_STACKS]; /* into names where a stack is a file, else NULL (outdir check) */
+	double pixel_nm;             /* camera pixel size */
+	int srf;
+	int nsup, sup[C0_MAX_STACKS];/* support step: its stacks (0-based) and results */
+	struct c0_support_result *sres;
+	uint8_t *mask;               /* Ly x Lx union of the supports (or the given mask) */
+	int Ly, Lx;
+	struct c0_intensity_result *ires; /* n, after the intensity step */
+	float **corrected;           /* n temporal means minus background, for the baseline */
+	struct c0_matirf_result vol, base;
+	double vol_pixel_nm, z0_nm, dz_nm;
+	cJSON *timings;
+};
+
+/* An empty result for command (the report's "command"), n stacks named. */
+int c0_result_new(const char *command, int n, const char *const *names, const int *is_file, struct c0_result **out);
+/* Records the command line in the report. */
+void c0_result_set_argv(struct c0_result *r, int argc, char **argv);
+/* Opens the stacks as frame sources, all the same size. */
+int c0_stacks_open(const struct c0_stack *s, int n, struct c0_frames *f);
+void c0_stacks_close(struct c0_frames *f, int n);
+/* The camera pixel size: c->pixel_nm, else the first stack's. */
+int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, double *pixel_nm);
+/* The start of every run: the stacks opened into f (close them with
+ * c0_stacks_close), the stages' configs, an empty result for command. */
+int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
+		  struct c0_frames *f, struct c0_stage_confs *sc, struct c0_result **out);
+
+/* Support of stacks r->sup[0..nsup) (indices into f); sets the union mask. */
+int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struct c0_frames *f);
+/* Intensity and background of every stack on r->mask: the support step's
+ * mean and noise variance where it ran on the stack, else one pass (the
+ * mean when sigma2[i] > 0, else the covariance, for the noise variance on
+ * the mask). With corrected, keeps each mean minus its background. */
+int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
+		      struct c0_frames *f, const double *sigma2, int corrected);
+/* MA-TIRF volume from nq images (ny x nx at pixel_nm) into r->vol, or
+ * r->base with baseline; own (or NULL): the pixels' own images when img
+ * are pooled (stages/depthpool.h). */
+int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline);
+/* Writes what r holds into an open output directory. */
+int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out);

@@ -1,0 +1,208 @@
+/* The run configuration: one table gives each parameter's name, type, field
+ * and help; setting by name, and turning it into the stages' configs. */
+#include "stages/pipeline.h"
+#include "core/err.h"
+#include "c0_version.h"
+
+#include <errno.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum ptype { P_DOUBLE, P_INT, P_FLAG, P_DOUBLES, P_INTS, P_ENUM };
+
+struct param {
+	const char *name;
+	enum ptype type;
+	size_t off;          /* the field */
+	size_t count;        /* lists: the count field, 0 for a fixed length */
+	int max;             /* lists: capacity (fixed length when count is 0) */
+	const char *choices; /* enums: names in value order, '|'-separated */
+	const char *doc;
+};
+
+#define F(f) offsetof(struct c0_run_conf, f)
+#define NUM(n, t, doc) { #n, t, F(n), 0, 0, NULL, doc }
+#define LIST(x, t, doc) { #x, t, F(x), F(n##x), C0_MAX_STACKS, NULL, doc }
+static const struct param params[] = {
+	NUM(pixel_nm, P_DOUBLE, "camera pixel size in the sample, nm (0: the first stack's calibration)"),
+	NUM(fwhm_nm, P_DOUBLE, "PSF full width at half maximum, nm (0: 0.51 emission_nm / na)"),
+	NUM(emission_nm, P_DOUBLE, "emission wavelength, nm, with na instead of fwhm_nm (0)"),
+	NUM(na, P_DOUBLE, "numerical aperture of the objective, with emission_nm (0)"),
+	NUM(srf, P_INT, "super-resolution factor: fine pixel = pixel_nm / srf (4)"),
+	{ "support_stacks", P_INTS, F(support_stacks), F(nsupport_stacks), C0_MAX_STACKS, NULL,
+	  "1-based stack numbers whose supports are joined (none: the smallest angle)" },
+	{ "penalty", P_ENUM, F(penalty), 0, 0, "l1|cel0", "support sparsity penalty (l1)" },
+	NUM(lambda, P_DOUBLE, "support regularisation relative to lambda_max (0: 1e-2 for l1, 3e-5 for cel0)"),
+	NUM(lag, P_INT, "covariance lag radius in pixels (0: ceil(6 sigma / pixel))"),
+	NUM(iterations, P_INT, "maximum FISTA iterations, per reweighting for cel0 (2000)"),
+	NUM(tol, P_DOUBLE, "FISTA stops when the iterate's relative change falls below this (1e-5)"),
+	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
+	NUM(tile, P_INT, "support tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
+	{ "background", P_ENUM, F(background), 0, 0, "none|constant|smooth", "background model (smooth)" },
+	NUM(beta, P_DOUBLE, "background smoothness weight (20)"),
+	NUM(nu, P_DOUBLE, "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (1; 0: sqrt(T))"),
+	NUM(mu, P_DOUBLE, "fixed intensity smoothness weight (0: discrepancy principle)"),
+	NUM(cg_tol, P_DOUBLE, "CG stopping tolerance, relative residual (1e-3)"),
+	NUM(cg_iterations, P_INT, "CG steps per active-set round (500)"),
+	NUM(graph_radius, P_DOUBLE, "intensity smoothness couples support pixels up to this far apart, fine pixels (2.25)"),
+	LIST(noise_variance, P_DOUBLES, "per-stack noise variance, camera units^2 (none: estimated on the support)"),
+	LIST(angles, P_DOUBLES, "incidence angle in the glass of each stack, deg, same order (none: 2D)"),
+	LIST(gains, P_DOUBLES, "per-angle gain calibration, multiplies I0 (none: 1 for every angle)"),
+	NUM(n_glass, P_DOUBLE, "refractive index of the coverslip and immersion (1.518)"),
+	NUM(n_sample, P_DOUBLE, "refractive index of the sample (1.33)"),
+	NUM(wavelength_nm, P_DOUBLE, "excitation wavelength in vacuum, nm (488)"),
+	NUM(s_fraction, P_DOUBLE, "share of s-polarised excitation in I0 (0.75)"),
+	{ "z_range_nm", P_DOUBLES, F(z_range_nm), 0, 3, NULL, "depth bins MIN,MAX,STEP in nm (0,400,20)" },
+	{ "reg", P_ENUM, F(reg), 0, 0, "tv|hessian", "MA-TIRF regulariser: total variation or Hessian-Schatten (tv)" },
+	NUM(kappa, P_DOUBLE, "MA-TIRF regularisation weight, images scaled to a maximum of 1 (3e-2)"),
+	NUM(sparsity, P_DOUBLE, "weight of the l1 term that keeps few depths per pixel (3e-2)"),
+	NUM(axial_weight, P_DOUBLE, "axial weight of the regulariser relative to lateral (0)"),
+	NUM(matirf_iterations, P_INT, "maximum primal-dual iterations (3000)"),
+	NUM(matirf_tol, P_DOUBLE, "primal-dual stopping tolerance (1e-4)"),
+	NUM(depth_pool_nm, P_DOUBLE, "window over which intensities are summed for each pixel's depth, nm (-1: fwhm_nm, 0: off)"),
+	NUM(baseline, P_FLAG, "1: also reconstruct the standard MA-TIRF volume from the background-corrected means (0)"),
+};
+enum { NPARAMS = sizeof params / sizeof *params };
+
+void c0_run_conf_init(struct c0_run_conf *c)
+{
+	*c = (struct c0_run_conf)C0_RUN_CONF_DEFAULTS;
+}
+
+const char *c0_run_conf_param(int i, const char **doc)
+{
+	if (i < 0 || i >= NPARAMS)
+		return NULL;
+	if (doc)
+		*doc = params[i].doc;
+	return params[i].name;
+}
+
+const char *c0_version(void)
+{
+	return C0_VERSION;
+}
+
+static int number(const char *s, double *v)
+{
+	char *end;
+	errno = 0;
+	*v = strtod(s, &end);
+	return end != s && !errno && *v == *v && (*end == '\0' || *end == ',') ? (int)(end - s) : -1;
+}
+
+int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value)
+{
+	const struct param *p = NULL;
+	for (int i = 0; name && i < NPARAMS; i++)
+		if (!strcmp(params[i].name, name))
+			p = &params[i];
+	if (!p)
+		return c0_fail(C0_EINVAL, "%s: unknown parameter", name ? name : "(null)");
+	if (!value)
+		return c0_fail(C0_EINVAL, "%s: missing value", name);
+	char *f = (char *)c + p->off;
+	double v;
+	int k = number(value, &v);
+	switch (p->type) {
+	case P_DOUBLE:
+		if (k < 0 || value[k])
+			return c0_fail(C0_EINVAL, "%s %s: expected a number", name, value);
+		*(double *)f = v;
+		return C0_OK;
+	case P_INT:
+	case P_FLAG:
+		if (k < 0 || value[k] || v != (int)v || (p->type == P_FLAG && v != 0 && v != 1))
+			return c0_fail(C0_EINVAL, "%s %s: expected %s", name, value, p->type == P_FLAG ? "0 or 1" : "an integer");
+		*(int *)f = (int)v;
+		return C0_OK;
+	case P_DOUBLES:
+	case P_INTS: {
+		double tmp[C0_MAX_STACKS];
+		int n = 0;
+		for (const char *s = value; *s; n++) {
+			if (n == p->max || (k = number(s, &tmp[n])) < 0)
+				return c0_fail(C0_EINVAL, "%s %s: expected %s%d numbers, comma-separated", name, value,
+					       p->count ? "up to " : "", p->max);
+			if (p->type == P_INTS && tmp[n] != (int)tmp[n])
+				return c0_fail(C0_EINVAL, "%s %s: expected integers", name, value);
+			s += k + (s[k] == ',');
+		}
+		if (p->count ? n == 0 : n != p->max)
+			return c0_fail(C0_EINVAL, "%s %s: expected %s%d numbers, comma-separated", name, value,
+				       p->count ? "up to " : "", p->max);
+		for (int i = 0; i < n; i++)
+			if (p->type == P_INTS)
+				((int *)f)[i] = (int)tmp[i];
+			else
+				((double *)f)[i] = tmp[i];
+		if (p->count)
+			*(int *)((char *)c + p->count) = n;
+		return C0_OK;
+	}
+	case P_ENUM: {
+		const char *s = p->choices;
+		for (int i = 0; s; i++) {
+			const char *bar = strchr(s, '|');
+			size_t l = bar ? (size_t)(bar - s) : strlen(s);
+			if (strlen(value) == l && !strncmp(s, value, l)) {
+				*(int *)f = i;   /* the enums are int-sized, valued in this order */
+				return C0_OK;
+			}
+			s = bar ? bar + 1 : NULL;
+		}
+		return c0_fail(C0_EINVAL, "%s %s: expected one of %s", name, value, p->choices);
+	}
+	}
+	return C0_EINVAL;
+}
+
+void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
+{
+	*m = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
+	m->tirf = (struct c0_tirf){ c->n_glass, c->n_sample, c->wavelength_nm, c->s_fraction };
+	m->z0_nm = c->z_range_nm[0], m->z1_nm = c->z_range_nm[1], m->dz_nm = c->z_range_nm[2];
+	m->reg = c->reg, m->kappa = c->kappa, m->wz = c->axial_weight, m->sparsity = c->sparsity;
+	m->pdhg.maxit = c->matirf_iterations, m->pdhg.tol = c->matirf_tol;
+}
+
+int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_stage_confs *s)
+{
+	double fwhm = c->fwhm_nm;
+	if (!(fwhm > 0)) {
+		if (!(c->emission_nm > 0 && c->na > 0))
+			return c0_fail(C0_EINVAL, "fwhm_nm %g: give the PSF FWHM, or the emission wavelength (emission_nm) and numerical aperture (na)", fwhm);
+		fwhm = 0.51 * c->emission_nm / c->na;
+	}
+	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
+					       .lambda_rel = c->lambda, .lag = c->lag,
+					       .fista = { c->iterations, c->tol }, .cel0_outer = c->reweightings, .tile = c->tile };
+	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
+						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
+						   .tol = c->cg_tol, .maxit = c->cg_iterations,
+						   .graph_radius = c->graph_radius };
+	c0_run_conf_matirf(c, &s->matirf);
+	s->pool_nm = c->depth_pool_nm < 0 ? fwhm : c->depth_pool_nm;
+	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN)
+		return c0_fail(C0_EINVAL, "penalty %d / background %d / reg %d: out of range", (int)c->penalty,
+			       (int)c->background, (int)c->reg);
+	if (c->nangles < 0 || c->nangles > C0_MAX_STACKS || c->ngains < 0 || c->ngains > C0_MAX_STACKS ||
+	    c->nsupport_stacks < 0 || c->nsupport_stacks > C0_MAX_STACKS || c->nnoise_variance < 0 ||
+	    c->nnoise_variance > C0_MAX_STACKS)
+		return c0_fail(C0_EINVAL, "nangles %d / ngains %d / nsupport_stacks %d / nnoise_variance %d: must be 0..%d",
+			       c->nangles, c->ngains, c->nsupport_stacks, c->nnoise_variance, C0_MAX_STACKS);
+	return c0_intensity_check(&s->intensity);
+}
+
+int c0_run_conf_matirf_check(const struct c0_run_conf *c, const struct c0_matirf_conf *m, int nimages)
+{
+	if (c->nangles != nimages)
+		return c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, nimages);
+	if (c->ngains && c->ngains != nimages)
+		return c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, nimages);
+	for (int q = 0; q < c->ngains; q++)
+		if (!(c->gains[q] > 0))
+			return c0_fail(C0_EINVAL, "gains: gain %d is %g, must be > 0", q + 1, c->gains[q]);
+	return c0_matirf_check(m, c->nangles, c->angles);
+}

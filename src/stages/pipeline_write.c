@@ -1,0 +1,109 @@
+/* Writing a result: the files of `col0rme run` (and of the single steps),
+ * each calibrated, through an output directory that is rolled back on
+ * failure. */
+#include "stages/pipeline.h"
+#include "stages/depthcode.h"
+#include "io/png.h"
+#include "io/tiff.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* support.tif (the union of the masks) and rx.tif (one plane per support stack) */
+static int write_support(const struct c0_result *r, struct c0_outdir *out)
+{
+	const size_t L = (size_t)r->Ly * r->Lx;
+	float *img = c0_alloc(L * (size_t)r->nsup, sizeof *img);
+	if (!img)
+		return C0_ENOMEM;
+	for (size_t i = 0; i < L; i++)
+		img[i] = r->mask[i];
+	struct c0_tiff_wopts o = { .width = r->Lx, .height = r->Ly, .dtype = C0_U8,
+				   .pixel_size_nm = r->pixel_nm / r->srf, .software = "col0rme" };
+	int st = c0_tiff_save_f32(c0_outdir_file(out, "support.tif"), &o, img);
+	if (!st) {
+		for (int k = 0; k < r->nsup; k++)
+			memcpy(img + k * L, r->sres[k].rx, L * sizeof *img);
+		o.dtype = C0_F32;
+		o.slices = r->nsup;
+		st = c0_tiff_save_f32(c0_outdir_file(out, "rx.tif"), &o, img);
+	}
+	free(img);
+	return st;
+}
+
+static int write_intensity(const struct c0_result *r, struct c0_outdir *out)
+{
+	for (int i = 0; i < r->n; i++) {
+		int st;
+		const struct c0_intensity_result *s = &r->ires[i];
+		char name[64];
+		struct c0_tiff_wopts o = { .width = s->Lx, .height = s->Ly, .dtype = C0_F32,
+					   .pixel_size_nm = r->pixel_nm / r->srf, .software = "col0rme" };
+		snprintf(name, sizeof name, "intensity_q%02d.tif", i + 1);
+		if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->x)))
+			return st;
+		o.width = s->Nx, o.height = s->Ny, o.pixel_size_nm = r->pixel_nm;
+		snprintf(name, sizeof name, "background_q%02d.tif", i + 1);
+		if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->b)))
+			return st;
+	}
+	return C0_OK;
+}
+
+/* PREFIXvolume.tif, PREFIXdepth.tif (mean depth) and PREFIXdepth.png */
+static int write_volume(const struct c0_result *r, const struct c0_matirf_result *v, double pixel_nm,
+			const char *prefix, struct c0_outdir *out)
+{
+	char name[128];
+	struct c0_tiff_wopts o = { .width = v->nx, .height = v->ny, .slices = v->nz, .dtype = C0_F32,
+				   .pixel_size_nm = pixel_nm, .z_spacing_nm = r->dz_nm, .software = "col0rme" };
+	snprintf(name, sizeof name, "%svolume.tif", prefix);
+	int st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, v->f);
+	if (st)
+		return st;
+	o.slices = 1;
+	snprintf(name, sizeof name, "%sdepth.tif", prefix);
+	if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, v->depth)))
+		return st;
+	uint8_t *rgb;
+	int w, h;
+	if ((st = c0_depthcode(v->f, v->nz, v->ny, v->nx, r->z0_nm, r->z0_nm + v->nz * r->dz_nm, &rgb, &w, &h)))
+		return st;
+	snprintf(name, sizeof name, "%sdepth.png", prefix);
+	st = c0_png_write_rgb(c0_outdir_file(out, name), w, h, rgb);
+	free(rgb);
+	return st;
+}
+
+int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out)
+{
+	int st = C0_OK;
+	if (r->sres)
+		st = write_support(r, out);
+	if (!st && r->ires)
+		st = write_intensity(r, out);
+	if (!st && r->vol.f)
+		st = write_volume(r, &r->vol, r->vol_pixel_nm, "", out);
+	if (!st && r->base.f)
+		st = write_volume(r, &r->base, r->pixel_nm, "baseline_", out);
+	if (!st)
+		st = c0_report_write(r->rep, c0_outdir_file(out, "report.json"));
+	return st;
+}
+
+int c0_result_write(const struct c0_result *r, const char *outdir, int force)
+{
+	struct c0_outdir out;
+	int st = c0_outdir_check_inputs(outdir, r->paths, r->n);
+	if (!st)
+		st = c0_outdir_open(&out, outdir, force);
+	if (st)
+		return st;
+	if ((st = c0_result_write_to(r, &out)))
+		c0_outdir_rollback(&out);
+	return st;
+}

@@ -1,0 +1,194 @@
+/* The whole method as one call: the same stacks given as files and as
+ * arrays in memory give identical results; the run conf's defaults are the
+ * stages' defaults; bad parameters are refused naming the parameter. */
+#define _XOPEN_SOURCE 700
+#include "check.h"
+#include "col0rme.h"
+#include "stages/pipeline.h"
+#include "sim/sim.h"
+#include "io/tiff.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static int same_f(const float *a, const float *b, size_t n)
+{
+	return a && b && !memcmp(a, b, n * sizeof *a);
+}
+
+static void expect_einval(int st, const char *name)
+{
+	CHECK_MSG(st == C0_EINVAL && strstr(c0_last_error(), name), "status %d, message '%s' should name %s", st,
+		  c0_last_error(), name);
+}
+
+static void test_conf(void)
+{
+	struct c0_run_conf c = C0_RUN_CONF_DEFAULTS, d;
+	c0_run_conf_init(&d);
+	CHECK(!memcmp(&c, &d, sizeof c));
+	/* the defaults are the stages' own */
+	struct c0_stage_confs s;
+	c.fwhm_nm = 229;
+	CHECK(c0_run_conf_stages(&c, 100, &s) == C0_OK);
+	struct c0_support_conf sd = C0_SUPPORT_DEFAULTS;
+	struct c0_intensity_conf id = C0_INTENSITY_DEFAULTS;
+	struct c0_matirf_conf md = C0_MATIRF_DEFAULTS;
+	CHECK(s.support.srf == sd.srf && s.support.penalty == sd.penalty && s.support.lambda_rel == sd.lambda_rel &&
+	      s.support.lag == sd.lag && s.support.fista.maxit == sd.fista.maxit && s.support.fista.tol == sd.fista.tol &&
+	      s.support.cel0_outer == sd.cel0_outer);
+	CHECK(s.intensity.srf == id.srf && s.intensity.background == id.background && s.intensity.beta == id.beta &&
+	      s.intensity.nu == id.nu && s.intensity.mu == id.mu && s.intensity.tol == id.tol &&
+	      s.intensity.maxit == id.maxit && s.intensity.graph_radius == id.graph_radius);
+	CHECK(!memcmp(&s.matirf.tirf, &md.tirf, sizeof md.tirf) && s.matirf.z0_nm == md.z0_nm && s.matirf.z1_nm == md.z1_nm &&
+	      s.matirf.dz_nm == md.dz_nm && s.matirf.reg == md.reg && s.matirf.kappa == md.kappa && s.matirf.wz == md.wz &&
+	      s.matirf.sparsity == md.sparsity && s.matirf.pdhg.maxit == md.pdhg.maxit && s.matirf.pdhg.tol == md.pdhg.tol &&
+	      s.matirf.pdhg.relax == md.pdhg.relax && s.matirf.fused == md.fused);
+	CHECK(s.pool_nm == 229);
+	/* set by name */
+	CHECK(c0_run_conf_set(&c, "lambda", "1e-3") == C0_OK && c.lambda == 1e-3);
+	CHECK(c0_run_conf_set(&c, "angles", "62,64,66") == C0_OK && c.nangles == 3 && c.angles[2] == 66);
+	CHECK(c0_run_conf_set(&c, "support_stacks", "1,3") == C0_OK && c.nsupport_stacks == 2 && c.support_stacks[1] == 3);
+	CHECK(c0_run_conf_set(&c, "penalty", "cel0") == C0_OK && c.penalty == C0_PENALTY_CEL0);
+	CHECK(c0_run_conf_set(&c, "reg", "hessian") == C0_OK && c.reg == C0_REG_HESSIAN);
+	CHECK(c0_run_conf_set(&c, "z_range_nm", "0,300,10") == C0_OK && c.z_range_nm[1] == 300);
+	CHECK(c0_run_conf_set(&c, "baseline", "1") == C0_OK && c.baseline == 1);
+	CHECK(c0_run_conf_set(&c, "srf", "2") == C0_OK && c.srf == 2);
+	/* every parameter in the table is settable */
+	const char *doc;
+	int np = 0;
+	for (const char *name; (name = c0_run_conf_param(np, &doc)); np++)
+		CHECK_MSG(doc && doc[0] && c0_run_conf_set(&d, name, "foo") == C0_EINVAL && strstr(c0_last_error(), name),
+			  "%s", name);
+	CHECK(np > 30);
+	expect_einval(c0_run_conf_set(&c, "lambda", "abc"), "lambda");
+	expect_einval(c0_run_conf_set(&c, "lamda", "1e-3"), "lamda");
+	expect_einval(c0_run_conf_set(&c, "penalty", "l2"), "penalty");
+	expect_einval(c0_run_conf_set(&c, "srf", "2.5"), "srf");
+	expect_einval(c0_run_conf_set(&c, "angles", "62,x"), "angles");
+	expect_einval(c0_run_conf_set(&c, "z_range_nm", "0,400"), "z_range_nm");
+	expect_einval(c0_run_conf_set(&c, "baseline", "2"), "baseline");
+	CHECK(c.srf == 2 && c.nangles == 3 && c.z_range_nm[1] == 300);   /* a refused value changes nothing */
+}
+
+static void compare(const struct c0_result *a, const struct c0_result *b, int nq)
+{
+	int h, w, h2, w2, nz, nz2;
+	const uint8_t *sa = c0_result_support(a, &h, &w), *sb = c0_result_support(b, &h2, &w2);
+	CHECK(sa && sb && h == h2 && w == w2 && !memcmp(sa, sb, (size_t)h * w));
+	int on = 0;
+	for (int i = 0; sa && i < h * w; i++)
+		on += sa[i];
+	CHECK_MSG(on > 20, "%d support pixels", on);
+	for (int q = 0; q < nq; q++) {
+		const float *x = c0_result_intensity(a, q, &h, &w);
+		CHECK(same_f(x, c0_result_intensity(b, q, &h2, &w2), (size_t)h * w) && h == h2 && w == w2);
+		x = c0_result_background(a, q, &h, &w);
+		CHECK(same_f(x, c0_result_background(b, q, &h2, &w2), (size_t)h * w) && h == h2 && w == w2);
+	}
+	CHECK(!c0_result_intensity(a, nq, NULL, NULL) && !c0_result_background(a, -1, NULL, NULL));
+	const float *v = c0_result_volume(a, &nz, &h, &w);
+	CHECK(v && same_f(v, c0_result_volume(b, &nz2, &h2, &w2), (size_t)nz * h * w) && nz == nz2 && h == h2);
+	CHECK(nz == 20 && h == 4 * 20 && w == 4 * 24);
+	double tot = 0;
+	for (size_t i = 0; v && i < (size_t)nz * h * w; i++)
+		tot += v[i];
+	CHECK(tot > 0);
+	CHECK(same_f(c0_result_depth(a, &h, &w), c0_result_depth(b, &h2, &w2), (size_t)h * w));
+	const double *z = c0_result_z_nm(a, &nz), *z2 = c0_result_z_nm(b, &nz2);
+	CHECK(z && z2 && nz == nz2 && !memcmp(z, z2, (size_t)nz * sizeof *z) && z[0] == 10);
+	v = c0_result_baseline_volume(a, &nz, &h, &w);
+	CHECK(v && same_f(v, c0_result_baseline_volume(b, &nz2, &h2, &w2), (size_t)nz * h * w) && h == 20 && w == 24);
+	const char *ja = c0_result_report_json(a);
+	CHECK(ja && strstr(ja, "\"lambda_max\"") && strstr(ja, "\"timings_s\"") && strstr(ja, "\"3D\""));
+}
+
+static void test_files_and_arrays(void)
+{
+	char dir[] = "/tmp/c0_test_pipeline_XXXXXX";
+	CHECK(mkdtemp(dir) != NULL);
+	char data[300], outa[300], outb[300];
+	snprintf(data, sizeof data, "%s/data", dir);
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	s.seed = 5, s.width = 24, s.height = 20, s.frames = 120;
+	c0_sim_default_angles(&s, 3);
+	struct c0_outdir od;
+	CHECK(c0_outdir_open(&od, data, 0) == C0_OK);
+	struct c0_sim_result sr;
+	CHECK(c0_simulate(&s, &od, &sr) == C0_OK);
+	c0_sim_result_free(&sr);
+
+	struct c0_run_conf c;
+	c0_run_conf_init(&c);
+	char ang[128];
+	snprintf(ang, sizeof ang, "%.17g,%.17g,%.17g", s.angles[0], s.angles[1], s.angles[2]);
+	CHECK(c0_run_conf_set(&c, "fwhm_nm", "229") == C0_OK && c0_run_conf_set(&c, "angles", ang) == C0_OK &&
+	      c0_run_conf_set(&c, "baseline", "1") == C0_OK);
+
+	char paths[3][320];
+	struct c0_stack fs[3] = { 0 }, ms[3] = { 0 };
+	float *arr[3] = { 0 };
+	for (int q = 0; q < 3; q++) {
+		snprintf(paths[q], sizeof paths[q], "%s/stack_q%02d.tif", data, q + 1);
+		fs[q].path = paths[q];
+		struct c0_tiff_info in;
+		CHECK(c0_tiff_load_f32(paths[q], &in, &arr[q]) == C0_OK);
+		ms[q] = (struct c0_stack){ .data = arr[q], .frames = (int)in.pages, .height = (int)in.height,
+					   .width = (int)in.width, .pixel_nm = 100 };
+	}
+	struct c0_result *ra = NULL, *rb = NULL;
+	CHECK(c0_run(&c, fs, 3, &ra) == C0_OK);
+	CHECK(c0_run(&c, ms, 3, &rb) == C0_OK);
+	if (ra && rb) {
+		CHECK(c0_result_nstacks(ra) == 3);
+		compare(ra, rb, 3);
+		/* written: the files of `col0rme run`; never into an input's directory */
+		snprintf(outa, sizeof outa, "%s/a", dir), snprintf(outb, sizeof outb, "%s/b", dir);
+		CHECK(c0_result_write(ra, outa, 0) == C0_OK && c0_result_write(rb, outb, 0) == C0_OK);
+		const char *files[] = { "support.tif", "rx.tif", "intensity_q03.tif", "background_q01.tif", "volume.tif",
+					"depth.tif", "depth.png", "baseline_volume.tif", "report.json" };
+		for (size_t k = 0; k < sizeof files / sizeof *files; k++) {
+			char p[400];
+			snprintf(p, sizeof p, "%s/%s", outb, files[k]);
+			CHECK_MSG(access(p, F_OK) == 0, "%s", p);
+		}
+		expect_einval(c0_result_write(ra, data, 1), "outdir");
+		CHECK(c0_result_write(rb, outb, 0) != C0_OK && strstr(c0_last_error(), "not empty"));
+	}
+	c0_result_free(ra), c0_result_free(rb);
+	ra = rb = NULL;
+
+	/* bad input: refused with the parameter named, no result */
+	struct c0_run_conf b = c;
+	b.fwhm_nm = 0;
+	expect_einval(c0_run(&b, ms, 3, &ra), "fwhm_nm");
+	CHECK(!ra);
+	expect_einval(c0_run(&c, ms, 2, &ra), "angles");
+	b = c, b.graph_radius = 0.5;
+	expect_einval(c0_run(&b, ms, 3, &ra), "graph_radius");
+	b = c, b.nsupport_stacks = 1, b.support_stacks[0] = 4;
+	expect_einval(c0_run(&b, ms, 3, &ra), "support_stacks");
+	b = c, b.angles[1] = 50;
+	expect_einval(c0_run(&b, ms, 3, &ra), "angles");
+	struct c0_stack bad[3] = { ms[0], ms[1], ms[2] };
+	bad[1].width = 20, bad[1].frames = 100;
+	expect_einval(c0_run(&c, bad, 3, &ra), "array 2");
+	bad[1] = ms[1], bad[0].pixel_nm = 0;
+	expect_einval(c0_run(&c, bad, 3, &ra), "pixel_nm");
+	CHECK(!ra);
+
+	for (int q = 0; q < 3; q++)
+		free(arr[q]);
+	char cmd[400];
+	snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+	CHECK(system(cmd) == 0);
+}
+
+int main(void)
+{
+	RUN(test_conf);
+	RUN(test_files_and_arrays);
+	return CHECK_DONE();
+}
