@@ -85,6 +85,125 @@ static double smooth(void *vctx, const double *x, double *g)
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
 
+/* The same on a working set: x and g hold only the pixels ws[0..nws), the
+ * others are 0. A x = Hy X Hx costs 2 band products per stored pixel instead
+ * of per grid pixel: the support is a few percent of the grid. */
+struct wctx {
+	struct ctx *c;
+	const size_t *ws;
+	size_t nws;
+	double *T;           /* Ly x Lx scratch, zero outside the rows in use */
+	uint8_t *row;        /* rows of T touched by the last call */
+};
+
+static double smooth_ws(void *vctx, const double *xw, double *gw)
+{
+	struct wctx *w = vctx;
+	const struct c0_covop *op = w->c->op;
+	const struct c0_band *Hy = &op->Hy, *Hx = &op->Hx;
+	const int Ly = op->Ly, Lx = op->Lx;
+	for (int a = 0; a < Ly; a++)
+		if (w->row[a])
+			memset(w->T + (size_t)a * Lx, 0, sizeof *w->T * (size_t)Lx), w->row[a] = 0;
+	/* T = X Hx (Hx symmetric: row b of Hx is its column b) */
+	for (size_t k = 0; k < w->nws; k++) {
+		if (xw[k] == 0)
+			continue;
+		const size_t i = w->ws[k];
+		const int a = (int)(i / (size_t)Lx), b = (int)(i % (size_t)Lx);
+		const double v = xw[k], *h = Hx->v + (size_t)b * Hx->w;
+		double *t = w->T + (size_t)a * Lx + Hx->start[b];
+		for (int u = 0; u < Hx->w; u++)
+			t[u] += v * h[u];
+		w->row[a] = 1;
+	}
+	double xc = 0, xax = 0, xn = 0;
+	for (size_t k = 0; k < w->nws; k++) {
+		const size_t i = w->ws[k];
+		const int a = (int)(i / (size_t)Lx), b = (int)(i % (size_t)Lx);
+		const double *h = Hy->v + (size_t)a * Hy->w, *t = w->T + (size_t)Hy->start[a] * Lx + b;
+		double ax = 0;
+		for (int u = 0; u < Hy->w; u++)
+			ax += h[u] * t[(size_t)u * Lx];
+		gw[k] = ax;
+		xc += xw[k] * w->c->C[i], xax += xw[k] * ax, xn += xw[k] * op->n[i];
+	}
+	const struct ctx *c = w->c;
+	const double s = fmax(0, (c->trR - xn) / c->HW);
+	for (size_t k = 0; k < w->nws; k++)
+		gw[k] += s * op->n[w->ws[k]] - c->C[w->ws[k]];
+	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
+}
+
+/* l1 by FISTA: a short run on the whole grid finds where the support can
+ * be; then FISTA on the working set (pixels that are non-zero or whose
+ * gradient would make them so), whose optimality is checked on the whole
+ * grid whenever it converges: pixels that would move join the set and the
+ * solve goes on from where it was. */
+#define WS_WARMUP 100
+static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, double *x, struct c0_fista_info *info)
+{
+	const struct c0_covop *op = ctx->op;
+	const size_t L = (size_t)op->Ly * op->Lx;
+	struct c0_fista_conf f0 = *fc;
+	f0.maxit = fc->maxit < WS_WARMUP ? fc->maxit : WS_WARMUP;
+	int st = c0_fista_nn(smooth, ctx, L, lip, NULL, ctx->lam, x, &f0, info);
+	int used = info->iters;
+	if (st || info->converged || used >= fc->maxit)
+		return st;
+	struct wctx w = { ctx, NULL, 0, c0_alloc(L, sizeof(double)), c0_alloc((size_t)op->Ly, 1) };
+	size_t *ws = c0_alloc(L, sizeof *ws);
+	double *xw = c0_alloc(L, sizeof *xw), *g = ctx->Ax;
+	uint8_t *in = c0_alloc(L, 1);
+	if (!w.T || !w.row || !ws || !xw || !in) {
+		st = C0_ENOMEM;
+		goto out;
+	}
+	w.ws = ws;
+	struct c0_fista_info part = *info;
+	for (;;) {
+		/* the gradient on the whole grid: who would move? */
+		smooth(ctx, x, g);
+		/* join: a gradient that would move the pixel by more than rounding
+		 * (1e-3 lambda); leave: at 0 and held there by a margin (0.1 lambda) */
+		int grew = 0;
+		for (size_t i = 0; i < L; i++) {
+			const double m = g[i] + ctx->lam;
+			if (!in[i] && (x[i] > 0 || m < -1e-3 * ctx->lam))
+				in[i] = 1, grew = 1;
+			else if (in[i] && x[i] == 0 && m > 0.1 * ctx->lam)
+				in[i] = 0;
+		}
+		if (!grew && part.converged)
+			break;
+		w.nws = 0;
+		for (size_t i = 0; i < L; i++)
+			if (in[i])
+				xw[w.nws] = x[i], ws[w.nws++] = i;
+		struct c0_fista_conf fw = *fc;
+		fw.maxit = fc->maxit - used;
+		part.hist = info->hist ? info->hist + used : NULL;
+		part.nhist = info->hist && info->nhist > used ? info->nhist - used : 0;
+		if ((st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, ctx->lam, xw, &fw, &part)))
+			break;
+
+		used += part.iters;
+		memset(x, 0, L * sizeof *x);
+		for (size_t k = 0; k < w.nws; k++)
+			x[ws[k]] = xw[k];
+		if (used >= fc->maxit) {
+			part.converged = 0;
+			break;
+		}
+	}
+	info->iters = used, info->converged = part.converged, info->obj = part.obj;
+
+	info->restarts += part.restarts;
+out:
+	free(w.T), free(w.row), free(ws), free(xw), free(in);
+	return st;
+}
+
 /* Relative duality gap of the l1 problem at x >= 0 (with s in closed form):
  * the residual rho = R - A x - s I scaled into the dual feasible set,
  * theta = rho / max(1, max_a (A^T rho)_a / lam), gives
@@ -201,8 +320,10 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
 	ctx.lam = res->lambda;
 	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
-		if (c->penalty == C0_PENALTY_L1 || mask)
+		if (mask)
 			st = c0_fista_nn(smooth, &ctx, L, op.lip, NULL, res->lambda, x, &c->fista, &info);
+		else if (c->penalty == C0_PENALTY_L1)
+			st = solve_l1(&ctx, &c->fista, op.lip, x, &info);
 		else
 			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &c->fista, c->cel0_outer, c->fista.tol, &info);
 	}
