@@ -101,6 +101,10 @@ int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value);
 /* The parameters in order (i = 0, 1, ... until NULL): name, and its help
  * line with the default. */
 const char *c0_run_conf_param(int i, const char **doc);
+/* A conf on the heap with the defaults (NULL: out of memory), for callers
+ * that cannot hold the struct itself (language bindings). */
+struct c0_run_conf *c0_run_conf_new(void);
+void c0_run_conf_free(struct c0_run_conf *c);
 
 /* One stack: a TIFF file (path) or float32 frames in memory (data, frames x
  * height x width, row-major, owned by the caller). pixel_nm 0: the file's
@@ -120,6 +124,12 @@ int c0_run(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, st
 /* Writes the files `col0rme run` writes into outdir (created; must be empty
  * unless force; never the directory of an input). On failure nothing is left. */
 int c0_result_write(const struct c0_result *r, const char *outdir, int force);
+/* One step alone, as `col0rme support` and `col0rme matirf` do. The support of
+ * each stack, joined (support and report). */
+int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out);
+/* The MA-TIRF volume from n images of h x w (one per angle of c, row-major;
+ * pixel size c->pixel_nm, for the outputs' calibration): volume, depth, z_nm. */
+int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n, int h, int w, struct c0_result **out);
 
 /* Arrays owned by the result (NULL when absent or q out of range). */
 int c0_result_nstacks(const struct c0_result *r);
@@ -137,6 +147,21 @@ void c0_result_free(struct c0_result *r);
 const char *c0_last_error(void);
 /* "MAJOR.MINOR.PATCH" */
 const char *c0_version(void);
+
+/* The simulator of `col0rme simulate` in memory: blinking emitters on
+ * filaments, one acquisition per angle, camera noise. Parameters by name
+ * (sim.json's "parameters": "seed", "width", "height", "frames", "pixel_nm",
+ * "fwhm_nm", "angles" (comma list, deg) or "nangles" (a default set),
+ * "snr_db", "background", ...); the stacks are the values the CLI writes. */
+struct c0_simulation;
+int c0_simulation_new(struct c0_simulation **out);
+int c0_simulation_set(struct c0_simulation *s, const char *name, const char *value);
+double c0_simulation_get(const struct c0_simulation *s, const char *name);   /* NAN: no such parameter */
+int c0_simulation_run(struct c0_simulation *s);
+const float *c0_simulation_stack(const struct c0_simulation *s, int q, int *frames, int *h, int *w);  /* ADU, after run */
+const double *c0_simulation_angles(const struct c0_simulation *s, int *n);
+const double *c0_simulation_emitters(const struct c0_simulation *s, int *n);  /* n x (x, y, z nm, brightness) */
+void c0_simulation_free(struct c0_simulation *s);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,7 @@
 /* MA-TIRF: adjoints of the difference operators, TIRF intensity ratios, and
  * depth recovery on synthetic volumes. */
 #include "check.h"
+#include "check_adjoint.h"
 #include "ops/diff3.h"
 #include "ops/grad3m.h"
 #include "ops/tirfop.h"
@@ -20,17 +21,10 @@ static void test_adjoints(void)
 	size_t N = 7 * 5 * 4;
 	float work[2 * 7 * 5 * 4];
 	struct c0_diff3 d = { 7, 5, 4, 1.3, 0.7, work };
-	float *v = malloc(N * sizeof *v), *g = malloc(6 * N * sizeof *g), *h = malloc(6 * N * sizeof *h), *va = malloc(N * sizeof *va);
-	for (size_t i = 0; i < N; i++)
-		v[i] = (float)c0_rng_normal(&rng);
-	for (size_t i = 0; i < 6 * N; i++)
-		h[i] = (float)c0_rng_normal(&rng);
-	c0_grad3(&d, v, g);
-	c0_grad3_adjoint(&d, h, va);
-	CHECK_REL(dotf(g, h, 3 * N), dotf(v, va, N), 1e-5);
-	c0_hess3(&d, v, g);
-	c0_hess3_adjoint(&d, h, va);
-	CHECK_REL(dotf(g, h, 6 * N), dotf(v, va, N), 1e-5);
+	float *v = malloc(N * sizeof *v), *g = malloc(6 * N * sizeof *g);
+	const struct c0_linopf grad = c0_grad3_linop(&d), hess = c0_hess3_linop(&d);
+	CHECK_ADJOINTF(&grad, 1e-5);
+	CHECK_ADJOINTF(&hess, 1e-5);
 	/* the Hessian of a linear ramp vanishes away from the borders */
 	for (int z = 0; z < 4; z++)
 		for (int y = 0; y < 5; y++)
@@ -44,7 +38,7 @@ static void test_adjoints(void)
 				for (int x = 1; x < 6; x++)
 					mx = fmax(mx, fabs(g[c * N + (z * 5 + y) * 7 + x]));
 	CHECK(mx < 1e-12);
-	free(v), free(g), free(h), free(va);
+	free(v), free(g);
 }
 
 /* the gradient over mask columns: adjoint on a ragged mask, and the plain 3D
@@ -63,17 +57,15 @@ static void test_grad3m(void)
 		e[i] = (float)c0_rng_normal(&rng);
 	for (size_t i = 0; i < 140; i++)
 		v[i] = (float)c0_rng_normal(&rng);
-	c0_grad3m_forward(&g, v, d);
-	c0_grad3m_adjoint(&g, e, va);
-	CHECK(g.M > 0 && g.M < np);
-	CHECK_REL(dotf(d, e, 3 * N), dotf(v, va, N), 1e-5);
+	const struct c0_linopf G = c0_grad3m_linop(&g);
+	CHECK(g.M > 0 && g.M < np && G.nout == 3 * N);
+	CHECK_ADJOINTF(&G, 1e-5);
 	c0_grad3m_free(&g);
 	/* no axial weight: the axial component is dropped, not stored as zeros */
 	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0) == C0_OK);
-	CHECK(g.nc == 2);
-	c0_grad3m_forward(&g, v, d);
-	c0_grad3m_adjoint(&g, e, va);
-	CHECK_REL(dotf(d, e, 2 * N), dotf(v, va, N), 1e-5);
+	const struct c0_linopf G2 = c0_grad3m_linop(&g);
+	CHECK(g.nc == 2 && G2.nout == 2 * N);
+	CHECK_ADJOINTF(&G2, 1e-5);
 	c0_grad3m_free(&g);
 	memset(mask, 1, sizeof mask);
 	CHECK(c0_grad3m_init(&g, mask, ny, nx, nz, 1.3, 0.7) == C0_OK);
@@ -101,17 +93,15 @@ static void test_tirfop(void)
 	struct c0_tirf t = C0_TIRF_DEFAULTS;
 	enum { NQ = 5, NZ = 7, M = 11 };
 	double W[NQ * NZ];
-	float u[NZ * M], y[NQ * M], v[NQ * M], ua[NZ * M] = { 0 };
+	float u[NZ * M], y[NQ * M];
 	const double ang[NQ] = { 61.48, 63.37, 65.39, 67.58, 70.0 };
 	CHECK(c0_tirf_weights(&t, NQ, ang, NULL, NZ, 0, 30, W) == C0_OK);
 	for (int i = 0; i < NZ * M; i++)
 		u[i] = (float)c0_rng_normal(&rng);
-	for (int i = 0; i < NQ * M; i++)
-		v[i] = (float)c0_rng_normal(&rng);
 	const struct c0_tirfop o = { NQ, NZ, M, W };
+	const struct c0_linopf T = c0_tirfop_linop(&o);
+	CHECK_ADJOINTF(&T, 1e-5);
 	c0_tirfop_forward(&o, u, y);
-	c0_tirfop_adjoint_add(&o, v, ua);
-	CHECK_REL(dotf(y, v, NQ * M), dotf(u, ua, NZ * M), 1e-5);
 	double s = 0;            /* angle 3, column 4, by hand */
 	for (int j = 0; j < NZ; j++)
 		s += W[3 * NZ + j] * u[j * M + 4];

@@ -3,6 +3,7 @@
  * dense sample covariance, and accuracy on simulated data. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
+#include "check_adjoint.h"
 #include "ops/covop.h"
 #include "ops/covariance.h"
 #include "optics/psf.h"
@@ -177,14 +178,18 @@ static void test_dense_identities(void)
 	}
 	CHECK_REL(op.lip, lam, 1e-9);
 	/* Psi and Psi^T against the dense matrix, and their adjointness */
-	double *y = rnd(NP, -0.5), psix[NP], psity[NL];
+	double psix[NP];
 	c0_covop_psi(&op, x, psix);
 	for (int p = 0; p < NP; p++)
 		slow[p] = dot(P + (size_t)p * NL, x, NL);
 	CHECK(maxdiff(psix, slow, NP) < 1e-12);
-	c0_covop_psit(&op, y, psity);
-	CHECK_REL(dot(psix, y, NP), dot(x, psity, NL), 1e-12);
-	free(P), free(x), free(fast), free(slow), free(M), free(e), free(AtA), free(v), free(y);
+	const struct c0_linop Psi = c0_covop_psi_linop(&op);
+	CHECK_ADJOINT(&Psi, NULL, 1e-12);
+	/* one PSF factor alone, along the rows of an image */
+	struct c0_band_rows gx = { &op.Gx, 3 };
+	const struct c0_linop Gx = c0_band_linop(&gx);
+	CHECK_ADJOINT(&Gx, NULL, 1e-12);
+	free(P), free(x), free(fast), free(slow), free(M), free(e), free(AtA), free(v);
 	c0_covop_free(&op);
 }
 
@@ -285,12 +290,13 @@ static void test_covariance_operator(void)
 	/* adjoint test in the band's Frobenius product, with a narrower band */
 	c0_cov_free(&cov);
 	random_cov(2, 10, &cov, D, 0);
-	c0_covop_forward(&op, &cov, x, m);
-	c0_covop_adjoint(&op, &cov, cov.r, C);
-	double lhs = 0;
-	for (int l = 0; l < cov.nlag; l++)
-		lhs += c0_cov_weight(&cov, l) * dot(m + (size_t)l * NP, cov.r + (size_t)l * NP, NP);
-	CHECK_REL(lhs, dot(x, C, NL), 1e-12);
+	struct c0_covop_band band = { &op, &cov };
+	const struct c0_linop A = c0_covop_linop(&band);
+	double *w = malloc(sizeof *w * A.nout);
+	for (size_t i = 0; i < A.nout; i++)
+		w[i] = c0_cov_weight(&cov, (int)(i / NP));
+	CHECK_ADJOINT(&A, w, 1e-12);
+	free(w);
 	/* gradient of 1/2||R - M(x) - sI||^2 in x at fixed s, and the closed-form s */
 	c0_cov_free(&cov);
 	random_cov(5, 30, &cov, D, 0);

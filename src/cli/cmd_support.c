@@ -17,18 +17,9 @@ int cmd_support(int argc, char **argv)
 	int rc = c0_cli_start(&k, &spec, params, NULL, 0, argc, argv);
 	if (rc)
 		return rc == 1 ? 0 : 2;
-	struct c0_frames f[C0_MAX_STACKS];
-	struct c0_stage_confs sc;
 	struct c0_result *r = NULL;
-	int st = c0_pipe_begin("support", &k.m.c, k.stacks, k.n, f, &sc, &r);
-	if (st)
-		return c0_cli_end(&k, "support", r, st, argc, argv);
-	if (!(st = c0_cli_open(&k))) {
-		r->nsup = k.n;
-		for (int i = 0; i < k.n; i++)
-			r->sup[i] = i;
-		st = c0_step_support(r, &sc.support, f);
-	}
-	c0_stacks_close(f, k.n);
+	int st = c0_cli_open(&k);
+	if (!st)
+		st = c0_run_support(&k.m.c, k.stacks, k.n, &r);
 	return c0_cli_end(&k, "support", r, st, argc, argv);
 }

@@ -183,3 +183,26 @@ double c0_psi_norm2(const struct c0_psi_omega *p)
 	}
 	return l[0] * l[1];
 }
+
+void c0_psi_omega_diag(const struct c0_psi_omega *p, double *psi2)
+{
+	for (int k = 0; k < p->n; k++) {
+		/* ||psi_k||^2 = ||gy_a||^2 ||gx_b||^2 */
+		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
+		const double *gy = p->GyT.v + (size_t)a * p->GyT.w, *gx = p->GxT.v + (size_t)b * p->GxT.w;
+		double sy = 0, sx = 0;
+		for (int i = 0; i < p->GyT.w; i++)
+			sy += gy[i] * gy[i];
+		for (int j = 0; j < p->GxT.w; j++)
+			sx += gx[j] * gx[j];
+		psi2[k] = sy * sx;
+	}
+}
+
+void c0_grad_omega_diag(const struct c0_psi_omega *p, double *deg)
+{
+	for (int k = 0; k < p->n; k++)
+		deg[k] = 0;
+	for (int e = 0; e < p->ne; e++)
+		deg[p->e0[e]] += p->ew[e] * p->ew[e], deg[p->e1[e]] += p->ew[e] * p->ew[e];
+}

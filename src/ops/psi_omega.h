@@ -24,5 +24,12 @@ void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double 
 void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x);  /* Ny*Nx -> n */
 void c0_grad_omega(const struct c0_psi_omega *p, const double *x, double *g);         /* n -> ne */
 void c0_grad_omega_adjoint(const struct c0_psi_omega *p, const double *g, double *x); /* ne -> n */
+/* Fine raster index of unknown k. */
+static inline int c0_psi_omega_pixel(const struct c0_psi_omega *p, int k) { return p->idx[k]; }
+/* The diagonals of Psi_Omega^T Psi_Omega (||psi_k||^2) and of D^T D for the
+ * graph gradient D (sum of squared edge weights at each node), n each, for
+ * diagonal preconditioners. */
+void c0_psi_omega_diag(const struct c0_psi_omega *p, double *psi2);
+void c0_grad_omega_diag(const struct c0_psi_omega *p, double *deg);
 /* lambda_max(Psi^T Psi) of the full operator, an upper bound for Psi_Omega */
 double c0_psi_norm2(const struct c0_psi_omega *p);

@@ -78,10 +78,12 @@ struct c0_sim_result {
 	int nemitters;
 	struct c0_emitter *em;
 	struct c0_sim_angle angle[C0_MAX_ANGLES];
+	float *stack[C0_MAX_ANGLES];        /* without an outdir: frames x height x width ADU per angle */
 	double seconds;
 };
 
-/* Writes OUTDIR/stack_qNN.tif (uint16) and the ground truth. */
+/* Writes OUTDIR/stack_qNN.tif (uint16) and the ground truth; with out NULL,
+ * keeps the stacks in res->stack instead (the same values) and writes nothing. */
 struct c0_outdir;
 int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_sim_result *res);
 void c0_sim_result_free(struct c0_sim_result *r);

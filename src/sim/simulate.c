@@ -19,7 +19,7 @@ void c0_sim_result_free(struct c0_sim_result *r)
 {
 	free(r->em);
 	for (int q = 0; q < C0_MAX_ANGLES; q++)
-		free(r->angle[q].mean_on);
+		free(r->angle[q].mean_on), free(r->stack[q]);
 	memset(r, 0, sizeof *r);
 }
 
@@ -62,32 +62,36 @@ static double noisefree_variance(const struct c0_sim_conf *c, const struct c0_si
 	return fail ? NAN : b / N - (a / N) * (a / N);
 }
 
+/* To the TIFF at path, or with path NULL into mem (frames x H x W). */
 static int write_stack(const struct c0_sim_conf *c, int q, const struct c0_sim_scene *s, double read_noise,
-		       const char *path, struct c0_progress *pr, double done0)
+		       const char *path, float *mem, struct c0_progress *pr, double done0)
 {
 	const size_t n = (size_t)c->width * c->height;
 	struct c0_tiff_wopts o = { .width = c->width, .height = c->height, .frames = c->frames, .dtype = C0_U16,
 				   .pixel_size_nm = c->pixel_nm, .frame_interval_s = 1 / c->fps, .software = "col0rme simulate" };
-	struct c0_tiff_writer *w;
-	int st = c0_tiff_create(path, &o, &w);
+	struct c0_tiff_writer *w = NULL;
+	int st = path ? c0_tiff_create(path, &o, &w) : C0_OK;
 	if (st)
 		return st;
-	float *adu = c0_alloc(n * BLOCK, sizeof *adu);
+	float *adu = mem ? NULL : c0_alloc(n * BLOCK, sizeof *adu);
 	double *ph = c0_alloc(n * BLOCK, sizeof *ph);
-	if (!adu || !ph)
+	if ((!adu && !mem) || !ph)
 		st = C0_ENOMEM;
 	for (int t0 = 0; !st && t0 < c->frames; t0 += BLOCK) {
 		int nb = c->frames - t0 < BLOCK ? c->frames - t0 : BLOCK;
+		float *a = mem ? mem + (size_t)t0 * n : adu;
 #pragma omp parallel for schedule(dynamic, 1)
 		for (int b = 0; b < nb; b++) {
 			c0_sim_render(s, t0 + b, ph + b * n);
-			c0_sim_camera(c, q, t0 + b, read_noise, ph + b * n, adu + b * n);
+			c0_sim_camera(c, q, t0 + b, read_noise, ph + b * n, a + b * n);
 		}
-		for (int b = 0; b < nb && !st; b++)
-			st = c0_tiff_write_plane(w, adu + b * n);
+		for (int b = 0; b < nb && !st && w; b++)
+			st = c0_tiff_write_plane(w, a + b * n);
 		c0_progress_update(pr, done0 + t0 + nb);
 	}
 	free(adu), free(ph);
+	if (!w)
+		return st;
 	if (st) {
 		c0_tiff_abort(w);
 		return st;
@@ -225,14 +229,17 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 		a->snr_db = a->read_noise > 0 && var == var ? 10 * log10(var / (a->read_noise * a->read_noise)) : INFINITY;
 		char name[64];
 		snprintf(name, sizeof name, "stack_q%02d.tif", q + 1);
-		st = write_stack(c, q, s, a->read_noise, c0_outdir_file(out, name), &pr, done);
+		if (!out && !(res->stack[q] = c0_alloc((size_t)c->frames * c->width * c->height, sizeof(float))))
+			st = C0_ENOMEM;
+		else
+			st = write_stack(c, q, s, a->read_noise, out ? c0_outdir_file(out, name) : NULL, res->stack[q], &pr, done);
 		done += c->frames;
 		c0_sim_scene_free(s);
 	}
 	c0_progress_end(&pr);
-	if (!st)
+	if (!st && out)
 		st = write_truth(c, out, res, bg);
-	if (!st)
+	if (!st && out)
 		st = write_csv(c, out, res);
 	for (int q = 0; q < C0_MAX_ANGLES; q++)
 		free(bg[q]);

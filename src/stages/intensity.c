@@ -203,18 +203,8 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 		st = C0_ENOMEM;
 		goto out;
 	}
-	for (int k = 0; k < p.n; k++) {
-		/* ||psi_k||^2 = ||gy_a||^2 ||gx_b||^2 */
-		const int a = p.P.idx[k] / p.P.Lx, b = p.P.idx[k] % p.P.Lx;
-		double sy = 0, sx = 0;
-		for (int i = 0; i < p.P.GyT.w; i++)
-			sy += p.P.GyT.v[(size_t)a * p.P.GyT.w + i] * p.P.GyT.v[(size_t)a * p.P.GyT.w + i];
-		for (int j = 0; j < p.P.GxT.w; j++)
-			sx += p.P.GxT.v[(size_t)b * p.P.GxT.w + j] * p.P.GxT.v[(size_t)b * p.P.GxT.w + j];
-		p.psi2[k] = sy * sx;
-	}
-	for (int e = 0; e < p.P.ne; e++)
-		p.deg[p.P.e0[e]] += p.P.ew[e] * p.P.ew[e], p.deg[p.P.e1[e]] += p.P.ew[e] * p.P.ew[e];
+	c0_psi_omega_diag(&p.P, p.psi2);
+	c0_grad_omega_diag(&p.P, p.deg);
 	res->Ly = p.P.Ly, res->Lx = p.P.Lx, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2;
 	double nu = c->nu > 0 ? c->nu : sqrt((double)T);
 	res->target2 = nu * nu * p.NN * sigma2 / (double)T;
@@ -238,7 +228,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 	res->mu = p.mu;
 	res->residual2 = residual2(&p, sol);
 	for (int k = 0; k < p.n; k++)
-		res->x[p.P.idx[k]] = (float)sol[k];
+		res->x[c0_psi_omega_pixel(&p.P, k)] = (float)sol[k];
 	for (int i = 0; i < p.NN; i++)
 		res->b[i] = (float)(p.nb == p.NN ? sol[p.n + i] : p.nb == 1 ? p.bscale * sol[p.n] : 0);
 	res->solves = p.solves, res->cg_iters = p.cg_iters, res->active_rounds = p.rounds;

@@ -260,15 +260,7 @@ static void primal_fused(void *vc, const float *y, float *x, float *t, float rho
 		const size_t k1 = k0 + FCHUNK < M ? k0 + FCHUNK : M, n = k1 - k0;
 		float a[FCHUNK];                    /* K^T y of the chunk at one depth */
 		for (int j = 0; j < nz; j++) {
-			const float *dxj = dx + j * M + k0, *dyj = dy + j * M, *hr = g->hr + k0, *hd = g->hd + k0;
-			for (size_t i = 0; i < n; i++)
-				a[i] = -hr[i] * dxj[i] - hd[i] * dyj[k0 + i];
-			if (k0 > 0)
-				a[0] += hr[-1] * dxj[-1];
-			for (size_t i = 1; i < n; i++)
-				a[i] += hr[i - 1] * dxj[i - 1];
-			for (size_t i = 0; i < n; i++)       /* gather: from the upper neighbour */
-				a[i] += g->hu[k0 + i] * dyj[g->up[k0 + i]];
+			c0_grad3m_lateral_adjoint(g, dx + j * M, dy + j * M, k0, n, a);
 			for (size_t i = 0; i < n; i++)
 				a[i] *= wl;
 			for (int q = 0; q < nq; q++) {
@@ -308,13 +300,7 @@ static void dual_fused(void *vc, const float *t, float *y, float rho, double sum
 				for (size_t i = 0; i < n; i++)
 					acc[q * FCHUNK + i] += w * tj[k0 + i];
 			}
-			const size_t nr = k1 < M ? n : n - 1;   /* the last column has no right neighbour */
-			for (size_t i = 0; i < nr; i++)
-				ex[i] = g->hr[k0 + i] * (tj[k0 + i + 1] - tj[k0 + i]);
-			if (nr < n)
-				ex[nr] = 0;
-			for (size_t i = 0; i < n; i++)       /* gather: from the lower neighbour */
-				ey[i] = tj[g->down[k0 + i]] - tj[k0 + i];
+			c0_grad3m_lateral(g, tj, k0, n, ex, ey);
 			float *gxj = gx + j * M + k0, *gyj = gy + j * M + k0;
 #pragma omp simd reduction(+ : d2, n2)
 			for (size_t i = 0; i < n; i++)

@@ -1,0 +1,110 @@
+/* The public calls besides c0_run, through col0rme.h alone: the simulator
+ * in memory (parameters by name, deterministic), the support step alone
+ * (the same mask as c0_run's), MA-TIRF alone on c0_run's intensities (the
+ * same volume as c0_run's without pooling), and bad input refused with a
+ * message naming the parameter. */
+#include "check.h"
+#include "col0rme.h"
+
+#include <string.h>
+
+static void expect_einval(int st, const char *name)
+{
+	CHECK_MSG(st == C0_EINVAL && strstr(c0_last_error(), name), "status %d, message '%s' should name %s", st,
+		  c0_last_error(), name);
+}
+
+static struct c0_simulation *simulate(void)
+{
+	struct c0_simulation *s;
+	CHECK(c0_simulation_new(&s) == C0_OK);
+	const char *p[][2] = { { "width", "16" }, { "height", "16" }, { "frames", "120" }, { "angles", "62,65,68" },
+			       { "filaments", "2" }, { "seed", "9" } };
+	for (size_t i = 0; i < sizeof p / sizeof *p; i++)
+		CHECK(c0_simulation_set(s, p[i][0], p[i][1]) == C0_OK);
+	CHECK(c0_simulation_run(s) == C0_OK);
+	return s;
+}
+
+static void test_simulation(void)
+{
+	struct c0_simulation *a = simulate(), *b = simulate();
+	int t, h, w, t2, h2, w2, n, ne;
+	const float *sa = c0_simulation_stack(a, 2, &t, &h, &w), *sb = c0_simulation_stack(b, 2, &t2, &h2, &w2);
+	CHECK(sa && sb && t == 120 && h == 16 && w == 16 && t2 == t && h2 == h && w2 == w);
+	CHECK(sa && sb && !memcmp(sa, sb, sizeof(float) * 120 * 16 * 16));   /* same seed, same values */
+	CHECK(!c0_simulation_stack(a, 3, &t, &h, &w));
+	const double *ang = c0_simulation_angles(a, &n), *em = c0_simulation_emitters(a, &ne);
+	CHECK(n == 3 && ang[1] == 65 && ne > 10 && em);
+	int inside = 1;
+	for (int e = 0; em && e < ne; e++)
+		inside &= em[4 * e] >= 0 && em[4 * e] < 1600 && em[4 * e + 1] >= 0 && em[4 * e + 1] < 1600 &&
+			  em[4 * e + 2] >= 0 && em[4 * e + 2] <= 400 && em[4 * e + 3] > 0;
+	CHECK(inside);
+	CHECK(c0_simulation_get(a, "width") == 16 && c0_simulation_get(a, "fwhm_nm") == 229);
+	CHECK(c0_simulation_get(a, "nonsense") != c0_simulation_get(a, "nonsense"));   /* NAN */
+	expect_einval(c0_simulation_set(a, "frames", "10"), "frames");                  /* after the run */
+	c0_simulation_free(a), c0_simulation_free(b);
+
+	struct c0_simulation *s;
+	CHECK(c0_simulation_new(&s) == C0_OK);
+	expect_einval(c0_simulation_set(s, "bogus", "1"), "bogus");
+	expect_einval(c0_simulation_set(s, "frames", "1.5"), "frames");
+	expect_einval(c0_simulation_set(s, "snr_db", "x"), "snr_db");
+	expect_einval(c0_simulation_set(s, "angles", ""), "angles");
+	expect_einval(c0_simulation_set(s, "nangles", "0"), "nangles");
+	CHECK(c0_simulation_set(s, "nangles", "3") == C0_OK);
+	CHECK(c0_simulation_set(s, "width", "4") == C0_OK && c0_simulation_run(s) == C0_EINVAL);
+	c0_simulation_free(s);
+}
+
+static void test_steps(void)
+{
+	struct c0_simulation *sim = simulate();
+	struct c0_stack st[3] = { { 0 } };
+	for (int q = 0; q < 3; q++)
+		st[q].data = c0_simulation_stack(sim, q, &st[q].frames, &st[q].height, &st[q].width);
+	struct c0_run_conf *c = c0_run_conf_new();
+	CHECK(c && c->srf == 4);   /* the defaults */
+	CHECK(c0_run_conf_set(c, "angles", "62,65,68") == C0_OK && c0_run_conf_set(c, "pixel_nm", "100") == C0_OK &&
+	      c0_run_conf_set(c, "fwhm_nm", "229") == C0_OK && c0_run_conf_set(c, "depth_pool_nm", "0") == C0_OK);
+	struct c0_result *run = NULL, *sup = NULL, *mat = NULL;
+	CHECK(c0_run(c, st, 3, &run) == C0_OK);
+	if (!run) {
+		c0_run_conf_free(c), c0_simulation_free(sim);
+		return;
+	}
+	/* the support of the smallest angle's stack, alone: c0_run's support */
+	int h, w, h2, w2, nz, nz2;
+	CHECK(c0_run_support(c, st, 1, &sup) == C0_OK);
+	const uint8_t *ma = c0_result_support(run, &h, &w), *mb = sup ? c0_result_support(sup, &h2, &w2) : NULL;
+	CHECK(ma && mb && h == 64 && w == 64 && h2 == h && w2 == w && !memcmp(ma, mb, (size_t)h * w));
+	CHECK(sup && !c0_result_volume(sup, &nz, &h2, &w2) && !c0_result_intensity(sup, 0, &h2, &w2));
+	/* MA-TIRF on c0_run's intensities: c0_run's volume (no pooling) */
+	const float *img[3];
+	for (int q = 0; q < 3; q++)
+		img[q] = c0_result_intensity(run, q, &h, &w);
+	CHECK(c0_run_matirf(c, img, 3, h, w, &mat) == C0_OK);
+	const float *va = c0_result_volume(run, &nz, &h, &w), *vb = mat ? c0_result_volume(mat, &nz2, &h2, &w2) : NULL;
+	CHECK(va && vb && nz == 20 && nz2 == nz && h2 == h && w2 == w && !memcmp(va, vb, sizeof(float) * nz * h * w));
+	const double *za = c0_result_z_nm(run, &nz), *zb = mat ? c0_result_z_nm(mat, &nz2) : NULL;
+	CHECK(za && zb && nz == nz2 && za[0] == zb[0] && za[nz - 1] == zb[nz - 1]);
+	CHECK(mat && strstr(c0_result_report_json(mat), "\"matirf\""));
+	/* bad input */
+	struct c0_result *bad = run;
+	expect_einval(c0_run_matirf(c, img, 2, h, w, &bad), "angles");
+	CHECK(bad == NULL);
+	img[1] = NULL;
+	expect_einval(c0_run_matirf(c, img, 3, h, w, &bad), "images");
+	expect_einval(c0_run_support(c, st, 0, &bad), "stacks");
+	c0_result_free(run), c0_result_free(sup), c0_result_free(mat);
+	c0_run_conf_free(c);
+	c0_simulation_free(sim);
+}
+
+int main(void)
+{
+	RUN(test_simulation);
+	RUN(test_steps);
+	return CHECK_DONE();
+}
