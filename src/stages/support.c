@@ -269,14 +269,14 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), cov->d);
 	if (st)
 		return st;
-	double *R = c0_alloc((size_t)cov->nlag * n, sizeof *R), *C = c0_alloc(L, sizeof *C);
+	double *C = c0_alloc(L, sizeof *C);
 	double *x = c0_alloc(L, sizeof *x), *Ax = c0_alloc(L, sizeof *Ax);
 	res->Ly = H * r, res->Lx = W * r, res->lag = cov->d, res->nlag = cov->nlag, res->frames = cov->frames;
 	res->mask = c0_alloc(L, 1);
 	res->rx = c0_alloc(L, sizeof *res->rx);
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!R || !C || !x || !Ax || !res->mask || !res->rx || !res->hist) {
+	if (!C || !x || !Ax || !res->mask || !res->rx || !res->hist) {
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -297,13 +297,15 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 		double w = c0_cov_weight(cov, l);
 		for (size_t i = 0; i < n; i++) {
 			double v = cov->r[(size_t)l * n + i] / mx;
-			R[(size_t)l * n + i] = v;
 			ctx.R2 += w * v * v;
 			if (l == 0)
 				ctx.trR += v;
 		}
 	}
-	c0_covop_adjoint(&op, cov, R, C);
+	/* C = A^T (R / mx), without a normalised copy of the band */
+	c0_covop_adjoint(&op, cov, cov->r, C);
+	for (size_t i = 0; i < L; i++)
+		C[i] /= mx;
 	/* lambda_max: the smallest lambda for which x = 0 (with s = tr R / HW) is optimal */
 	double s0 = fmax(0, ctx.trR / ctx.HW), lmax = 0;
 	for (size_t i = 0; i < L; i++) {
@@ -342,7 +344,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	}
 	res->sigma2 = fmax(0, (ctx.trR - xn) / ctx.HW) * mx;
 out:
-	free(R), free(C), free(x), free(Ax);
+	free(C), free(x), free(Ax);
 	c0_covop_free(&op);
 	res->t_solve = c0_now() - t0;
 	return st;
