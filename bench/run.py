@@ -70,7 +70,7 @@ def support_row(what, d, w, T, extra=(), env=None, base=None):
         "%d tiles, %d its max, %s; cov %.0f fr/s; %d thr; %s" % (s["tiles"], s["iterations"],
                                                                 "converged" if s["converged"] else "cap",
                                                                 s["covariance_frames_per_s"], rep["threads"], l0),
-        mem, "%.2fx the baseline" % (base / dt) if base else "baseline")
+        mem, "%.2fx the baseline" % (base / dt) if base else "baseline" if base is None else "no baseline (one tile: ~12 GB)")
     return dt
 
 
@@ -79,7 +79,7 @@ def large(tmp):
     for w, T, with_base in ((1024, 500, True), (2048, 200, False)):
         d = os.path.join(tmp, "L%d" % w)
         sim(d, w, T)
-        base = support_row("support, one tile (baseline)", d, w, T, ("--tile", str(w))) if with_base else None
+        base = support_row("support, one tile (baseline)", d, w, T, ("--tile", str(w))) if with_base else 0
         support_row("support, tiles (default)", d, w, T, base=base)
         if w == 1024:
             # thread scaling and a busy neighbour (the passive wait policy vs spinning threads)
