@@ -35,6 +35,9 @@ enum c0_status {
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
+enum c0_discrepancy { C0_DISCREPANCY_RELATIVE, C0_DISCREPANCY_PLAIN };  /* "relative", "plain" */
+enum c0_bleaching { C0_BLEACHING_ESTIMATE, C0_BLEACHING_OFF };       /* "estimate", "off" */
+enum c0_acquisition { C0_ACQ_SEQUENTIAL, C0_ACQ_INTERLEAVED };       /* "sequential", "interleaved" */
 
 #define C0_MAX_STACKS 64
 
@@ -43,7 +46,8 @@ enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hes
 struct c0_run_conf {
 	/* optics and grid */
 	double pixel_nm;       /* 0: camera pixel size in the sample; 0: the first stack's (c0_stack.pixel_nm, else its TIFF calibration) */
-	double fwhm_nm;        /* 0: PSF full width at half maximum; 0: 0.51 emission_nm / na */
+	double fwhm_nm;        /* 0: PSF full width at half maximum; 0: from psf_image, else 0.51 emission_nm / na */
+	const char *psf_image; /* NULL: a measured PSF image (TIFF, planes averaged) whose fitted Gaussian FWHM is used */
 	double emission_nm;    /* 0: emission wavelength (with na, when fwhm_nm is 0) */
 	double na;             /* 0: numerical aperture of the objective (with emission_nm) */
 	int srf;               /* 4: super-resolution factor, fine pixel = pixel_nm / srf */
@@ -62,6 +66,7 @@ struct c0_run_conf {
 	double beta;           /* 20: background smoothness weight (coarse grid) */
 	double nu;             /* 1: discrepancy factor, residual^2 = nu^2 H W sigma2 / T; 0: sqrt(T) */
 	double mu;             /* 0: smoothness weight by the discrepancy principle; > 0: fixed */
+	enum c0_discrepancy discrepancy; /* relative: residual^2 = floor^2 + nu^2 H W sigma2 / T, floor = the residual at mu = 1e-3; plain: without the floor */
 	double cg_tol;         /* 1e-3: CG relative residual */
 	int cg_iterations;     /* 500: CG steps per active-set round */
 	double graph_radius;   /* 2.25: smoothness couples support pixels up to this far apart (fine pixels, 1..4) */
@@ -83,7 +88,16 @@ struct c0_run_conf {
 	double axial_weight;   /* 0: axial weight of the regulariser relative to lateral */
 	int matirf_iterations; /* 3000: maximum primal-dual iterations */
 	double matirf_tol;     /* 1e-4: primal-dual stopping tolerance */
-	double depth_pool_nm;  /* -1: window over which intensities are summed for each pixel's depth; -1: fwhm_nm, 0: off */
+	double depth_pool_nm;  /* -1: window over which intensities are summed for each pixel's depth; -1: 0.75 fwhm_nm, 0: off */
+	/* photobleaching across the stacks (3D mode) */
+	enum c0_bleaching bleach; /* estimate: the fade from the stacks' frame sums, each intensity divided by its factor; off */
+	double bleach_factors[C0_MAX_STACKS]; /* known factors (each stack's mean population relative to the start) */
+	int nbleach_factors;   /* 0: estimated (or off) */
+	enum c0_acquisition acquisition; /* sequential: stacks recorded one after another; interleaved: frame by frame in turn */
+	int acquisition_order[C0_MAX_STACKS]; /* 1-based stack numbers in the order they were recorded */
+	int nacquisition_order; /* 0: the order given */
+	double gaps_frames[C0_MAX_STACKS]; /* illuminated, unrecorded frames between consecutive recorded stacks */
+	int ngaps_frames;      /* 0: none; 1: the same everywhere; else one per pair */
 	int baseline;          /* 0: 1 also reconstructs the standard MA-TIRF volume from the background-corrected means */
 };
 

@@ -67,7 +67,8 @@ static void test_steps(void)
 	struct c0_run_conf *c = c0_run_conf_new();
 	CHECK(c && c->srf == 4);   /* the defaults */
 	CHECK(c0_run_conf_set(c, "angles", "62,65,68") == C0_OK && c0_run_conf_set(c, "pixel_nm", "100") == C0_OK &&
-	      c0_run_conf_set(c, "fwhm_nm", "229") == C0_OK && c0_run_conf_set(c, "depth_pool_nm", "0") == C0_OK);
+	      c0_run_conf_set(c, "fwhm_nm", "229") == C0_OK && c0_run_conf_set(c, "depth_pool_nm", "0") == C0_OK &&
+	      c0_run_conf_set(c, "bleach", "off") == C0_OK);   /* the volume from the intensities as returned */
 	struct c0_result *run = NULL, *sup = NULL, *mat = NULL;
 	CHECK(c0_run(c, st, 3, &run) == C0_OK);
 	if (!run) {

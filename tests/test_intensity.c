@@ -104,10 +104,19 @@ static void test_discrepancy(void)
 	c.pixel_nm = 100, c.fwhm_nm = 0.97 * 100 / 0.42466090014400953;
 	struct c0_intensity_result res;
 	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) == C0_OK);
-	CHECK(res.dp_status == 0);
-	CHECK_MSG(fabs(res.residual2 - res.target2) <= 0.01 * res.target2, "residual2 %g target %g", res.residual2, res.target2);
-	CHECK(res.mu > 0);
+	/* relative (the default): the floor is the residual at the smallest mu */
+	CHECK(res.dp_status == 0 && res.floor2 > 0 && res.floor2 < res.target2);
+	CHECK_MSG(fabs(res.residual2 - res.floor2 - res.target2) <= 0.01 * res.target2, "residual2 %g floor2 %g target %g",
+		  res.residual2, res.floor2, res.target2);
+	const double mu_rel = res.mu;
 	c0_intensity_result_free(&res);
+	c.relative = 0;   /* plain: the noise level alone, a smaller mu */
+	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) == C0_OK);
+	CHECK(res.dp_status == 0 && res.floor2 == 0);
+	CHECK_MSG(fabs(res.residual2 - res.target2) <= 0.01 * res.target2, "residual2 %g target %g", res.residual2, res.target2);
+	CHECK(res.mu > 0 && res.mu < mu_rel);
+	c0_intensity_result_free(&res);
+	c.relative = 1;
 	/* refusals */
 	memset(m, 0, L);
 	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) != C0_OK && strstr(c0_errmsg(), "empty"));

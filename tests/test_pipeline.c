@@ -5,6 +5,7 @@
 #include "check.h"
 #include "col0rme.h"
 #include "stages/pipeline.h"
+#include "stages/depthpool.h"
 #include "sim/sim.h"
 #include "io/tiff.h"
 
@@ -45,7 +46,7 @@ static void test_conf(void)
 	      s.matirf.dz_nm == md.dz_nm && s.matirf.reg == md.reg && s.matirf.kappa == md.kappa && s.matirf.wz == md.wz &&
 	      s.matirf.sparsity == md.sparsity && s.matirf.pdhg.maxit == md.pdhg.maxit && s.matirf.pdhg.tol == md.pdhg.tol &&
 	      s.matirf.pdhg.relax == md.pdhg.relax && s.matirf.fused == md.fused);
-	CHECK(s.pool_nm == 229);
+	CHECK(s.pool_nm == C0_DEPTH_POOL_FWHM * 229);
 	/* set by name */
 	CHECK(c0_run_conf_set(&c, "lambda", "1e-3") == C0_OK && c.lambda == 1e-3);
 	CHECK(c0_run_conf_set(&c, "angles", "62,64,66") == C0_OK && c.nangles == 3 && c.angles[2] == 66);
@@ -118,6 +119,7 @@ static void test_files_and_arrays(void)
 	CHECK(c0_outdir_open(&od, data, 0) == C0_OK);
 	struct c0_sim_result sr;
 	CHECK(c0_simulate(&s, &od, &sr) == C0_OK);
+	CHECK(c0_outdir_commit(&od) == C0_OK);
 	c0_sim_result_free(&sr);
 
 	struct c0_run_conf c;
@@ -170,8 +172,12 @@ static void test_files_and_arrays(void)
 	expect_einval(c0_run(&b, ms, 3, &ra), "graph_radius");
 	b = c, b.nsupport_stacks = 1, b.support_stacks[0] = 4;
 	expect_einval(c0_run(&b, ms, 3, &ra), "support_stacks");
-	b = c, b.angles[1] = 50;
+	b = c, b.angles[1] = 50, b.angles[2] = 50;   /* one below critical is support-only; two leave one TIRF angle */
 	expect_einval(c0_run(&b, ms, 3, &ra), "angles");
+	b = c, b.nacquisition_order = 3, b.acquisition_order[0] = 1, b.acquisition_order[1] = 1, b.acquisition_order[2] = 2;
+	expect_einval(c0_run(&b, ms, 3, &ra), "acquisition_order");
+	b = c, b.ngaps_frames = 3;
+	expect_einval(c0_run(&b, ms, 3, &ra), "gaps_frames");
 	struct c0_stack bad[3] = { ms[0], ms[1], ms[2] };
 	bad[1].width = 20, bad[1].frames = 100;
 	expect_einval(c0_run(&c, bad, 3, &ra), "array 2");

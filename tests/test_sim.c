@@ -5,6 +5,7 @@
 #include "optics/tirf.h"
 #include "core/err.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -39,6 +40,40 @@ static void test_onfraction(void)
 	}
 	CHECK(lit <= 2);
 	free(on);
+}
+
+/* Bleaching by cumulative ON time: the population's mean on-fraction decays
+ * at c0_sim_bleach_rate, and a process sampled at some slots is the same
+ * process as sampled at every slot. */
+static void test_bleach_rate(void)
+{
+	struct c0_sim_conf c;
+	c0_sim_defaults(&c);
+	c.tau_bleach_s = 2;
+	const int E = 3000, T = 1200;
+	double k = c0_sim_bleach_rate(&c), p_on = 1.0 / 3;
+	CHECK_REL(k, p_on / c.tau_bleach_s, 0.02);     /* about p_on / tau_bleach */
+	float *on = malloc(sizeof(float) * T), *sub = malloc(sizeof(float) * 4);
+	double *m = calloc(T, sizeof *m);
+	const int64_t slot[4] = { 3, 400, 401, 1100 };
+	int same = 1;
+	for (int e = 0; e < E; e++) {
+		c0_sim_blink(&c, 1000 + e, T, on);
+		for (int t = 0; t < T; t++)
+			m[t] += on[t] / E;
+		c0_sim_blink_slots(&c, 1000 + e, slot, 4, sub);
+		for (int i = 0; i < 4; i++)
+			same &= sub[i] == on[slot[i]];
+	}
+	CHECK(same);
+	/* the decay rate between the means of the second and the last 100 frames */
+	double a = 0, b = 0;
+	for (int t = 100; t < 200; t++)
+		a += m[t];
+	for (int t = T - 100; t < T; t++)
+		b += m[t];
+	CHECK_REL(log(a / b) / ((T - 200) / c.fps), k, 0.03);
+	free(on), free(sub), free(m);
 }
 
 static void test_tirf_closed_forms(void)
@@ -156,8 +191,15 @@ static void test_bad_params(void)
 	c.tau_on_ms = -1;
 	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--tau-on"));
 	c0_sim_defaults(&c);
-	c.angles[2] = 55;
-	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "critical"));
+	c.angles[2] = 55;                 /* below critical: an epi stack */
+	CHECK(c0_sim_check(&c) == C0_OK);
+	c.angles[2] = 95;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "incidence angle"));
+	c0_sim_defaults(&c);
+	c.ngaps = 2;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--gaps"));
+	c.ngaps = 1, c.order = C0_ORDER_INTERLEAVED;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--gaps"));
 	c0_sim_defaults(&c);
 	c.filaments = 0;
 	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "empty structure"));
@@ -169,6 +211,7 @@ static void test_bad_params(void)
 int main(void)
 {
 	RUN(test_onfraction);
+	RUN(test_bleach_rate);
 	RUN(test_tirf_closed_forms);
 	RUN(test_variance_image);
 	RUN(test_bad_params);

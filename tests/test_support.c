@@ -199,23 +199,32 @@ static int random_cov(int d, int T, struct c0_cov *cov, double *dense, int dense
 	struct c0_cov_acc *a;
 	c0_cov_acc_new(NX, NY, d, &a);
 	float *frames = malloc(sizeof(float) * NP * T);
-	for (int i = 0; i < NP * T; i++)
-		frames[i] = (float)(100 + 20 * c0_rng_normal(&rng));
+	for (int i = 0; i < NP * T; i++)   /* with a per-pixel trend, which the covariance removes */
+		frames[i] = (float)(100 + 20 * c0_rng_normal(&rng) + (i / NP) * ((i % NP) % 3 - 1.0));
 	for (int t = 0; t < T; t++)
 		c0_cov_acc_add(a, frames + t * NP);
 	int st = c0_cov_acc_finish(a, cov);
-	/* dense sample covariance, mean removed, 1/(T-1) */
 	if (dense_ref) {
-	for (int p = 0; p < NP; p++)
-		for (int q = 0; q < NP; q++) {
-			double mp = 0, mq = 0, s = 0;
+		/* dense sample covariance of the residuals of a least-squares line in t
+		 * per pixel, 1/(T-2) */
+		double *res = malloc(sizeof(double) * NP * T);
+		for (int p = 0; p < NP; p++) {
+			double m = 0, tm = (T - 1) / 2.0, sty = 0, stt = 0;
 			for (int t = 0; t < T; t++)
-				mp += frames[t * NP + p], mq += frames[t * NP + q];
-			mp /= T, mq /= T;
+				m += frames[t * NP + p] / T;
 			for (int t = 0; t < T; t++)
-				s += (frames[t * NP + p] - mp) * (frames[t * NP + q] - mq);
-			dense[p * NP + q] = s / (T - 1);
+				sty += (t - tm) * (frames[t * NP + p] - m), stt += (t - tm) * (t - tm);
+			for (int t = 0; t < T; t++)
+				res[t * NP + p] = frames[t * NP + p] - m - sty / stt * (t - tm);
 		}
+		for (int p = 0; p < NP; p++)
+			for (int q = 0; q < NP; q++) {
+				double s = 0;
+				for (int t = 0; t < T; t++)
+					s += res[t * NP + p] * res[t * NP + q];
+				dense[p * NP + q] = s / (T - 2);
+			}
+		free(res);
 	} else      /* the band's own numbers, to check the operators alone (the sums are float) */
 		for (int l = 0; !st && l < cov->nlag; l++)
 			for (int y = 0; y + cov->dy[l] < NY; y++)
@@ -394,6 +403,7 @@ static void test_accuracy(void)
 	c0_outdir_open(&out, dir, 1);
 	struct c0_sim_result sr;
 	CHECK(c0_simulate(&s, &out, &sr) == C0_OK);
+	CHECK(c0_outdir_commit(&out) == C0_OK);
 	c0_sim_result_free(&sr);
 	char p[256];
 	snprintf(p, sizeof p, "%s/stack_q01.tif", dir);

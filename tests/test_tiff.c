@@ -7,6 +7,7 @@
 #include "core/err.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -65,7 +66,7 @@ static void test_integer_clamp(void)
 {
 	char path[512];
 	snprintf(path, sizeof path, "%s/clamp.tif", dir);
-	float v[4] = { -3.f, 1.6f, 70000.f, NAN };
+	float v[4] = { -3.f, 1.6f, 70000.f, 0 };
 	struct c0_tiff_wopts o = { .width = 4, .height = 1, .dtype = C0_U16 };
 	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
 	struct c0_tiff_info in;
@@ -181,6 +182,78 @@ static void test_imagej_meta(void)
 	CHECK(c0_ij_format(buf, 8, 1, 5, 2, 1, 0.02, 0, 0, 1) < 0);
 }
 
+/* An output with NaN or infinity is refused whole, naming the file. */
+static void test_nonfinite_output(void)
+{
+	char path[512];
+	snprintf(path, sizeof path, "%s/nonfinite.tif", dir);
+	int before = count_files();
+	float v[6] = { 1, 2, 3, 4, NAN, 6 };
+	struct c0_tiff_wopts o = { .width = 3, .height = 2, .dtype = C0_F32 };
+	CHECK(c0_tiff_save_f32(path, &o, v) == C0_EINVAL);
+	CHECK_MSG(strstr(c0_errmsg(), "nonfinite.tif") && strstr(c0_errmsg(), "NaN") && strstr(c0_errmsg(), "x 1, y 1"),
+		  "message '%s'", c0_errmsg());
+	v[4] = INFINITY, o.dtype = C0_U16;   /* integer outputs too: no silent clamping of infinity */
+	CHECK(c0_tiff_save_f32(path, &o, v) == C0_EINVAL && strstr(c0_errmsg(), "infinite"));
+	CHECK(count_files() == before);
+}
+
+/* A hyperstack of C channels (planes in CZT order) gives each channel's
+ * frames in order through FILE:cK and c0_tiff_select_channel. */
+static void test_channels(void)
+{
+	char path[512], spec[600];
+	snprintf(path, sizeof path, "%s/chan.tif", dir);
+	const int W = 5, H = 4, C = 3, T = 4;
+	float *data = malloc(sizeof(float) * W * H * C * T);
+	for (int t = 0; t < T; t++)
+		for (int c = 0; c < C; c++)
+			for (int i = 0; i < W * H; i++)
+				data[((size_t)t * C + c) * W * H + i] = (float)(100 * c + 10 * t + i % 7);
+	struct c0_tiff_wopts o = { .width = W, .height = H, .channels = C, .frames = T, .dtype = C0_F32 };
+	CHECK(c0_tiff_save_f32(path, &o, data) == C0_OK);
+	struct c0_tiff_reader *r;
+	CHECK(c0_tiff_open(path, &r) == C0_OK);
+	CHECK(c0_tiff_get_info(r)->channels == C && c0_tiff_get_info(r)->pages == C * T);
+	c0_tiff_close(r);
+	float plane[20];
+	for (int c = 1; c <= C; c++) {
+		snprintf(spec, sizeof spec, "%s:c%d", path, c);
+		CHECK(c0_tiff_open(spec, &r) == C0_OK);
+		if (!r)
+			continue;
+		const struct c0_tiff_info *in = c0_tiff_get_info(r);
+		CHECK(in->pages == T && in->channel == c && in->file_pages == C * T);
+		int ok = 1;
+		for (int t = T - 1; t >= 0; t--) {   /* any order */
+			CHECK(c0_tiff_read_f32(r, t, plane) == C0_OK);
+			for (int i = 0; i < W * H; i++)
+				ok &= plane[i] == (float)(100 * (c - 1) + 10 * t + i % 7);
+		}
+		for (int t = 0; t < T; t++) {
+			CHECK(c0_tiff_read_f32(r, t, plane) == C0_OK);
+			for (int i = 0; i < W * H; i++)
+				ok &= plane[i] == (float)(100 * (c - 1) + 10 * t + i % 7);
+		}
+		CHECK_MSG(ok, "channel %d has the wrong planes", c);
+		c0_tiff_close(r);
+	}
+	snprintf(spec, sizeof spec, "%s:c4", path);
+	CHECK(c0_tiff_open(spec, &r) == C0_EINVAL && strstr(c0_errmsg(), "3 channels"));
+	free(data);
+}
+
+/* A message built from the current one (the old c0_fail wrote into the
+ * buffer it read from). */
+static void test_message_alias(void)
+{
+	c0_fail(C0_EINVAL, "angle %g deg is bad", 50.0);
+	CHECK(c0_fail(C0_EINVAL, "--angles: %s", c0_errmsg()) == C0_EINVAL);
+	CHECK_MSG(!strcmp(c0_errmsg(), "--angles: angle 50 deg is bad"), "got '%s'", c0_errmsg());
+	CHECK(c0_fail_prefix(C0_EIO, "x.tif") == C0_EIO);
+	CHECK_MSG(!strcmp(c0_errmsg(), "x.tif: --angles: angle 50 deg is bad"), "got '%s'", c0_errmsg());
+}
+
 int main(void)
 {
 	snprintf(dir, sizeof dir, "/tmp/c0_test_tiff_XXXXXX");
@@ -192,6 +265,9 @@ int main(void)
 	RUN(test_abort_leaves_nothing);
 	RUN(test_bad_input);
 	RUN(test_imagej_meta);
+	RUN(test_nonfinite_output);
+	RUN(test_channels);
+	RUN(test_message_alias);
 	char cmd[300];
 	snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
 	if (system(cmd)) {}

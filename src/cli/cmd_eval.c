@@ -107,7 +107,7 @@ static int eval_depth(const char *key, const char *est, const char *truth, const
 		st = C0_ENOMEM;
 	if (!st && (st = c0_depth_error(e.v, (int)e.in.height, (int)e.in.width, t.v, b, (int)t.in.height,
 					 (int)t.in.width, margin, &d)))
-		c0_fail(st, "%s: %s", est, c0_errmsg());
+		c0_fail_prefix(st, est);
 	if (!st) {
 		cJSON *o = cJSON_AddObjectToObject(rep, key);
 		cJSON_AddStringToObject(o, "estimate", est);

@@ -61,6 +61,7 @@ int cmd_info(int argc, char **argv)
 			rc = c0_cli_error("info");
 			break;
 		}
+		c0_tiff_allow_nonfinite(r);   /* describe such a file rather than refuse it */
 		const struct c0_tiff_info *in = c0_tiff_get_info(r);
 		struct stats s = { 0, 0, 0 };
 		if (!nostats && scan(r, in, &s)) {
@@ -77,6 +78,8 @@ int cmd_info(int argc, char **argv)
 			cJSON_AddNumberToObject(o, "channels", (double)in->channels);
 			cJSON_AddNumberToObject(o, "slices", (double)in->slices);
 			cJSON_AddNumberToObject(o, "frames", (double)in->frames);
+			cJSON_AddNumberToObject(o, "channel", in->channel);
+			cJSON_AddNumberToObject(o, "file_pages", (double)in->file_pages);
 			cJSON_AddStringToObject(o, "dtype", c0_dtype_name(in->dtype));
 			cJSON_AddNumberToObject(o, "pixel_size_nm", in->pixel_size_nm);
 			cJSON_AddNumberToObject(o, "z_spacing_nm", in->z_spacing_nm);
@@ -109,6 +112,9 @@ int cmd_info(int argc, char **argv)
 			if (in->z_spacing_nm > 0)
 				printf(", z spacing %.6g nm", in->z_spacing_nm);
 			printf("\n");
+			if (in->channels > 1 && !in->channel)
+				printf("  channels    %lld, read as %lld stacks (one per angle, in order) by run, support and intensity;\n"
+				       "              --channel K (or FILE:cK) selects one\n", (long long)in->channels, (long long)in->channels);
 			if (!nostats)
 				printf("  values      min %.6g, mean %.6g, max %.6g\n", s.min, s.mean, s.max);
 		}

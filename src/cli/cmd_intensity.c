@@ -7,7 +7,7 @@
 
 #include <stdlib.h>
 
-static const char *const params[] = { "pixel_nm", "fwhm_nm", "emission_nm", "na", "srf", "background", "beta", "nu",
+static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "background", "beta", "nu", "discrepancy",
 				      "mu", "cg_tol", "graph_radius", "noise_variance", NULL };
 
 /* The support mask from a file, checked against the stacks' grid. */

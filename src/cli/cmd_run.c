@@ -3,14 +3,19 @@
 #include "cli/commands.h"
 #include "cli/cmdkit.h"
 
-static const char *const params[] = { "pixel_nm", "fwhm_nm", "emission_nm", "na", "srf", "support_stacks", "penalty",
-				      "lambda", "tile", "nu", "graph_radius", "depth_pool_nm", "baseline", C0_MATIRF_PARAMS, NULL };
+static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_stacks",
+				      "penalty", "lambda", "tile", "nu", "discrepancy", "mu", "graph_radius", "depth_pool_nm",
+				      "bleach", "bleach_factors", "acquisition", "acquisition_order", "gaps_frames", "baseline",
+				      C0_MATIRF_PARAMS, NULL };
 
 int cmd_run(int argc, char **argv)
 {
 	struct c0_cmd_spec spec = { "run", "[options] -o OUTDIR STACK1.tif [STACK2.tif ...]",
 		"3D-COL0RME: the support (from the --support-angles stacks), each stack's intensity\n"
 		"and background, and with --angles the MA-TIRF volume. Without --angles: 2D COL0RME.\n"
+		"A stack at or below the critical angle (epi) only joins the support. With --angles\n"
+		"the fade from photobleaching across the stacks (recorded in the given order unless\n"
+		"--acquisition-order/--gaps/--acquisition say otherwise) is estimated and corrected.\n"
 		"Writes OUTDIR/support.tif (uint8 0/1, fine grid; fine pixel (i, j) covers\n"
 		"[i p/r, (i+1) p/r) nm from the top-left corner), rx.tif, intensity_qNN.tif (fine),\n"
 		"background_qNN.tif (coarse), volume.tif (depth bins x fine grid), depth.tif,\n"

@@ -8,6 +8,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static void report(const struct c0_sim_conf *c, const struct c0_sim_result *r, cJSON *rep)
 {
@@ -31,12 +32,21 @@ static void report(const struct c0_sim_conf *c, const struct c0_sim_result *r, c
 		cJSON_AddNumberToObject(p, "persistence_nm", c->persistence_nm);
 		cJSON_AddNumberToObject(p, "density_per_um", c->density_per_um);
 		cJSON_AddBoolToObject(p, "pairs", c->pairs);
+		if (c->pairs) {
+			cJSON_AddNumberToObject(p, "pair_sep_nm", c->pair_sep_nm);
+			cJSON_AddNumberToObject(p, "pair_dz_nm", c->pair_dz_nm);
+		}
 	}
 	cJSON_AddNumberToObject(p, "z_min_nm", c->z_min_nm);
 	cJSON_AddNumberToObject(p, "z_max_nm", c->z_max_nm);
 	cJSON_AddNumberToObject(p, "tau_on_ms", c->tau_on_ms);
 	cJSON_AddNumberToObject(p, "tau_off_ms", c->tau_off_ms);
 	cJSON_AddNumberToObject(p, "tau_bleach_s", c->tau_bleach_s);
+	cJSON_AddStringToObject(p, "tau_bleach_definition", "mean cumulative ON time before bleaching");
+	static const char *orders[] = { "sequential", "interleaved", "restart" };
+	cJSON_AddStringToObject(p, "bleach_order", orders[c->order]);
+	if (c->ngaps)
+		c0_report_add_array(p, "gaps_s", c->gap_s, c->ngaps);
 	cJSON_AddNumberToObject(p, "fps", c->fps);
 	cJSON_AddNumberToObject(p, "brightness_photons", c->brightness);
 	cJSON_AddNumberToObject(p, "brightness_cv", c->brightness_cv);
@@ -52,12 +62,27 @@ static void report(const struct c0_sim_conf *c, const struct c0_sim_result *r, c
 		const struct c0_sim_angle *a = &r->angle[q];
 		cJSON *o = cJSON_CreateObject();
 		cJSON_AddNumberToObject(o, "angle_deg", c->angles[q]);
-		cJSON_AddNumberToObject(o, "penetration_depth_nm", a->depth_nm);
+		if (a->p_per_nm > 0)
+			cJSON_AddNumberToObject(o, "penetration_depth_nm", a->depth_nm);
+		else
+			cJSON_AddStringToObject(o, "excitation", "epi (below the critical angle: no evanescent decay)");
 		cJSON_AddNumberToObject(o, "i0_relative", a->i0_rel);
 		cJSON_AddNumberToObject(o, "read_noise_adu", a->read_noise);
 		cJSON_AddNumberToObject(o, "snr_db", a->snr_db);
+		cJSON_AddNumberToObject(o, "start_s", a->t_start_s);
+		cJSON_AddNumberToObject(o, "bleach_factor", a->bleach_factor);
 		cJSON_AddItemToArray(angles, o);
 	}
+	/* the truth for run's bleaching estimate: rate per second and per frame,
+	 * and each stack's mean population relative to the unbleached one */
+	cJSON *b = cJSON_AddObjectToObject(e, "bleaching");
+	cJSON_AddNumberToObject(b, "rate_per_s", r->bleach_rate);
+	cJSON_AddNumberToObject(b, "rate_per_frame", r->bleach_rate / c->fps);
+	double f[C0_MAX_ANGLES];
+	for (int q = 0; q < c->nangles; q++)
+		f[q] = r->angle[q].bleach_factor;
+	c0_report_add_array(b, "stack_factors", f, c->nangles);
+	cJSON_AddNumberToObject(b, "fade_last_vs_first", c->nangles > 1 ? 1 - f[c->nangles - 1] / f[0] : 0);
 	cJSON *t = cJSON_AddObjectToObject(rep, "timings_s");
 	cJSON_AddNumberToObject(t, "simulate", r->seconds);
 }
@@ -68,6 +93,7 @@ int cmd_simulate(int argc, char **argv)
 	c0_sim_defaults(&c);
 	const char *outdir = NULL;
 	int force = 0, verbose = 0, nangles = c.nangles, nz = 2;
+	const char *order = "sequential";
 	long long seed = (long long)c.seed;
 	double zr[2] = { c.z_min_nm, c.z_max_nm };
 	const struct c0_opt opts[] = {
@@ -89,11 +115,17 @@ int cmd_simulate(int argc, char **argv)
 		{ "persistence", 0, C0_OPT_DOUBLE, &c.persistence_nm, "NM", "filament persistence length", NULL, 0, NULL },
 		{ "density", 0, C0_OPT_DOUBLE, &c.density_per_um, "N", "emitters per um of filament", NULL, 0, NULL },
 		{ "z-range", 0, C0_OPT_DOUBLES, zr, "MIN,MAX", "depth range of the filaments (nm)", NULL, 2, &nz },
-		{ "pairs", 0, C0_OPT_FLAG, &c.pairs, NULL, "add a parallel partner 100-150 nm from each filament", NULL, 0, NULL },
+		{ "pairs", 0, C0_OPT_FLAG, &c.pairs, NULL, "add a parallel partner to each filament, --pair-sep away and --pair-dz deeper", NULL, 0, NULL },
+		{ "pair-sep", 0, C0_OPT_DOUBLE, &c.pair_sep_nm, "NM", "lateral distance of a filament's partner", NULL, 0, NULL },
+		{ "pair-dz", 0, C0_OPT_DOUBLE, &c.pair_dz_nm, "NM", "how much deeper the partner runs", NULL, 0, NULL },
 		{ "emitters", 0, C0_OPT_STRING, &c.emitters_csv, "CSV", "emitters x_nm,y_nm,z_nm[,brightness] instead of filaments", NULL, 0, NULL },
 		{ "tau-on", 0, C0_OPT_DOUBLE, &c.tau_on_ms, "MS", "mean on-state lifetime", NULL, 0, NULL },
 		{ "tau-off", 0, C0_OPT_DOUBLE, &c.tau_off_ms, "MS", "mean off-state lifetime", NULL, 0, NULL },
-		{ "tau-bleach", 0, C0_OPT_DOUBLE, &c.tau_bleach_s, "S", "mean time from the start of an angle's acquisition to bleaching (0: none)", NULL, 0, NULL },
+		{ "tau-bleach", 0, C0_OPT_DOUBLE, &c.tau_bleach_s, "S", "mean cumulative ON time before an emitter bleaches (0: none)", NULL, 0, NULL },
+		{ "bleach-order", 0, C0_OPT_STRING, &order, "sequential|interleaved|restart",
+		  "angles acquired one after another on the same fluorophores, frame by frame in turn, or each on a fresh population", NULL, 0, NULL },
+		{ "gaps", 0, C0_OPT_DOUBLES, c.gap_s, "S,...", "illuminated, unrecorded seconds between consecutive stacks (one value: all; sequential order)",
+		  "none", C0_MAX_ANGLES, &c.ngaps },
 		{ "fps", 0, C0_OPT_DOUBLE, &c.fps, "HZ", "frame rate (each frame integrates its whole period)", NULL, 0, NULL },
 		{ "brightness", 0, C0_OPT_DOUBLE, &c.brightness, "PH", "photons per frame of an emitter fully on at z=0, angle 1", NULL, 0, NULL },
 		{ "brightness-cv", 0, C0_OPT_DOUBLE, &c.brightness_cv, "F", "log-normal spread of brightness (coefficient of variation)", NULL, 0, NULL },
@@ -119,6 +151,15 @@ int cmd_simulate(int argc, char **argv)
 	c.z_min_nm = zr[0];
 	c.z_max_nm = nz > 1 ? zr[1] : zr[0];
 	c.nangles = nangles;
+	static const char *orders[] = { "sequential", "interleaved", "restart" };
+	c.order = -1;
+	for (int k = 0; k < 3; k++)
+		if (!strcmp(order, orders[k]))
+			c.order = k;
+	if (c.order < 0) {
+		c0_fail(C0_EINVAL, "--bleach-order %s: expected sequential, interleaved or restart", order);
+		return c0_cli_error("simulate");
+	}
 	struct c0_outdir out;
 	if (c0_sim_check(&c) || c0_outdir_open(&out, outdir, force))
 		return c0_cli_error("simulate");
@@ -130,8 +171,7 @@ int cmd_simulate(int argc, char **argv)
 		st = c0_report_write(rep, c0_outdir_file(&out, "sim.json"));
 	}
 	cJSON_Delete(rep);
-	if (st) {
-		c0_outdir_rollback(&out);
+	if ((st = c0_outdir_finish(&out, st))) {
 		c0_sim_result_free(&res);
 		return c0_cli_error("simulate");
 	}

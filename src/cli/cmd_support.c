@@ -2,7 +2,7 @@
 #include "cli/commands.h"
 #include "cli/cmdkit.h"
 
-static const char *const params[] = { "pixel_nm", "fwhm_nm", "emission_nm", "na", "srf", "penalty", "lambda",
+static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "penalty", "lambda",
 				      "iterations", "tol", "reweightings", "lag", "tile", NULL };
 
 int cmd_support(int argc, char **argv)

@@ -3,7 +3,17 @@
 #include "core/err.h"
 #include "core/comm.h"
 
+#include <stdio.h>
 #include <string.h>
+
+int c0_cli_error(const char *cmd)
+{
+	char msg[2048];
+	c0_cli_flags(c0_errmsg(), msg, sizeof msg);   /* the library names parameters; we show flags */
+	if (c0_comm_rank() == 0)      /* under MPI every rank has the message */
+		fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
+	return 1;
+}
 
 int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
 		 int nextra, int argc, char **argv)
@@ -14,15 +24,16 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	if (nextra)
 		memcpy(k->opts + no, extra, (size_t)nextra * sizeof *extra);
 	spec->opts = k->opts, spec->nopts = no + nextra;
-	int rc = c0_opts_parse(spec, argc, argv, &k->n, k->paths);
+	int na, rc = c0_opts_parse(spec, argc, argv, &na, k->paths);
 	if (rc)
 		return rc;
-	for (int i = 0; i < k->n; i++)
-		k->stacks[i].path = k->paths[i];
-	if (c0_conf_cli_finish(&k->m)) {
+	/* a multi-channel file gives one stack per channel (or --channel's) */
+	if (c0_conf_cli_finish(&k->m) || c0_frames_expand(k->paths, na, k->m.channel, C0_MAX_STACKS, &k->names, &k->n)) {
 		c0_cli_error(spec->name);
 		return 2;
 	}
+	for (int i = 0; i < k->n; i++)
+		k->stacks[i].path = k->paths[i] = k->names[i];
 	return 0;
 }
 
@@ -42,8 +53,10 @@ int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, i
 		c0_result_set_argv(r, argc, argv);
 		st = c0_result_write_to(r, &k->out);
 	}
-	if (st && k->opened)
-		c0_outdir_rollback(&k->out);
+	if (k->opened)
+		st = c0_outdir_finish(&k->out, st);
 	c0_result_free(r);
+	c0_frames_expand_free(k->names, k->n);
+	k->names = NULL;
 	return st ? c0_cli_error(cmd) : 0;
 }

@@ -11,7 +11,8 @@ struct c0_cli {
 	const char *outdir;
 	int force, verbose;
 	struct c0_opt opts[64];
-	char *paths[C0_MAX_STACKS];
+	char *paths[C0_MAX_STACKS];  /* after multi-channel files were expanded (FILE:cK) */
+	char **names;                /* their storage */
 	struct c0_stack stacks[C0_MAX_STACKS];
 	int n;
 	struct c0_outdir out;
@@ -25,6 +26,7 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 		 int nextra, int argc, char **argv);
 /* The output directory: not an input's, empty unless --force. */
 int c0_cli_open(struct c0_cli *k);
-/* Writes r (with argv in its report) when st is 0, else rolls back; frees
- * r; returns the exit code, printing the error. */
+/* Writes r (with argv in its report) and moves the output directory into
+ * place when st is 0, else rolls back; frees r; returns the exit code,
+ * printing the error. */
 int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, int argc, char **argv);

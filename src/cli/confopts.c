@@ -2,6 +2,7 @@
 #include "core/err.h"
 
 #include <ctype.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -15,8 +16,10 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 {
 	struct c0_run_conf *c = &m->c;
 	const struct row all[] = {
-		{ "pixel_nm", { "pixel-size", 0, C0_OPT_DOUBLE, &c->pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, NULL } },
+		{ "pixel_nm", { "pixel-size", 0, C0_OPT_DOUBLE, &c->pixel_nm, "NM", "camera pixel size in the sample", "from the TIFF calibration", 0, &m->pixel_given } },
+		{ "channel", { "channel", 0, C0_OPT_INT, &m->channel, "K", "read only channel K of multi-channel files", "every channel, one stack per angle in order", 0, NULL } },
 		{ "fwhm_nm", { "fwhm", 0, C0_OPT_DOUBLE, &c->fwhm_nm, "NM", "PSF full width at half maximum", "0.51 emission / NA", 0, NULL } },
+		{ "psf_image", { "psf", 0, C0_OPT_STRING, &c->psf_image, "IMAGE.tif", "measured PSF (a bead, or the mean of several centred ones): its fitted Gaussian FWHM, instead of --fwhm", "none", 0, NULL } },
 		{ "emission_nm", { "emission", 0, C0_OPT_DOUBLE, &c->emission_nm, "NM", "emission wavelength (with --na, instead of --fwhm)", "none", 0, NULL } },
 		{ "na", { "na", 0, C0_OPT_DOUBLE, &c->na, "NA", "numerical aperture of the objective (with --emission)", "none", 0, NULL } },
 		{ "srf", { "srf", 0, C0_OPT_INT, &c->srf, "R", "super-resolution factor: fine pixel = pixel size / R", NULL, 0, NULL } },
@@ -32,10 +35,16 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "beta", { "beta", 0, C0_OPT_DOUBLE, &c->beta, "B", "background smoothness weight", NULL, 0, NULL } },
 		{ "nu", { "nu", 0, C0_OPT_DOUBLE, &c->nu, "F", "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (0: sqrt(T))", NULL, 0, NULL } },
 		{ "mu", { "mu", 0, C0_OPT_DOUBLE, &c->mu, "M", "fixed smoothness weight instead of the discrepancy principle", "0 (discrepancy)", 0, NULL } },
+		{ "discrepancy", { "discrepancy", 0, C0_OPT_STRING, &m->discrepancy, "relative|plain", "intensity mu: residual = the model's floor (at mu = 1e-3) plus the noise level, or the noise level alone", NULL, 0, NULL } },
 		{ "cg_tol", { "tol", 0, C0_OPT_DOUBLE, &c->cg_tol, "F", "CG stopping tolerance (relative residual)", NULL, 0, NULL } },
 		{ "graph_radius", { "graph-radius", 0, C0_OPT_DOUBLE, &c->graph_radius, "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL } },
 		{ "noise_variance", { "noise-variance", 0, C0_OPT_DOUBLES, c->noise_variance, "V,...", "per-stack noise variance (camera units^2)", "estimated on the support", C0_MAX_STACKS, &c->nnoise_variance } },
-		{ "depth_pool_nm", { "depth-pool", 0, C0_OPT_DOUBLE, &c->depth_pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "the FWHM", 0, NULL } },
+		{ "depth_pool_nm", { "depth-pool", 0, C0_OPT_DOUBLE, &c->depth_pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "0.75 FWHM", 0, NULL } },
+		{ "bleach", { "bleach", 0, C0_OPT_STRING, &m->bleach, "estimate|off", "photobleaching across the stacks: estimate the fade and divide each stack's intensity by its factor before MA-TIRF, or off", NULL, 0, NULL } },
+		{ "bleach_factors", { "bleach-factors", 0, C0_OPT_DOUBLES, c->bleach_factors, "F,...", "known bleaching factors: each stack's mean population relative to the start of the acquisition", "estimated", C0_MAX_STACKS, &c->nbleach_factors } },
+		{ "acquisition", { "acquisition", 0, C0_OPT_STRING, &m->acquisition, "sequential|interleaved", "how the stacks were recorded: one after another, or frame by frame in turn", NULL, 0, NULL } },
+		{ "acquisition_order", { "acquisition-order", 0, C0_OPT_INTS, c->acquisition_order, "I,J,...", "the stack numbers (1-based, as given) in the order they were recorded", "as given", C0_MAX_STACKS, &c->nacquisition_order } },
+		{ "gaps_frames", { "gaps", 0, C0_OPT_DOUBLES, c->gaps_frames, "FRAMES,...", "illuminated but unrecorded time between consecutive recorded stacks, in frames (one value: all)", "none", C0_MAX_STACKS, &c->ngaps_frames } },
 		{ "baseline", { "baseline", 0, C0_OPT_FLAG, &c->baseline, NULL, "also reconstruct the standard MA-TIRF volume from the background-corrected means (baseline_*)", NULL, 0, NULL } },
 		{ "angles", { "angles", 0, C0_OPT_DOUBLES, c->angles, "DEG,...", "incidence angle in the glass of each stack/image, same order", "none", C0_MAX_STACKS, &c->nangles } },
 		{ "n_glass", { "n-glass", 0, C0_OPT_DOUBLE, &c->n_glass, "N", "refractive index of the coverslip and immersion", NULL, 0, NULL } },
@@ -59,7 +68,8 @@ enum { MAXROWS = 64 };
 void c0_conf_cli_init(struct c0_conf_cli *m)
 {
 	c0_run_conf_init(&m->c);
-	m->penalty = "l1", m->background = "smooth", m->reg = "tv", m->nz = 0;
+	m->penalty = "l1", m->background = "smooth", m->reg = "tv", m->nz = 0, m->pixel_given = 0, m->channel = 0;
+	m->discrepancy = "relative", m->bleach = "estimate", m->acquisition = "sequential";
 }
 
 int c0_conf_cli_opts(struct c0_conf_cli *m, const char *const *params, struct c0_opt *o)
@@ -90,6 +100,14 @@ int c0_conf_cli_finish(struct c0_conf_cli *m)
 		st = c0_run_conf_set(&m->c, "background", m->background);
 	if (!st)
 		st = c0_run_conf_set(&m->c, "reg", m->reg);
+	if (!st && m->pixel_given && !(m->c.pixel_nm > 0 && isfinite(m->c.pixel_nm)))
+		st = c0_fail(C0_EINVAL, "pixel_nm %g: must be a positive number of nm", m->c.pixel_nm);
+	if (!st)
+		st = c0_run_conf_set(&m->c, "discrepancy", m->discrepancy);
+	if (!st)
+		st = c0_run_conf_set(&m->c, "bleach", m->bleach);
+	if (!st)
+		st = c0_run_conf_set(&m->c, "acquisition", m->acquisition);
 	if (!st && m->nz && m->nz != 3)
 		st = c0_fail(C0_EINVAL, "z_range_nm: expected MIN,MAX,STEP in nm");
 	return st;

@@ -10,7 +10,10 @@
 struct c0_conf_cli {
 	struct c0_run_conf c;
 	const char *penalty, *background, *reg;  /* the named choices, set by name at the end */
+	const char *discrepancy, *bleach, *acquisition;
 	int nz;                                  /* values given to --z-range */
+	int pixel_given;                         /* --pixel-size was given (then it must be positive) */
+	int channel;                             /* --channel: 0 reads every channel of a multi-channel file */
 };
 
 /* The MA-TIRF parameters of 'run' and 'matirf', in help order. */

@@ -25,15 +25,6 @@ static const struct {
 	{ "support", cmd_support, "COL0RME support estimation from the stacks' covariance" },
 };
 
-int c0_cli_error(const char *cmd)
-{
-	char msg[2048];
-	c0_cli_flags(c0_errmsg(), msg, sizeof msg);   /* the library names parameters; we show flags */
-	if (c0_comm_rank() == 0)      /* under MPI every rank has the message */
-		fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
-	return 1;
-}
-
 static void usage(FILE *f)
 {
 	fprintf(f, "usage: col0rme <command> [options]\n\n"

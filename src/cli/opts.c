@@ -106,6 +106,8 @@ static int set_value(const struct c0_cmd_spec *spec, const struct c0_opt *o, con
 		if (end == v || *end || errno || x != x)
 			return bad(spec, o->name, v, "expected a number");
 		*(double *)o->dst = x;
+		if (o->count)   /* given: a default that means "not given" (0) can then be told apart */
+			*o->count = 1;
 		return 0;
 	}
 	case C0_OPT_STRING:

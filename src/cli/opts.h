@@ -21,7 +21,7 @@ struct c0_opt {
 	const char *help;
 	const char *defhint;   /* shown instead of the current value, if set */
 	int max;               /* list options: capacity */
-	int *count;            /* list options: parsed length */
+	int *count;            /* list options: parsed length; C0_OPT_DOUBLE: set to 1 when given */
 };
 
 struct c0_cmd_spec {

@@ -6,14 +6,28 @@
 
 static _Thread_local char msg[1024];
 
+/* Formats into a local buffer first: the arguments may point into msg
+ * itself (c0_fail(st, "%s: %s", name, c0_errmsg())), and vsnprintf into
+ * the buffer it reads from is undefined. */
 int c0_fail(int code, const char *fmt, ...)
 {
-	char m[sizeof msg];   /* the arguments may include c0_errmsg() itself */
+	char tmp[sizeof msg];
 	va_list ap;
 	va_start(ap, fmt);
-	vsnprintf(m, sizeof m, fmt, ap);
+	vsnprintf(tmp, sizeof tmp, fmt, ap);
 	va_end(ap);
-	memcpy(msg, m, sizeof msg);
+	memcpy(msg, tmp, sizeof msg);
+	return code;
+}
+
+int c0_fail_prefix(int code, const char *prefix)
+{
+	char tmp[sizeof msg];
+	const char *cur = c0_errmsg();
+	size_t k = (size_t)snprintf(tmp, sizeof tmp, "%s: ", prefix);
+	if (k < sizeof tmp)
+		snprintf(tmp + k, sizeof tmp - k, "%s", cur);
+	memcpy(msg, tmp, sizeof msg);
 	return code;
 }
 

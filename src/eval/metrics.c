@@ -20,6 +20,12 @@ static int cmp_pair(const void *a, const void *b)
 int c0_jaccard_index(const uint8_t *est, const uint8_t *truth, int H, int W, double px,
 		     double radius, int margin, struct c0_jaccard *out)
 {
+	if (!(px > 0 && isfinite(px)))
+		return c0_fail(C0_EINVAL, "pixel_nm %g: must be a positive number of nm", px);
+	if (!(radius > 0 && radius <= 1000 * px))   /* the search window is (2R+1)^2 pixels */
+		return c0_fail(C0_EINVAL, "radius %g nm: must be positive and at most 1000 pixels of %g nm", radius, px);
+	if (margin < 0)
+		return c0_fail(C0_EINVAL, "margin %d: must be >= 0", margin);
 	int R = (int)floor(radius / px);
 	size_t cap = 1024, np = 0;
 	struct pair *p = malloc(cap * sizeof *p);

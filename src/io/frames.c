@@ -1,7 +1,9 @@
 #include "io/frames.h"
 #include "core/err.h"
 
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 int c0_frames_open(struct c0_frames *f, const char *path)
@@ -42,6 +44,11 @@ int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
 		return c0_fail(C0_EINVAL, "%s: frame %lld out of 0..%lld", f->name, (long long)t, (long long)f->count - 1);
 	const size_t n = (size_t)f->height * f->width;
 	memcpy(dst, f->data + (size_t)t * n, n * sizeof *dst);
+	for (size_t i = 0; i < n; i++)   /* as for float files: NaN or infinity would poison every sum */
+		if (!isfinite(dst[i]))
+			return c0_fail(C0_EINVAL, "%s: frame %lld, pixel (x %zu, y %zu) is %s; non-finite pixels are not supported",
+				       f->name, (long long)t + 1, i % (size_t)f->width, i / (size_t)f->width,
+				       isnan(dst[i]) ? "NaN" : "infinite");
 	return C0_OK;
 }
 
@@ -61,4 +68,58 @@ void c0_frames_close(struct c0_frames *f)
 	if (f->tiff)
 		c0_tiff_close(f->tiff);
 	f->tiff = NULL, f->data = NULL;
+}
+
+void c0_frames_expand_free(char **names, int n)
+{
+	for (int i = 0; names && i < n; i++)
+		free(names[i]);
+	free(names);
+}
+
+static int add(char **names, int *n, int max, const char *path, int k)
+{
+	if (*n >= max)
+		return c0_fail(C0_EINVAL, "%s: more than %d stacks in all (one per angle)", path, max);
+	size_t l = strlen(path) + 16;
+	if (!(names[*n] = malloc(l)))
+		return C0_ENOMEM;
+	snprintf(names[*n], l, k ? "%s:c%d" : "%s", path, k);
+	(*n)++;
+	return C0_OK;
+}
+
+int c0_frames_expand(char *const *paths, int n, int channel, int max, char ***out, int *nout)
+{
+	*out = NULL, *nout = 0;
+	if (channel < 0)
+		return c0_fail(C0_EINVAL, "channel %d: channels are numbered from 1 (0: all)", channel);
+	char **names = calloc((size_t)(max > 0 ? max : 1), sizeof *names);
+	if (!names)
+		return C0_ENOMEM;
+	int st = C0_OK, k = 0;
+	for (int i = 0; i < n && !st; i++) {
+		struct c0_tiff_reader *r;
+		if ((st = c0_tiff_open(paths[i], &r)))
+			break;
+		const struct c0_tiff_info *in = c0_tiff_get_info(r);
+		int64_t nc = in->channel ? 1 : in->channels;
+		/* channels of one plane each: a stack that a writer labelled by
+		 * channel (tifffile does so for 3D arrays), unless one is asked for */
+		if (!channel && nc > 1 && in->file_pages / nc < 2)
+			nc = 1;
+		c0_tiff_close(r);
+		if (channel > nc)
+			st = c0_fail(C0_EINVAL, "channel %d: %s has %lld channel%s", channel, paths[i], (long long)nc, nc == 1 ? "" : "s");
+		else if (nc == 1)
+			st = add(names, &k, max, paths[i], 0);
+		for (int c = channel ? channel : 1; !st && nc > 1 && c <= (channel ? channel : nc); c++)
+			st = add(names, &k, max, paths[i], c);
+	}
+	if (st) {
+		c0_frames_expand_free(names, k);
+		return st;
+	}
+	*out = names, *nout = k;
+	return C0_OK;
 }

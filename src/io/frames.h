@@ -24,3 +24,10 @@ int c0_frames_read(struct c0_frames *f, int64_t t, float *dst);
  * strips that hold them (each MPI rank reads its own rows). */
 int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *dst);
 void c0_frames_close(struct c0_frames *f);
+/* Multi-channel files (ImageJ channels=, OME SizeC or series) as one stack
+ * per channel: a path whose file has C > 1 channels of several planes each
+ * becomes PATH:c1 .. PATH:cC, in order (or PATH:cK only when channel K >= 1;
+ * channels of one plane each are read as one stack unless K is given). *out (allocated,
+ * free with c0_frames_expand_free) gets at most max names. */
+int c0_frames_expand(char *const *paths, int n, int channel, int max, char ***out, int *nout);
+void c0_frames_expand_free(char **names, int n);

@@ -122,6 +122,31 @@ double c0_ome_pixel_size_nm(const char *xml, double *z_nm)
 	return ome_length_nm(xml, "PhysicalSizeX");
 }
 
+int c0_ome_layout(const char *xml, struct c0_ome_layout *l)
+{
+	memset(l, 0, sizeof *l);
+	if (!xml || !strstr(xml, "<OME"))
+		return 0;
+	char v[32], order[16];
+	l->size_c = xml_attr(xml, "SizeC", v, sizeof v) ? strtoll(v, NULL, 10) : 1;
+	l->size_z = xml_attr(xml, "SizeZ", v, sizeof v) ? strtoll(v, NULL, 10) : 1;
+	l->size_t_ = xml_attr(xml, "SizeT", v, sizeof v) ? strtoll(v, NULL, 10) : 1;
+	if (!xml_attr(xml, "DimensionOrder", order, sizeof order))
+		snprintf(order, sizeof order, "XYCZT");
+	if (l->size_c < 1 || l->size_z < 1 || l->size_t_ < 1 || l->size_c > 4096 || l->size_z > (1 << 30) || l->size_t_ > (1 << 30))
+		return 0;
+	/* the channel's stride: the product of the sizes of the axes before C */
+	l->stride_c = 1;
+	for (const char *a = order + 2; *a && *a != 'C'; a++)
+		l->stride_c *= *a == 'Z' ? l->size_z : *a == 'T' ? l->size_t_ : 1;
+	l->series = 0;
+	for (const char *p = xml; (p = strstr(p, "<Image ")); p++)
+		l->series++;
+	if (l->series < 1)
+		l->series = 1;
+	return 1;
+}
+
 int c0_ij_format(char *buf, size_t n, int64_t channels, int64_t slices, int64_t frames,
 		 int calibrated, double z_spacing_um, double finterval_s, double dmin, double dmax)
 {
@@ -142,4 +167,12 @@ int c0_ij_format(char *buf, size_t n, int64_t channels, int64_t slices, int64_t 
 	if (dmin != 0 || dmax != 0) PUT("min=%.9g\nmax=%.9g\n", dmin, dmax);
 #undef PUT
 	return (int)k;
+}
+
+int c0_ij_append(char *buf, size_t n, int len, const char *key, double value)
+{
+	if (len < 0 || (size_t)len >= n)
+		return -1;
+	int w = snprintf(buf + len, n - (size_t)len, "%s=%.9g\n", key, value);
+	return w < 0 || (size_t)w >= n - (size_t)len ? -1 : len + w;
 }

@@ -23,8 +23,9 @@ int c0_png_write_rgb(const char *path, int w, int h, const uint8_t *rgb)
 		png_destroy_write_struct(&png, info ? &info : NULL);
 		fclose(f);
 		remove(tmp);
-		return c0_fail(C0_EIO, "%s: PNG write failed", path);
+		return c0_fail(C0_EIO, "%s: PNG write failed%s%s", path, errno ? ": " : "", errno ? strerror(errno) : "");
 	}
+	errno = 0;
 	png_init_io(png, f);
 	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
 		     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);

@@ -25,11 +25,25 @@ struct c0_tiff_info {
 	int bigtiff, big_endian, tiled;
 	char compression[16];
 	int imagej, ome;
+	int channel;                   /* 1-based channel this reader shows (pages = its frames), 0: the whole file */
+	int64_t file_pages;            /* planes in the file, all channels */
 };
 
 struct c0_tiff_reader;
 
+/* path may name one channel of a multi-channel file as FILE:cK (K 1-based;
+ * used only when no file is called that): the reader then shows that
+ * channel's planes in order as its pages. Channels come from the ImageJ
+ * description (channels=, planes in CZT order) or the OME-XML (SizeC with
+ * its DimensionOrder; several Image series of one size count as channels). */
 int c0_tiff_open(const char *path, struct c0_tiff_reader **out);
+/* Splits FILE:cK into FILE and K; returns 0 (channel 0) when path has no such suffix. */
+int c0_tiff_channel_spec(const char *path, char *file, size_t n);
+/* Shows channel k (1-based) only; 0 shows the whole file again. */
+int c0_tiff_select_channel(struct c0_tiff_reader *r, int k);
+/* Reading float samples refuses NaN and infinity (naming the frame and the
+ * pixel) unless this is called ('info' describes such files). */
+void c0_tiff_allow_nonfinite(struct c0_tiff_reader *r);
 /* Reads from memory (the buffer must outlive the reader); name is for messages. */
 int c0_tiff_open_mem(const void *data, size_t size, const char *name, struct c0_tiff_reader **out);
 const struct c0_tiff_info *c0_tiff_get_info(const struct c0_tiff_reader *r);
@@ -51,6 +65,7 @@ struct c0_tiff_wopts {
 	enum c0_dtype dtype;               /* C0_U8, C0_U16 or C0_F32 */
 	double pixel_size_nm;              /* 0: uncalibrated */
 	double z_spacing_nm;               /* 0: not written */
+	double z_origin_nm;                /* z of the first plane (with z_spacing_nm), ImageJ's zorigin */
 	double frame_interval_s;           /* 0: not written */
 	double display_min, display_max;   /* both 0: not written */
 	int bigtiff;                       /* 1: force BigTIFF; 0: only when needed */

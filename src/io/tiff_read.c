@@ -25,6 +25,11 @@ struct c0_tiff_reader {
 	size_t bufsize;
 	const uint8_t *mem;         /* memory source, or NULL */
 	size_t memsize, mempos;
+	/* channels: the channel of file plane p is
+	 * (p / series_pages) * per_series + (p % series_pages / stride) % per_series */
+	int64_t series_pages, per_series, stride;
+	int64_t *map;               /* selected channel: its file planes in order */
+	int allow_nonfinite;
 };
 
 const char *c0_dtype_name(enum c0_dtype t)
@@ -120,10 +125,12 @@ static int read_calibration(struct c0_tiff_reader *r)
 		return c0_fail(C0_EUNSUPPORTED, "%s: ImageJ raw layout (images=%lld stored after one page, used above 4 GiB) is not supported; save as OME-TIFF or BigTIFF",
 			       r->name, (long long)ij.images);
 	in->frames = in->pages;
+	r->series_pages = in->pages, r->per_series = 1, r->stride = 1;
 	if (ij.present && ij.channels * ij.slices * ij.frames == in->pages) {
 		in->channels = ij.channels;
 		in->slices = ij.slices;
 		in->frames = ij.frames;
+		r->per_series = ij.channels;   /* ImageJ stores planes in CZT order */
 	}
 	float xres = 0;
 	uint16_t ru = RESUNIT_NONE;
@@ -142,6 +149,14 @@ static int read_calibration(struct c0_tiff_reader *r)
 	in->pixel_size_nm = px;
 	if (ij.spacing > 0 && c0_unit_nm(ij.unit) > 0)
 		in->z_spacing_nm = ij.spacing * c0_unit_nm(ij.unit);
+	struct c0_ome_layout ol;
+	if (c0_ome_layout(desc, &ol) && ol.size_c * ol.size_z * ol.size_t_ * ol.series == in->pages) {
+		in->ome = 1;
+		in->channels = ol.size_c * ol.series;
+		in->slices = ol.size_z, in->frames = ol.size_t_;
+		r->series_pages = ol.size_c * ol.size_z * ol.size_t_;
+		r->per_series = ol.size_c, r->stride = ol.stride_c;
+	}
 	double z = 0, ome = c0_ome_pixel_size_nm(desc, &z);
 	if (ome > 0) {
 		in->ome = 1;
@@ -182,7 +197,7 @@ static int open_common(struct c0_tiff_reader *r)
 	} while (TIFFReadDirectory(r->tif));
 	if (r->tiffmsg[0])
 		return c0_fail(C0_EFORMAT, "%s: truncated or damaged after page %lld (%s)", r->name, (long long)pages, r->tiffmsg);
-	in->pages = pages;
+	in->pages = in->file_pages = pages;
 	in->channels = in->slices = 1;
 	if (!TIFFSetDirectory(r->tif, 0))
 		return c0_fail(C0_EFORMAT, "%s: cannot return to page 1 (%s)", r->name, r->tiffmsg);
@@ -234,31 +249,46 @@ static int finish_open(struct c0_tiff_reader *r, struct c0_tiff_reader **out)
 	return C0_OK;
 }
 
-int c0_tiff_open(const char *path, struct c0_tiff_reader **out)
+static int open_file(const char *path, const char *name, struct c0_tiff_reader **out)
 {
-	*out = NULL;
 	struct stat sb;
 	if (stat(path, &sb))
-		return c0_fail(C0_EIO, "%s: %s", path, strerror(errno));
+		return c0_fail(C0_EIO, "%s: %s", name, strerror(errno));
 	if (S_ISDIR(sb.st_mode))
-		return c0_fail(C0_EIO, "%s: is a directory, not a TIFF file", path);
+		return c0_fail(C0_EIO, "%s: is a directory, not a TIFF file", name);
 	FILE *f = fopen(path, "rb");
 	if (!f)
-		return c0_fail(C0_EIO, "%s: %s", path, strerror(errno));
+		return c0_fail(C0_EIO, "%s: %s", name, strerror(errno));
 	uint8_t magic[8];
 	size_t n = fread(magic, 1, 8, f);
 	fclose(f);
-	int st = check_magic(path, magic, n);
+	int st = check_magic(name, magic, n);
 	if (st)
 		return st;
 	struct c0_tiff_reader *r = c0_alloc(1, sizeof *r);
 	if (!r)
 		return C0_ENOMEM;
-	snprintf(r->name, sizeof r->name, "%s", path);
+	snprintf(r->name, sizeof r->name, "%s", name);
 	TIFFOpenOptions *o = options(r);
 	r->tif = TIFFOpenExt(path, "rm", o);   /* read, not map: a mapped stack counts as resident memory */
 	TIFFOpenOptionsFree(o);
 	return finish_open(r, out);
+}
+
+int c0_tiff_open(const char *path, struct c0_tiff_reader **out)
+{
+	*out = NULL;
+	char file[4096];
+	struct stat sb;
+	int k = stat(path, &sb) ? c0_tiff_channel_spec(path, file, sizeof file) : 0;
+	if (!k)
+		return open_file(path, path, out);
+	int st = open_file(file, path, out);
+	if (!st && (st = c0_tiff_select_channel(*out, k))) {
+		c0_tiff_close(*out);
+		*out = NULL;
+	}
+	return st;
 }
 
 int c0_tiff_open_mem(const void *data, size_t size, const char *name, struct c0_tiff_reader **out)
@@ -292,6 +322,7 @@ void c0_tiff_close(struct c0_tiff_reader *r)
 	if (r->tif)
 		TIFFClose(r->tif);
 	free(r->buf);
+	free(r->map);
 	free(r);
 }
 
@@ -299,13 +330,87 @@ static int seek_page(struct c0_tiff_reader *r, int64_t page)
 {
 	if (page < 0 || page >= r->info.pages)
 		return c0_fail(C0_EINVAL, "%s: page %lld out of range (1..%lld)", r->name, (long long)page + 1, (long long)r->info.pages);
+	if (r->map)
+		page = r->map[page];
 	if (page == r->cur)
 		return C0_OK;
-	int ok = page == r->cur + 1 ? TIFFReadDirectory(r->tif) : TIFFSetDirectory(r->tif, (tdir_t)page);
-	if (!ok)
+	int ok = 1;
+	/* a channel's planes are a few apart: step forward rather than search from the start */
+	if (r->cur >= 0 && page > r->cur && page - r->cur <= 64)
+		while (ok && r->cur < page)
+			ok = TIFFReadDirectory(r->tif), r->cur++;
+	else
+		ok = TIFFSetDirectory(r->tif, (tdir_t)page);
+	if (!ok) {
+		r->cur = -1;   /* unknown: the next read searches */
 		return c0_fail(C0_EFORMAT, "%s: cannot read page %lld (%s)", r->name, (long long)page + 1, r->tiffmsg);
+	}
 	r->cur = page;
 	return C0_OK;
+}
+
+int c0_tiff_select_channel(struct c0_tiff_reader *r, int k)
+{
+	struct c0_tiff_info *in = &r->info;
+	free(r->map);
+	r->map = NULL;
+	in->pages = in->file_pages, in->channel = 0;
+	if (k == 0)
+		return C0_OK;
+	if (k < 0 || k > in->channels)
+		return c0_fail(C0_EINVAL, "%s: channel %d requested; the file has %lld channel%s", r->name, k,
+			       (long long)in->channels, in->channels == 1 ? "" : "s");
+	int64_t n = 0;
+	if (!(r->map = c0_alloc((size_t)(in->file_pages / in->channels + 1), sizeof *r->map)))
+		return C0_ENOMEM;
+	for (int64_t p = 0; p < in->file_pages; p++) {
+		int64_t c = p / r->series_pages * r->per_series + p % r->series_pages / r->stride % r->per_series;
+		if (c == k - 1 && n <= in->file_pages / in->channels)
+			r->map[n++] = p;
+	}
+	in->pages = n, in->channel = k;
+	return C0_OK;
+}
+
+void c0_tiff_allow_nonfinite(struct c0_tiff_reader *r)
+{
+	r->allow_nonfinite = 1;
+}
+
+int c0_tiff_channel_spec(const char *path, char *file, size_t n)
+{
+	const char *c = strrchr(path, ':');
+	if (!c || c[1] != 'c' || !c[2] || (size_t)(c - path) >= n)
+		return 0;
+	char *end;
+	long k = strtol(c + 2, &end, 10);
+	if (*end || k < 1 || k > 4096 || c[2] == '+' || c[2] == '-')
+		return 0;
+	memcpy(file, path, (size_t)(c - path));
+	file[c - path] = '\0';
+	return (int)k;
+}
+
+/* NaN or infinity in a float stack would poison every sum it enters; the
+ * message says where, so that the user can mend the file. */
+static int check_finite(const struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, const float *d32,
+			const double *d64)
+{
+	const size_t n = (size_t)r->info.width * (size_t)(yb - ya);
+	size_t i = 0;
+	if (d32) {
+		while (i < n && isfinite(d32[i]))
+			i++;
+	} else {
+		while (i < n && isfinite(d64[i]))
+			i++;
+	}
+	if (i == n)
+		return C0_OK;
+	double v = d32 ? d32[i] : d64[i];
+	return c0_fail(C0_EFORMAT, "%s: frame %lld, pixel (x %lld, y %lld) is %s; non-finite pixels are not supported (replace them first)",
+		       r->name, (long long)page + 1, (long long)(i % r->info.width), (long long)(ya + (int64_t)(i / r->info.width)),
+		       isnan(v) ? "NaN" : v > 0 ? "+infinity" : "-infinity");
 }
 
 static int ensure_buf(struct c0_tiff_reader *r, size_t n)
@@ -335,6 +440,8 @@ static void convert(enum c0_dtype t, const uint8_t *src, size_t n, float *d32, d
 	}
 #undef CONV
 }
+
+static int read_strips(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64);
 
 /* rows [ya, yb) of a page into rows 0.. of the destination */
 static int read_page(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64)
@@ -370,8 +477,18 @@ static int read_page(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t
 					convert(r->info.dtype, r->buf + (size_t)y * tw * bs, nx, d32 ? d32 + o : NULL, d64 ? d64 + o : NULL);
 				}
 			}
+	} else if ((st = read_strips(r, page, ya, yb, d32, d64)))
+		return st;
+	if (r->allow_nonfinite || (r->info.dtype != C0_F32 && r->info.dtype != C0_F64))
 		return C0_OK;
-	}
+	return check_finite(r, page, ya, yb, d32, d64);
+}
+
+static int read_strips(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64)
+{
+	const int64_t W = r->info.width, H = r->info.height;
+	const size_t bs = c0_dtype_size(r->info.dtype);
+	int st;
 	uint32_t rps = 0;
 	TIFFGetFieldDefaulted(r->tif, TIFFTAG_ROWSPERSTRIP, &rps);
 	if (rps == 0 || rps > H)

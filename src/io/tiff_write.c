@@ -7,6 +7,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -57,8 +58,12 @@ int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_ti
 	c0_tmp_name(path, w->tmp, sizeof w->tmp);
 	int64_t bytes = w->planes * o->width * o->height * (int64_t)c0_dtype_size(o->dtype);
 	int big = o->bigtiff || c0_tiff_needs_bigtiff(bytes);
-	if (c0_ij_format(w->desc, sizeof w->desc, w->o.channels, w->o.slices, w->o.frames, o->pixel_size_nm > 0,
-			 o->z_spacing_nm / 1000, o->frame_interval_s, o->display_min, o->display_max) < 0) {
+	int dl = c0_ij_format(w->desc, sizeof w->desc, w->o.channels, w->o.slices, w->o.frames, o->pixel_size_nm > 0,
+			      o->z_spacing_nm / 1000, o->frame_interval_s, o->display_min, o->display_max);
+	/* ImageJ's z origin is in slices: slice k is at (k - zorigin) * spacing */
+	if (dl >= 0 && o->z_origin_nm != 0 && o->z_spacing_nm > 0)
+		dl = c0_ij_append(w->desc, sizeof w->desc, dl, "zorigin", -o->z_origin_nm / o->z_spacing_nm);
+	if (dl < 0) {
 		free(w);
 		return c0_fail(C0_EINVAL, "%s: metadata too long", path);
 	}
@@ -72,10 +77,12 @@ int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_ti
 	}
 	TIFFOpenOptionsSetErrorHandlerExtR(oo, on_error, w);
 	TIFFOpenOptionsSetWarningHandlerExtR(oo, on_error, w);
+	errno = 0;
 	w->tif = TIFFOpenExt(w->tmp, big ? "w8" : "w", oo);
+	int err = errno;
 	TIFFOpenOptionsFree(oo);
 	if (!w->tif) {
-		int st = c0_fail(C0_EIO, "%s: cannot create (%s)", path, w->tiffmsg);
+		int st = c0_fail(C0_EIO, "%s: cannot create (%s%s%s)", path, w->tiffmsg, err ? ": " : "", err ? strerror(err) : "");
 		free(w->buf);
 		free(w);
 		return st;
@@ -103,11 +110,40 @@ static void convert_plane(const struct c0_tiff_wopts *o, const float *src, uint8
 	}
 }
 
+/* libtiff's message, and the system's reason when there is one (ENOSPC) */
+static int write_error(struct c0_tiff_writer *w, int err)
+{
+	return c0_fail(C0_EIO, "%s: write failed at plane %lld (%s%s%s)", w->path, (long long)w->written + 1, w->tiffmsg,
+		       err && w->tiffmsg[0] ? ": " : "", err ? strerror(err) : "");
+}
+
+/* An output with NaN or infinity is never written: it would look like a
+ * result. The message names the file (not its staging directory). */
+static int check_finite(const struct c0_tiff_writer *w, const float *plane)
+{
+	const size_t n = (size_t)w->o.width * w->o.height;
+	size_t bad = n;
+	for (size_t i = 0; i < n; i++)
+		if (!isfinite(plane[i])) {
+			bad = i;
+			break;
+		}
+	if (bad == n)
+		return C0_OK;
+	const char *base = strrchr(w->path, '/');
+	return c0_fail(C0_EINVAL, "%s: plane %lld, pixel (x %lld, y %lld) is %s: not written (the computation overflowed; "
+		       "check the input for extreme values)", base ? base + 1 : w->path, (long long)w->written + 1,
+		       (long long)(bad % w->o.width), (long long)(bad / w->o.width), isnan(plane[bad]) ? "NaN" : "infinite");
+}
+
 int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
 {
 	const struct c0_tiff_wopts *o = &w->o;
 	if (w->written >= w->planes)
 		return c0_fail(C0_EINVAL, "%s: more planes than the %lld declared", w->path, (long long)w->planes);
+	int st = check_finite(w, plane);
+	if (st)
+		return st;
 	TIFF *t = w->tif;
 	uint16_t bps = (uint16_t)(8 * c0_dtype_size(o->dtype));
 	TIFFSetField(t, TIFFTAG_SUBFILETYPE, 0);
@@ -135,14 +171,15 @@ int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
 	}
 	convert_plane(o, plane, w->buf);
 	size_t row = (size_t)o->width * (bps / 8);
+	errno = 0;
 	for (int64_t y0 = 0; y0 < o->height; y0 += rps) {
 		int64_t ny = o->height - y0 < rps ? o->height - y0 : rps;
 		uint32_t s = TIFFComputeStrip(t, (uint32_t)y0, 0);
 		if (TIFFWriteEncodedStrip(t, s, w->buf + (size_t)y0 * row, (tmsize_t)(ny * row)) < 0)
-			return c0_fail(C0_EIO, "%s: write failed at plane %lld (%s)", w->path, (long long)w->written + 1, w->tiffmsg);
+			return write_error(w, errno);
 	}
 	if (!TIFFWriteDirectory(t))
-		return c0_fail(C0_EIO, "%s: write failed at plane %lld (%s)", w->path, (long long)w->written + 1, w->tiffmsg);
+		return write_error(w, errno);
 	w->written++;
 	return C0_OK;
 }
@@ -171,9 +208,12 @@ int c0_tiff_commit(struct c0_tiff_writer *w)
 		return st;
 	}
 	w->tiffmsg[0] = '\0';
+	errno = 0;
 	TIFFClose(w->tif);
+	int err = errno;
 	w->tif = NULL;
-	int st = w->tiffmsg[0] ? c0_fail(C0_EIO, "%s: closing failed (%s)", w->path, w->tiffmsg)
+	int st = w->tiffmsg[0] ? c0_fail(C0_EIO, "%s: closing failed (%s%s%s)", w->path, w->tiffmsg, err ? ": " : "",
+					 err ? strerror(err) : "")
 			       : c0_commit_file(w->tmp, w->path);
 	if (st)
 		remove(w->tmp);

@@ -2,6 +2,8 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <math.h>
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,6 +17,7 @@ struct c0_cov_acc {
 	float *sum;         /* nlag * H * W sums of products of shifted values */
 	double *shift;      /* first frame: sums are of y - shift, which keeps them small */
 	double *s1;
+	double *st;         /* sum over frames of t (y - shift): the linear trend */
 	float *blk;         /* up to `block` frames, shifted */
 	int nb, block;
 };
@@ -36,8 +39,9 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 	a->sum = c0_alloc((size_t)a->nlag * n, sizeof(float));
 	a->shift = c0_alloc(n, sizeof(double));
 	a->s1 = c0_alloc(n, sizeof(double));
+	a->st = c0_alloc(n, sizeof(double));
 	a->blk = c0_alloc(n * (size_t)a->block, sizeof(float));
-	if (!a->dy || !a->dx || !a->sum || !a->shift || !a->s1 || !a->blk) {
+	if (!a->dy || !a->dx || !a->sum || !a->shift || !a->s1 || !a->st || !a->blk) {
 		c0_cov_acc_free(a);
 		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, (d + 1) * (2 * d + 1) - d);
 	}
@@ -78,7 +82,7 @@ void c0_cov_acc_free(struct c0_cov_acc *a)
 {
 	if (!a)
 		return;
-	free(a->dy), free(a->dx), free(a->sum), free(a->shift), free(a->s1), free(a->blk);
+	free(a->dy), free(a->dx), free(a->sum), free(a->shift), free(a->s1), free(a->st), free(a->blk);
 	free(a);
 }
 
@@ -126,15 +130,24 @@ int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
 		for (size_t i = 0; i < n; i++)
 			a->shift[i] = frame[i];
 	float *dst = a->blk + a->nb * n;
+	const double t = (double)a->frames;
 	for (size_t i = 0; i < n; i++) {
 		double v = frame[i] - a->shift[i];
 		dst[i] = (float)v;
 		a->s1[i] += dst[i];
+		a->st[i] += t * dst[i];
 	}
 	a->frames++;
 	if (++a->nb == a->block)
 		flush(a);
 	return C0_OK;
+}
+
+/* a_i / sqrt(Stt) of pixel k */
+static double trend(const struct c0_cov_acc *a, size_t k)
+{
+	const double T = (double)a->frames, tbar = (T - 1) / 2, Stt = T * (T * T - 1) / 12;
+	return (a->st[k] - tbar * a->s1[k]) / sqrt(Stt);
 }
 
 int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct c0_cov *out)
@@ -159,9 +172,21 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 	memcpy(c->dy, a->dy, sizeof(int) * (size_t)c->nlag);
 	memcpy(c->dx, a->dx, sizeof(int) * (size_t)c->nlag);
 	const double T = (double)a->frames;
+	/* a per-pixel linear trend (bleaching, slow drift of the lamp) is not
+	 * fluctuation: remove it. With a_i = sum_t (t - tbar) y_i and
+	 * Stt = sum_t (t - tbar)^2, the detrended cross-product is
+	 * sum (y_i - ybar_i)(y_j - ybar_j) - a_i a_j / Stt, over T - 2 degrees of freedom. */
+	double *tr = c0_alloc(n, sizeof *tr);
+	if (!tr) {
+		c0_cov_free(c);
+		return C0_ENOMEM;
+	}
 	for (int y = 0; y < h; y++)
-		for (int x = 0; x < w; x++)
-			c->mean[(size_t)y * w + x] = a->s1[(size_t)(y0 + y) * a->W + x0 + x] / T;   /* shifted mean */
+		for (int x = 0; x < w; x++) {
+			const size_t k = (size_t)(y0 + y) * a->W + x0 + x, i = (size_t)y * w + x;
+			c->mean[i] = a->s1[k] / T;   /* shifted mean */
+			tr[i] = trend(a, k);
+		}
 	/* each entry only from its own pixels' sums: a window gives the same
 	 * numbers as the whole image, whatever the tiling */
 	for (int l = 0; l < c->nlag; l++) {
@@ -170,9 +195,10 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 			for (int x = dx < 0 ? -dx : 0; x < (dx > 0 ? w - dx : w); x++) {
 				size_t i = (size_t)y * w + x, j = (size_t)(y + dy) * w + x + dx;
 				double s = a->sum[(size_t)l * N + (size_t)(y0 + y) * a->W + x0 + x];
-				c->r[(size_t)l * n + i] = (s - T * c->mean[i] * c->mean[j]) / (T - 1);
+				c->r[(size_t)l * n + i] = (s - T * c->mean[i] * c->mean[j] - tr[i] * tr[j]) / (T - 2);
 			}
 	}
+	free(tr);
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++)
 			c->mean[(size_t)y * w + x] += a->shift[(size_t)(y0 + y) * a->W + x0 + x];
@@ -183,8 +209,8 @@ double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x)
 {
 	flush(a);
 	const size_t i = (size_t)y * a->W + x;
-	const double T = (double)a->frames, m = a->s1[i] / T;
-	return (a->sum[i] - T * m * m) / (T - 1);
+	const double T = (double)a->frames, m = a->s1[i] / T, b = trend(a, i);
+	return (a->sum[i] - T * m * m - b * b) / (T - 2);
 }
 
 int64_t c0_cov_acc_frames(const struct c0_cov_acc *a) { return a->frames; }

@@ -2,8 +2,9 @@
  *
  * Only pixel pairs within the lag radius d per axis are kept, and only half
  * of them (R is symmetric): lags (dy, dx) with dy > 0, or dy = 0 and dx >= 0.
- * r[l][y][x] = cov(pixel (y, x), pixel (y + dy_l, x + dx_l)) over time, mean
- * removed, normalised by T - 1; 0 where the partner falls outside.
+ * r[l][y][x] = cov(pixel (y, x), pixel (y + dy_l, x + dx_l)) over time, each
+ * pixel's mean and linear trend in time removed (a fade would otherwise add
+ * to every covariance), normalised by T - 2; 0 where the partner falls outside.
  * The accumulator holds float sums of products of values shifted by the
  * first frame, added in double a block of frames at a time (relative
  * rounding ~1e-7, far below the covariance's own sampling error): the

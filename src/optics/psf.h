@@ -6,6 +6,11 @@
 /* The parameters every grid shares: pixel size and FWHM positive (nm),
  * super-resolution factor 1..16; errors name the option. */
 int c0_psf_check(double pixel_nm, double fwhm_nm, int srf);
+/* The FWHM range c0_psf_check accepts, in camera pixels. */
+#define C0_PSF_MIN_PX 0.1
+#define C0_PSF_MAX_PX 100.0
+/* FWHM 0.51 lambda / NA (emission in nm), with 0 < NA < n_glass. */
+int c0_fwhm_from_na(double emission_nm, double na, double n_glass, double *fwhm_nm);
 
 /* sigma of the Gaussian in camera pixels from FWHM and pixel size (nm) */
 double c0_psf_sigma_px(double fwhm_nm, double pixel_nm);

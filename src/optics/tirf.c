@@ -8,11 +8,11 @@ static double rad(double deg) { return deg * C0_PI / 180; }
 
 int c0_tirf_check(const struct c0_tirf *t)
 {
-	if (!(t->n_glass > 0) || !(t->n_sample > 0))
+	if (!(t->n_glass > 0 && isfinite(t->n_glass)) || !(t->n_sample > 0))
 		return c0_fail(C0_EINVAL, "n_glass %g / n_sample %g: refractive indices must be positive", t->n_glass, t->n_sample);
 	if (t->n_sample >= t->n_glass)
 		return c0_fail(C0_EINVAL, "n_sample %g must be below n_glass %g for total internal reflection", t->n_sample, t->n_glass);
-	if (!(t->wavelength_nm > 0))
+	if (!(t->wavelength_nm > 0 && isfinite(t->wavelength_nm)))
 		return c0_fail(C0_EINVAL, "wavelength_nm %g: must be positive (nm)", t->wavelength_nm);
 	if (!(t->s_fraction >= 0 && t->s_fraction <= 1))
 		return c0_fail(C0_EINVAL, "s_fraction %g: the s-polarisation share must be in [0, 1]", t->s_fraction);

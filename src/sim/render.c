@@ -53,15 +53,27 @@ void c0_sim_scene_free(struct c0_sim_scene *s)
 	free(s);
 }
 
+int c0_sim_excitation(const struct c0_sim_conf *c, int q, double *p, double *i0_rel)
+{
+	const double ac = c0_tirf_critical_deg(&c->tirf);
+	double i0_1 = 0;
+	for (int k = 0; k < c->nangles && !(i0_1 > 0); k++)
+		if (c->angles[k] > ac)
+			i0_1 = c0_tirf_i0(&c->tirf, c->angles[k]);
+	if (!(c->angles[q] > ac) || c0_tirf_p(&c->tirf, c->angles[q], p)) {
+		*p = 0, *i0_rel = 1;   /* epi: a propagating beam, as bright as the first TIRF angle at z = 0 */
+		return 1;
+	}
+	*i0_rel = c0_tirf_i0(&c->tirf, c->angles[q]) / i0_1;
+	return 0;
+}
+
 int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, int nem, int q,
 		     struct c0_sim_scene **out)
 {
 	*out = NULL;
-	double p, i0_1 = c0_tirf_i0(&c->tirf, c->angles[0]);
-	int st = c0_tirf_p(&c->tirf, c->angles[q], &p);
-	if (st)
-		return st;
-	double rel = c0_tirf_i0(&c->tirf, c->angles[q]) / i0_1, sig = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
+	double p, rel, sig = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
+	c0_sim_excitation(c, q, &p, &rel);
 	struct c0_sim_scene *s = c0_alloc(1, sizeof *s);
 	if (!s)
 		return C0_ENOMEM;
@@ -75,10 +87,16 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 	s->amp = c0_alloc((size_t)nem, sizeof(double));
 	s->on = c0_alloc((size_t)nem * c->frames, sizeof(float));
 	s->bg = c0_alloc((size_t)c->width * c->height, sizeof(double));
-	if (!s->x0 || !s->y0 || !s->wx || !s->wy || !s->amp || !s->on || !s->bg) {
+	int64_t *slot = c0_alloc((size_t)c->frames, sizeof *slot);
+	for (int t = 0; slot && t < c->frames; t++)
+		slot[t] = c0_sim_slot(c, q, t);
+	if (!slot || !s->x0 || !s->y0 || !s->wx || !s->wy || !s->amp || !s->on || !s->bg) {
 		c0_sim_scene_free(s);
+		free(slot);
 		return C0_ENOMEM;
 	}
+	/* one process per emitter over the whole acquisition, unless each angle restarts */
+	const int qs = c->order == C0_ORDER_RESTART ? q : 0;
 	const int half = (int)ceil(C0_PSF_CUTOFF * sig);
 #pragma omp parallel for schedule(dynamic, 64)
 	for (int e = 0; e < nem; e++) {
@@ -88,8 +106,9 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 		c0_psf_pixel_weights(ex, sig, s->x0[e], s->K, s->wx + e * K);
 		c0_psf_pixel_weights(ey, sig, s->y0[e], s->K, s->wy + e * K);
 		s->amp[e] = em[e].brightness * rel * exp(-p * em[e].z);
-		c0_sim_blink(c, STREAM(1, q, e), c->frames, s->on + (size_t)e * c->frames);
+		c0_sim_blink_slots(c, STREAM(1, qs, e), slot, c->frames, s->on + (size_t)e * c->frames);
 	}
+	free(slot);
 	background(c, q, rel, s->bg);
 	*out = s;
 	return C0_OK;

@@ -6,6 +6,13 @@
  *   ADU = gain * Poisson(photons) + offset + Normal(0, read_noise^2), rounded to uint16
  * on_e,q(t) is the fraction of frame t the emitter spends on (two-state
  * telegraph process integrated within the frame) and zero once bleached.
+ * Bleaching follows the cumulative ON time. The angles are acquired one
+ * after another on the same fluorophores (order "sequential", optional
+ * illuminated gaps between stacks), frame by frame in turn ("interleaved"),
+ * or each on a fresh population ("restart", no fade across angles): in the
+ * first two, each emitter runs one process over the whole acquisition, so
+ * later stacks see a faded population. An angle below the critical one is an
+ * epifluorescence stack (E_q(z) = 1, no evanescent decay).
  *
  * SNR (the paper's 14.75 dB, as in the COL0RME reference code):
  *   SNR_dB = 10 log10( var(noise-free ADU over all pixels and frames) / read_noise^2 )
@@ -16,6 +23,8 @@
 #include <stdint.h>
 
 #define C0_MAX_ANGLES 32
+
+enum c0_sim_order { C0_ORDER_SEQUENTIAL, C0_ORDER_INTERLEAVED, C0_ORDER_RESTART };
 
 struct c0_emitter {
 	double x, y, z;          /* nm; x, y from the image's top-left corner */
@@ -37,11 +46,16 @@ struct c0_sim_conf {
 	double persistence_nm;     /* 4000 */
 	double density_per_um;     /* 60 emitters per um of filament */
 	double z_min_nm, z_max_nm; /* 0, 400: depth varies smoothly inside */
-	int pairs;                 /* 0; 1 adds a parallel partner 100-150 nm away */
+	int pairs;                 /* 0; 1 adds a parallel partner pair_sep_nm away, pair_dz_nm deeper */
+	double pair_sep_nm;        /* 120: lateral distance of the partner */
+	double pair_dz_nm;         /* 100: how much deeper the partner runs */
 	const char *emitters_csv;  /* x_nm,y_nm,z_nm[,brightness] instead of filaments */
 	/* photophysics */
 	double tau_on_ms, tau_off_ms;  /* 20, 40 */
-	double tau_bleach_s;       /* 35: mean time from the start of an angle's acquisition to bleaching; <= 0: none */
+	double tau_bleach_s;       /* 35: mean cumulative ON time before bleaching (s); 0: none */
+	int order;                 /* enum c0_sim_order: sequential */
+	double gap_s[C0_MAX_ANGLES]; /* illuminated, unrecorded seconds before stack q+1 (sequential order) */
+	int ngaps;                 /* 0: none; 1: the same gap everywhere; nangles - 1 */
 	double fps;                /* 100; each frame integrates its whole period */
 	double brightness;         /* 300 photons per frame, fully on, z = 0, angle 1 */
 	double brightness_cv;      /* 0.3: log-normal spread (coefficient of variation) */
@@ -65,11 +79,25 @@ int c0_sim_read_csv(const char *path, double default_brightness, struct c0_emitt
 /* Fraction of each frame spent on: on[t] for t < frames, one emitter, one
  * acquisition. Stationary start; bleaching at an exponential time. */
 void c0_sim_blink(const struct c0_sim_conf *c, uint64_t stream, int frames, float *on);
+/* The same on the acquisition's time line: on[f] is the fraction of frame
+ * period slot[f] (increasing; NULL: slot f) spent on. */
+void c0_sim_blink_slots(const struct c0_sim_conf *c, uint64_t stream, const int64_t *slot, int frames, float *on);
 /* Variance of the per-frame on-fraction of the unbleached telegraph process. */
 double c0_sim_onfrac_variance(const struct c0_sim_conf *c);
+/* Decay rate (1/s) of the expected signal: the slowest eigenvalue of the
+ * on/off/bleached chain (about p_on / tau_bleach). */
+double c0_sim_bleach_rate(const struct c0_sim_conf *c);
+/* Frame period (slot) of stack q's frame t on the acquisition's time line. */
+int64_t c0_sim_slot(const struct c0_sim_conf *c, int q, int t);
+/* Excitation of angle q: inverse penetration depth (0 for an epi stack below
+ * the critical angle) and I0 relative to the first TIRF angle's. Returns 1
+ * for an epi stack. */
+int c0_sim_excitation(const struct c0_sim_conf *c, int q, double *p, double *i0_rel);
 
 struct c0_sim_angle {
-	double p_per_nm, depth_nm, i0_rel;  /* physics of this angle */
+	double p_per_nm, depth_nm, i0_rel;  /* physics of this angle (p = 0, depth inf: epi) */
+	double bleach_factor;               /* mean over its frames of the population's on-fraction / p_on (1: unfaded) */
+	double t_start_s;                   /* when its first frame starts on the time line */
 	double read_noise, snr_db;          /* what was used / achieved */
 	double *mean_on;                    /* per emitter, over the acquisition */
 };
@@ -78,6 +106,7 @@ struct c0_sim_result {
 	int nemitters;
 	struct c0_emitter *em;
 	struct c0_sim_angle angle[C0_MAX_ANGLES];
+	double bleach_rate;                 /* 1/s, c0_sim_bleach_rate */
 	float *stack[C0_MAX_ANGLES];        /* without an outdir: frames x height x width ADU per angle */
 	double seconds;
 };

@@ -116,8 +116,7 @@ static int write_truth(const struct c0_sim_conf *c, struct c0_outdir *out, const
 	int st = img && zw && ww ? C0_OK : C0_ENOMEM;
 	char name[64];
 	for (int q = 0; q < nq && !st; q++) {
-		double p;
-		c0_tirf_p(&c->tirf, c->angles[q], &p);
+		const double p = res->angle[q].p_per_nm;
 		memset(img, 0, nf * sizeof *img);
 		for (int e = 0; e < res->nemitters; e++) {
 			const struct c0_emitter *m = &res->em[e];
@@ -195,12 +194,13 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "simulate", (double)c->nangles * c->frames * (c->snr_db > 0 ? 2 : 1));
 	double done = 0;
-	double i0_1 = c0_tirf_i0(&c->tirf, c->angles[0]);
+	res->bleach_rate = c0_sim_bleach_rate(c);
+	const double p_on = c->tau_on_ms / (c->tau_on_ms + c->tau_off_ms);
 	for (int q = 0; q < c->nangles && !st; q++) {
 		struct c0_sim_angle *a = &res->angle[q];
-		c0_tirf_p(&c->tirf, c->angles[q], &a->p_per_nm);
-		a->depth_nm = 1 / a->p_per_nm;
-		a->i0_rel = c0_tirf_i0(&c->tirf, c->angles[q]) / i0_1;
+		c0_sim_excitation(c, q, &a->p_per_nm, &a->i0_rel);
+		a->depth_nm = a->p_per_nm > 0 ? 1 / a->p_per_nm : INFINITY;
+		a->t_start_s = (double)c0_sim_slot(c, q, 0) / c->fps;
 		struct c0_sim_scene *s;
 		if ((st = c0_sim_scene_new(c, res->em, res->nemitters, q, &s)))
 			break;
@@ -212,12 +212,15 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 			break;
 		}
 		const float *on = c0_sim_scene_onfrac(s);
+		double all = 0;
 		for (int e = 0; e < res->nemitters; e++) {
 			double m = 0;
 			for (int t = 0; t < c->frames; t++)
 				m += on[(size_t)e * c->frames + t];
 			a->mean_on[e] = m / c->frames;
+			all += a->mean_on[e];
 		}
+		a->bleach_factor = all / res->nemitters / p_on;
 		memcpy(bg[q], c0_sim_scene_background(s), sizeof(double) * c->width * c->height);
 		a->read_noise = c->read_noise;
 		double var = NAN;

@@ -29,7 +29,7 @@ void c0_sim_defaults(struct c0_sim_conf *c)
 	*c = (struct c0_sim_conf){
 		.seed = 1, .width = 64, .height = 64, .frames = 500, .pixel_nm = 100, .fwhm_nm = 229, .srf = 4,
 		.tirf = C0_TIRF_DEFAULTS, .filaments = 5, .persistence_nm = 4000, .density_per_um = 60,
-		.z_min_nm = 0, .z_max_nm = 400, .tau_on_ms = 20, .tau_off_ms = 40, .tau_bleach_s = 35, .fps = 100,
+		.z_min_nm = 0, .z_max_nm = 400, .pair_sep_nm = 120, .pair_dz_nm = 100, .tau_on_ms = 20, .tau_off_ms = 40, .tau_bleach_s = 35, .fps = 100,
 		.brightness = 300, .brightness_cv = 0.3, .background = 40, .offset = 100, .gain = 1,
 		.read_noise = 0, .snr_db = 14.75,
 	};
@@ -49,11 +49,22 @@ int c0_sim_check(const struct c0_sim_conf *c)
 		return c0_fail(C0_EINVAL, "--angles: need 1..%d angles", C0_MAX_ANGLES);
 	if ((st = c0_tirf_check(&c->tirf)))
 		return st;
-	for (int q = 0; q < c->nangles; q++) {
-		double p;
-		if (c0_tirf_p(&c->tirf, c->angles[q], &p))
-			return c0_fail(C0_EINVAL, "--angles: %s", c0_errmsg());
-	}
+	for (int q = 0; q < c->nangles; q++)   /* below the critical angle: an epi stack */
+		if (!(c->angles[q] >= 0 && c->angles[q] < 90))
+			return c0_fail(C0_EINVAL, "--angles: %g is not an incidence angle in [0, 90) degrees", c->angles[q]);
+	if (c->order < C0_ORDER_SEQUENTIAL || c->order > C0_ORDER_RESTART)
+		return c0_fail(C0_EINVAL, "--bleach-order: unknown order %d", c->order);
+	if (c->ngaps && c->order != C0_ORDER_SEQUENTIAL)
+		return c0_fail(C0_EINVAL, "--gaps: only with the sequential acquisition order");
+	if (c->ngaps > 1 && c->ngaps != c->nangles - 1)
+		return c0_fail(C0_EINVAL, "--gaps: %d gaps for %d stacks (give one, or one per pair of consecutive stacks: %d)",
+			       c->ngaps, c->nangles, c->nangles - 1);
+	for (int k = 0; k < c->ngaps; k++)
+		if (!(c->gap_s[k] >= 0))
+			return c0_fail(C0_EINVAL, "--gaps: gap %d is %g s, must be >= 0", k + 1, c->gap_s[k]);
+	if (c->pairs && (!(c->pair_sep_nm > 0) || !(c->pair_dz_nm >= 0) || c->pair_dz_nm > c->z_max_nm - c->z_min_nm))
+		return c0_fail(C0_EINVAL, "--pair-sep %g / --pair-dz %g: need sep > 0 and 0 <= dz <= the depth range", c->pair_sep_nm,
+			       c->pair_dz_nm);
 	if (!(c->tau_on_ms > 0) || !(c->tau_off_ms > 0))
 		return c0_fail(C0_EINVAL, "--tau-on %g / --tau-off %g: lifetimes must be positive (ms)", c->tau_on_ms, c->tau_off_ms);
 	if (!(c->fps > 0))
@@ -66,6 +77,15 @@ int c0_sim_check(const struct c0_sim_conf *c)
 		return c0_fail(C0_EINVAL, "--gain must be positive, --read-noise and --offset >= 0");
 	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
 		return c0_fail(C0_EINVAL, "--z-range %g,%g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
+	/* every real parameter finite: infinity passes the >= 0 tests above */
+	const double all[] = { c->tau_on_ms, c->tau_off_ms, c->tau_bleach_s, c->fps, c->brightness, c->brightness_cv,
+			       c->background, c->offset, c->gain, c->read_noise, c->snr_db, c->z_min_nm, c->z_max_nm,
+			       c->persistence_nm, c->density_per_um };
+	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+		if (!isfinite(all[i]))
+			return c0_fail(C0_EINVAL, "simulation parameter %g: must be finite (see col0rme simulate --help)", all[i]);
+	if ((double)c->width * c->height * c->frames > 1e10)
+		return c0_fail(C0_EINVAL, "--size %dx%d with --frames %d: more than 1e10 pixels per angle", c->width, c->height, c->frames);
 	if (!c->emitters_csv && (c->filaments < 1 || !(c->density_per_um > 0) || !(c->persistence_nm > 0)))
 		return c0_fail(C0_EINVAL, "empty structure: --filaments %d, --density %g, --persistence %g must be positive (or give --emitters CSV)",
 			       c->filaments, c->density_per_um, c->persistence_nm);
@@ -102,10 +122,11 @@ static int filament(const struct c0_sim_conf *c, struct c0_rng *r, struct elist 
 	const double W = c->width * c->pixel_nm, H = c->height * c->pixel_nm, ds = 5, margin = 200;
 	double x0 = W * (0.1 + 0.8 * c0_rng_uniform(r)), y0 = H * (0.1 + 0.8 * c0_rng_uniform(r));
 	double th0 = C0_PI * c0_rng_uniform(r);
-	double zr = c->z_max_nm - c->z_min_nm, amp = 0.5 * zr * c0_rng_uniform(r);
+	/* with pairs the partner runs pair_dz_nm deeper, inside the range */
+	double dz = c->pairs ? c->pair_dz_nm : 0, zr = c->z_max_nm - c->z_min_nm - dz, amp = 0.5 * zr * c0_rng_uniform(r);
 	double zc = c->z_min_nm + amp + (zr - 2 * amp) * c0_rng_uniform(r);
 	double period = 2000 + 4000 * c0_rng_uniform(r), phase = 2 * C0_PI * c0_rng_uniform(r);
-	double sep = c->pairs ? 100 + 50 * c0_rng_uniform(r) : 0;
+	double sep = c->pairs ? c->pair_sep_nm : 0;
 	double step_sd = sqrt(ds / c->persistence_nm);
 	for (int dir = 0; dir < 2; dir++) {
 		double x = x0, y = y0, th = th0 + dir * C0_PI, s = 0;
@@ -119,7 +140,7 @@ static int filament(const struct c0_sim_conf *c, struct c0_rng *r, struct elist 
 					/* the partner runs along the local normal */
 					double px = ex - k * sep * sin(th), py = ey + k * sep * cos(th);
 					if (px >= 0 && px < W && py >= 0 && py < H) {
-						int st = push(l, px, py, z, draw_brightness(c, r));
+						int st = push(l, px, py, z + k * dz, draw_brightness(c, r));
 						if (st)
 							return st;
 					}

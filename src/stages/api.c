@@ -97,7 +97,8 @@ static const struct param params[] = {
 	F("wavelength_nm", P_DOUBLE, tirf.wavelength_nm), F("s_fraction", P_DOUBLE, tirf.s_fraction),
 	F("filaments", P_INT, filaments), F("persistence_nm", P_DOUBLE, persistence_nm),
 	F("density_per_um", P_DOUBLE, density_per_um), F("z_min_nm", P_DOUBLE, z_min_nm), F("z_max_nm", P_DOUBLE, z_max_nm),
-	F("pairs", P_FLAG, pairs), F("tau_on_ms", P_DOUBLE, tau_on_ms), F("tau_off_ms", P_DOUBLE, tau_off_ms),
+	F("pairs", P_FLAG, pairs), F("pair_sep_nm", P_DOUBLE, pair_sep_nm), F("pair_dz_nm", P_DOUBLE, pair_dz_nm),
+	F("bleach_order", P_INT, order), F("tau_on_ms", P_DOUBLE, tau_on_ms), F("tau_off_ms", P_DOUBLE, tau_off_ms),
 	F("tau_bleach_s", P_DOUBLE, tau_bleach_s), F("fps", P_DOUBLE, fps), F("brightness", P_DOUBLE, brightness),
 	F("brightness_cv", P_DOUBLE, brightness_cv), F("background", P_DOUBLE, background), F("offset", P_DOUBLE, offset),
 	F("gain", P_DOUBLE, gain), F("read_noise", P_DOUBLE, read_noise), F("snr_db", P_DOUBLE, snr_db),
@@ -153,6 +154,31 @@ int c0_simulation_set(struct c0_simulation *s, const char *name, const char *val
 			return c0_fail(C0_EINVAL, "angles \"%s\": need at least one angle (deg)", value);
 		memcpy(s->c.angles, s->angles, sizeof(double) * n);
 		s->c.nangles = n;
+		return C0_OK;
+	}
+	if (!strcmp(name, "bleach_order")) {   /* by name, as in sim.json */
+		static const char *orders[] = { "sequential", "interleaved", "restart" };
+		for (int k = 0; k < 3; k++)
+			if (!strcmp(value, orders[k])) {
+				s->c.order = k;
+				return C0_OK;
+			}
+		return c0_fail(C0_EINVAL, "bleach_order \"%s\": expected sequential, interleaved or restart", value);
+	}
+	if (!strcmp(name, "gaps_s")) {
+		int n = 0;
+		for (const char *p = value; *p; n++) {
+			char buf[64];
+			size_t k = strcspn(p, ",");
+			if (k >= sizeof buf || n >= C0_MAX_ANGLES)
+				return c0_fail(C0_EINVAL, "%s \"%s\": at most %d values", name, value, C0_MAX_ANGLES);
+			memcpy(buf, p, k), buf[k] = 0;
+			if (number(name, buf, &v))
+				return C0_EINVAL;
+			s->c.gap_s[n] = v;
+			p += k + (p[k] == ',');
+		}
+		s->c.ngaps = n;
 		return C0_OK;
 	}
 	for (size_t i = 0; i < sizeof params / sizeof *params; i++) {

@@ -15,3 +15,8 @@ int c0_pool_window(const float *x, const uint8_t *mask, int ny, int nx, int h, f
  * column by sum_q x_q / sum_q pooled_q, so the volume keeps the pixel's own
  * intensity (the depth profile, hence the depth map, is unchanged). */
 void c0_pool_rescale(float *f, int nz, int ny, int nx, int nq, const float *const *x, const float *const *pooled);
+
+/* Default window of run's depth pooling, as a fraction of the PSF FWHM:
+ * wide enough to average the per-angle splitting noise, narrower than two
+ * filaments 120 nm apart at different depths (docs/parameters.md). */
+#define C0_DEPTH_POOL_FWHM 0.75

@@ -15,8 +15,10 @@ int c0_intensity_check(const struct c0_intensity_conf *c)
 	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
 	if (st)
 		return st;
-	if (!(c->beta >= 0) || !(c->nu >= 0) || !(c->mu >= 0))
-		return c0_fail(C0_EINVAL, "beta %g, nu %g, mu %g: each must be >= 0", c->beta, c->nu, c->mu);
+	if (!(c->beta >= 0 && isfinite(c->beta)) || !(c->nu >= 0 && isfinite(c->nu)) || !(c->mu >= 0 && isfinite(c->mu)))
+		return c0_fail(C0_EINVAL, "beta %g, nu %g, mu %g: must be finite and >= 0", c->beta, c->nu, c->mu);
+	if (!(c->tol > 0 && c->tol < 1) || c->maxit < 1)
+		return c0_fail(C0_EINVAL, "cg_tol %g / cg_iterations %d: need a tolerance in (0, 1) and at least one step", c->tol, c->maxit);
 	if (!(c->graph_radius >= 1 && c->graph_radius <= 4))
 		return c0_fail(C0_EINVAL, "graph_radius %g: must be in [1, 4] fine pixels", c->graph_radius);
 	return C0_OK;
@@ -154,7 +156,7 @@ static double residual2(struct prob *p, const double *sol)
 	return s;
 }
 
-struct dp { struct prob *p; double *sol, target, tprev; int fail; };
+struct dp { struct prob *p; double *sol, target, tprev, tmin; int fail; };
 
 static double discrepancy(void *ctx, double t)
 {
@@ -163,7 +165,7 @@ static double discrepancy(void *ctx, double t)
 	/* Warm start from the last mu only when it is far (a factor e or more):
 	 * from a near one the start may already meet the CG tolerance and not
 	 * move, and the residual would step instead of rising with mu. */
-	if (!(fabs(t - d->tprev) >= 1))
+	if (!(fabs(t - d->tprev) >= 1) || t <= d->tmin)   /* at the smallest mu: as the floor was solved */
 		memset(d->sol, 0, sizeof *d->sol * (size_t)(d->p->n + d->p->nb));
 	d->tprev = t;
 	if (solve(d->p, d->sol))
@@ -213,10 +215,24 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 		st = solve(&p, sol);
 		res->dp_status = -1;
 	} else {
-		struct dp d = { &p, sol, res->target2, NAN, 0 };
+		/* the residual that the model reaches at all (the smallest mu): on real
+		 * data and continuous positions it exceeds the noise level, and the
+		 * plain principle is never met; the relative one lets the smoothness
+		 * cost as much residual above that floor as the noise explains */
+		const double tmin = log(C0_INTENSITY_MU_MIN);
+		res->floor2 = 0;
+		if (c->relative) {
+			p.mu = C0_INTENSITY_MU_MIN;
+			if (!(st = solve(&p, sol)))
+				res->floor2 = residual2(&p, sol);
+			memset(sol, 0, sizeof *sol * nv);
+			if (st)
+				goto out;
+		}
+		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, 0 };
 		double t;
 		int evals;
-		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), log(1e-3), log(1e8), 0.01 * res->target2, 40, &t, &evals);
+		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
 		st = d.fail ? C0_ENOMEM : C0_OK;
 		if (!st && fabs(p.mu - exp(t)) > 1e-12 * p.mu) {   /* make sol belong to the returned mu */
 			p.mu = exp(t);

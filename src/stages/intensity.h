@@ -25,14 +25,17 @@ struct c0_intensity_conf {
 	double tol;                /* 1e-3: CG relative residual (docs/parameters.md) */
 	int maxit;                 /* 500 CG steps per active-set round */
 	double graph_radius;       /* 2.25 fine pixels: smoothness neighbourhood (docs/parameters.md) */
+	int relative;              /* 1: residual^2 = floor^2 + target^2, floor = the residual at the smallest mu */
 };
-#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25 }
+#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1 }
+#define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {
 	int Ly, Lx, Ny, Nx;
 	float *x;                  /* Ly x Lx, zero off the support */
 	float *b;                  /* Ny x Nx */
 	double mu, residual2, target2, sigma2;
+	double floor2;             /* residual^2 at the smallest mu (relative principle), else 0 */
 	int dp_status;             /* enum c0_root_status; 0 = discrepancy met */
 	int solves, cg_iters, active_rounds;
 	double seconds;

@@ -25,14 +25,19 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	for (int q = 0; q < nq; q++) {
 		double p;
 		if (c0_tirf_p(&c->tirf, angles[q], &p))
-			return c0_fail(C0_EINVAL, "angles: %s", c0_errmsg());
+			return c0_fail_prefix(C0_EINVAL, "angles");
 	}
-	if (!(c->dz_nm > 0) || !(c->z1_nm > c->z0_nm) || c->z0_nm < 0)
+	if (!(c->dz_nm > 0) || !(c->z1_nm > c->z0_nm) || !(c->z0_nm >= 0) || !isfinite(c->z1_nm))
 		return c0_fail(C0_EINVAL, "z_range_nm %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
 		return c0_fail(C0_EINVAL, "z_range_nm: more than 512 depth bins");
-	if (!(c->kappa >= 0) || !(c->wz >= 0) || !(c->sparsity >= 0))
-		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: each must be >= 0", c->kappa, c->wz, c->sparsity);
+	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
+		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: must be finite and >= 0", c->kappa, c->wz,
+			       c->sparsity);
+	if (c->pdhg.maxit < 1)
+		return c0_fail(C0_EINVAL, "matirf_iterations %d: must be at least 1", c->pdhg.maxit);
+	if (!(c->pdhg.tol >= 0 && isfinite(c->pdhg.tol)) || !(c->pdhg.relax > 0 && c->pdhg.relax < 2))
+		return c0_fail(C0_EINVAL, "matirf_tol %g: must be >= 0 (relaxation %g in (0, 2))", c->pdhg.tol, c->pdhg.relax);
 	return C0_OK;
 }
 

@@ -3,6 +3,7 @@
  * the MA-TIRF volume from the (pooled) intensities, plus the standard
  * MA-TIRF baseline from the background-corrected means when asked. */
 #include "stages/pipeline.h"
+#include "stages/bleach.h"
 #include "stages/depthpool.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -88,11 +89,28 @@ void c0_stacks_close(struct c0_frames *f, int n)
 		c0_frames_close(&f[i]);
 }
 
-int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, double *pixel_nm)
+int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, int n, double *pixel_nm)
 {
+	if (!(c->pixel_nm >= 0 && isfinite(c->pixel_nm)))
+		return c0_fail(C0_EINVAL, "pixel_nm %g: must be a positive number of nm (0: the stacks' calibration)", c->pixel_nm);
 	*pixel_nm = c->pixel_nm > 0 ? c->pixel_nm : f[0].pixel_nm;
 	if (!(*pixel_nm > 0))
 		return c0_fail(C0_EINVAL, "pixel_nm: %s has no pixel calibration; give the camera pixel size in nm", f[0].name);
+	/* without the parameter, the stacks' calibrations must agree: which one is right is unknown */
+	for (int i = 1; !(c->pixel_nm > 0) && i < n; i++)
+		if (!(fabs(f[i].pixel_nm - f[0].pixel_nm) <= 1e-3 * f[0].pixel_nm))
+			return c0_fail(C0_EINVAL, "%s: pixel size %s%.6g nm, but %s has %.6g nm (give pixel_nm to override)", f[i].name,
+				       f[i].pixel_nm > 0 ? "" : "uncalibrated, not ", f[i].pixel_nm, f[0].name, f[0].pixel_nm);
+	return C0_OK;
+}
+
+int c0_stacks_check(const struct c0_support_conf *sc, const struct c0_frames *f, int n)
+{
+	for (int i = 0; i < n; i++) {
+		int st = c0_support_check(sc, f[i].width, f[i].height, f[i].count, f[i].name);
+		if (st)
+			return st;
+	}
 	return C0_OK;
 }
 
@@ -248,8 +266,13 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		cJSON_AddNumberToObject(j, "mu", s->mu);
 		cJSON_AddNumberToObject(j, "residual2", s->residual2);
 		cJSON_AddNumberToObject(j, "discrepancy_target2", s->target2);
-		static const char *dp[] = { "met", "below: even the smallest mu leaves a larger residual",
-					    "above: even the largest mu leaves a smaller residual", "not converged" };
+		if (ic->relative && s->dp_status >= 0)
+			cJSON_AddNumberToObject(j, "residual_floor2", s->floor2);
+		static const char *dp[] = {
+			"met",
+			"below: even the smallest mu leaves a residual above the target, so the intensity is as little smoothed as allowed (give mu to smooth more)",
+			"above: even the largest mu leaves a residual below the target, so the intensity is as smooth as allowed (lower nu or give mu for more detail)",
+			"not converged: mu is the last one tried (give mu to fix it)" };
 		cJSON_AddStringToObject(j, "discrepancy", s->dp_status < 0 ? "fixed mu" : dp[s->dp_status]);
 		cJSON_AddNumberToObject(j, "solves", s->solves);
 		cJSON_AddNumberToObject(j, "cg_iterations", s->cg_iters);
@@ -262,6 +285,11 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	cJSON_AddNumberToObject(p, "beta", ic->beta);
 	cJSON_AddNumberToObject(p, "nu", ic->nu);
 	cJSON_AddNumberToObject(p, "fixed_mu", ic->mu);
+	cJSON_AddStringToObject(p, "mu_rule", ic->mu > 0 ? "fixed" : ic->relative ? "relative discrepancy" : "plain discrepancy");
+	cJSON_AddStringToObject(p, "mu_rule_meaning",
+		ic->mu > 0 ? "mu as given"
+		: ic->relative ? "mu is the largest smoothness whose residual exceeds the model's floor (the residual at mu = 1e-3) by no more than the noise explains (nu^2 H W sigma2 / T): smoothing that costs less than the noise is kept. The floor is the model error (continuous positions on the fine grid, background shape), larger than the noise on real data, which is why the plain principle is never met there. Larger nu smooths more; mu fixes it."
+		: "mu makes the residual equal to the noise level nu^2 H W sigma2 / T; on data whose model error exceeds the noise this is never met and mu stays at its smallest value");
 	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
 	cJSON_AddNumberToObject(r->timings, "intensity", c0_now() - t);
 	return C0_OK;
@@ -319,14 +347,19 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 
 /* The support stacks: 1-based numbers, or the smallest angle (the deepest
  * penetration sees every emitter), or the first stack in 2D mode. */
-static int support_stacks(const struct c0_run_conf *c, int n, struct c0_result *r)
+static int support_stacks(const struct c0_run_conf *c, const int *only, int n, struct c0_result *r)
 {
 	if (!c->nsupport_stacks) {
-		int best = 0;
-		for (int i = 1; i < c->nangles; i++)
-			if (c->angles[i] < c->angles[best])
+		/* the support-only stacks (at or below the critical angle) and the smallest TIRF angle */
+		int best = -1, k = 0;
+		for (int i = 0; i < c->nangles; i++)
+			if (only[i])
+				r->sup[k++] = i;
+			else if (best < 0 || c->angles[i] < c->angles[best])
 				best = i;
-		r->sup[0] = best, r->nsup = 1;
+		if (best >= 0 || !k)
+			r->sup[k++] = best < 0 ? 0 : best;
+		r->nsup = k;
 		return C0_OK;
 	}
 	for (int k = 0; k < c->nsupport_stacks; k++) {
@@ -340,31 +373,98 @@ static int support_stacks(const struct c0_run_conf *c, int n, struct c0_result *
 
 /* The volume from the intensities, each pooled over a window of about
  * pool_nm (odd, in fine pixels) on the support. */
-static int volume(struct c0_result *r, const struct c0_run_conf *c, const struct c0_stage_confs *s)
+static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *tirf, const struct c0_stage_confs *s)
 {
-	const int n = r->n, Ly = r->Ly, Lx = r->Lx;
-	const float *img[C0_MAX_STACKS];
-	float *pooled[C0_MAX_STACKS] = { 0 };
+	const int nq = ct->nangles, Ly = r->Ly, Lx = r->Lx;
+	const size_t L = (size_t)Ly * Lx, Nc = r->ires[0].Ny * (size_t)r->ires[0].Nx;
+	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 };
 	const double fine = s->support.pixel_nm / s->support.srf;
 	int h = (int)lround((s->pool_nm / fine - 1) / 2), st = C0_OK;
-	for (int q = 0; !st && q < n; q++) {
-		img[q] = r->ires[q].x;
-		if (h <= 0)
+	for (int i = 0; !st && i < nq; i++) {
+		const int q = tirf[i];
+		const float g = (float)(1 / r->bleach_factor[q]);
+		if (!(own[i] = malloc(L * sizeof(float)))) {
+			st = C0_ENOMEM;
+			break;
+		}
+		for (size_t p = 0; p < L; p++)
+			own[i][p] = r->ires[q].x[p] * g;
+		if (ct->baseline && !(st = (base[i] = malloc(Nc * sizeof(float))) ? C0_OK : C0_ENOMEM))
+			for (size_t p = 0; p < Nc; p++)
+				base[i][p] = r->corrected[q][p] * g;
+		if (st || h <= 0)
 			continue;
-		pooled[q] = malloc((size_t)Ly * Lx * sizeof(float));
-		st = pooled[q] ? c0_pool_window(r->ires[q].x, r->mask, Ly, Lx, h, pooled[q]) : C0_ENOMEM;
+		pooled[i] = malloc(L * sizeof(float));
+		st = pooled[i] ? c0_pool_window(own[i], r->mask, Ly, Lx, h, pooled[i]) : C0_ENOMEM;
 	}
 	if (!st)
-		st = c0_step_matirf(r, c, &s->matirf, h > 0 ? (const float *const *)pooled : img, h > 0 ? img : NULL, Ly, Lx,
-				    fine, 0);
+		st = c0_step_matirf(r, ct, &s->matirf, h > 0 ? (const float *const *)pooled : (const float *const *)own,
+				    h > 0 ? (const float *const *)own : NULL, Ly, Lx, fine, 0);
 	if (!st)
 		cJSON_AddNumberToObject(cJSON_GetObjectItem(r->rep, "matirf"), "depth_pool_window_px", h > 0 ? 2 * h + 1 : 0);
-	for (int q = 0; q < n; q++)
-		free(pooled[q]);
-	if (!st && c->baseline)
-		st = c0_step_matirf(r, c, &s->matirf, (const float *const *)r->corrected, NULL, r->ires[0].Ny,
-				    r->ires[0].Nx, s->support.pixel_nm, 1);
+	if (!st && ct->baseline)
+		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
+				    s->support.pixel_nm, 1);
+	for (int i = 0; i < nq; i++)
+		free(own[i]), free(pooled[i]), free(base[i]);
 	return st;
+}
+
+static void bleach_conf(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
+{
+	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF : C0_BLEACH_ESTIMATE,
+				       .interleaved = c->acquisition == C0_ACQ_INTERLEAVED, .norder = c->nacquisition_order,
+				       .ngaps = c->ngaps_frames, .nfactors = c->nbleach_factors };
+	for (int i = 0; i < c->nacquisition_order && i < C0_BLEACH_MAX; i++)
+		bc->order[i] = c->acquisition_order[i] - 1;
+	for (int i = 0; i < c->ngaps_frames && i < C0_BLEACH_MAX; i++)
+		bc->gap_frames[i] = c->gaps_frames[i];
+	for (int i = 0; i < c->nbleach_factors && i < C0_BLEACH_MAX; i++)
+		bc->factor[i] = c->bleach_factors[i];
+}
+
+int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f)
+{
+	const int n = r->n;
+	double t = c0_now(), B[C0_MAX_STACKS] = { 0 };
+	struct c0_bleach_conf bc;
+	bleach_conf(c, &bc);
+	for (int q = 0; q < n; q++)
+		for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
+			B[q] += r->ires[q].b[i];
+	struct c0_bleach_result br;
+	int st = c0_bleach_run(&bc, n, f, B, &br);
+	if (st)
+		return st;
+	for (int q = 0; q < n; q++)
+		r->bleach_factor[q] = br.factor[q];
+	static const char *modes[] = { "estimated", "given", "off" };
+	cJSON *o = cJSON_AddObjectToObject(r->rep, "bleaching");
+	cJSON_AddStringToObject(o, "correction", modes[bc.mode]);
+	cJSON_AddStringToObject(o, "acquisition", bc.interleaved ? "interleaved" : "sequential");
+	double v[C0_MAX_STACKS];
+	for (int i = 0; i < n; i++)
+		v[i] = bc.norder ? bc.order[i] + 1 : i + 1;
+	c0_report_add_array(o, "acquisition_order", v, n);
+	if (bc.ngaps)
+		c0_report_add_array(o, "gaps_frames", bc.gap_frames, bc.ngaps);
+	if (bc.mode == C0_BLEACH_ESTIMATE) {
+		cJSON_AddNumberToObject(o, "rate_per_frame", br.k);
+		cJSON_AddNumberToObject(o, "rate_sd_per_frame", br.k_sd);
+		for (int q = 0; q < n; q++)
+			v[q] = br.k_stack[q] == br.k_stack[q] ? br.k_stack[q] : 0;
+		c0_report_add_array(o, "rate_per_frame_by_stack", v, n);
+		c0_report_add_array(o, "start_frame", br.start, n);
+		c0_report_add_array(o, "signal_per_frame", br.signal, n);
+	}
+	c0_report_add_array(o, "factors", br.factor, n);
+	const int first = bc.norder ? bc.order[0] : 0, last = bc.norder ? bc.order[n - 1] : n - 1;
+	cJSON_AddNumberToObject(o, "fade_last_vs_first", 1 - br.factor[last] / br.factor[first]);
+	cJSON_AddStringToObject(o, "meaning",
+		bc.mode == C0_BLEACH_OFF ? "no correction: a fade across the stacks would read as depth"
+		: "each stack's intensity was divided by its factor (its mean population relative to the start of the acquisition) before the MA-TIRF fit; intensity_qNN.tif are the stacks' own means");
+	cJSON_AddNumberToObject(r->timings, "bleaching", c0_now() - t);
+	return C0_OK;
 }
 
 static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
@@ -373,12 +473,35 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	const struct c0_stage_confs s = *sc;
 	const int three_d = c->nangles > 0;
 	int st = C0_OK;
-	if (three_d)
-		st = c0_run_conf_matirf_check(c, &s.matirf, n);
+	/* stacks at or below the critical angle (epi) only join the support:
+	 * the MA-TIRF step sees ct, the TIRF stacks' angles and gains */
+	int only[C0_MAX_STACKS] = { 0 }, tirf[C0_MAX_STACKS], ntirf = 0;
+	struct c0_run_conf ct = *c;
+	if (three_d && c->nangles != n)
+		st = c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, n);
+	if (!st && three_d && c->ngains && c->ngains != n)
+		st = c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, n);
+	const double crit = c0_tirf_critical_deg(&s.matirf.tirf);
+	for (int q = 0; !st && three_d && q < n; q++) {
+		only[q] = c->angles[q] <= crit;
+		if (!only[q])
+			ct.angles[ntirf] = c->angles[q], ct.gains[ntirf] = c->gains[q], tirf[ntirf++] = q;
+	}
+	ct.nangles = ntirf, ct.ngains = c->ngains ? ntirf : 0;
+	if (!st && three_d && ntirf < 2)
+		st = c0_fail(C0_EINVAL, "angles: MA-TIRF needs at least 2 angles above the critical angle %.2f deg (got %d; stacks below it only join the support)",
+			     crit, ntirf);
+	if (!st && three_d)
+		st = c0_run_conf_matirf_check(&ct, &s.matirf, ntirf);
+	if (!st && three_d) {   /* the acquisition options, before any work */
+		struct c0_bleach_conf bc;
+		bleach_conf(c, &bc);
+		st = c0_bleach_check(&bc, n);
+	}
 	if (!st && c->nnoise_variance)
 		st = c0_fail(C0_EINVAL, "noise_variance: not used by the whole method (the support step estimates it)");
 	if (!st)
-		st = support_stacks(c, n, r);
+		st = support_stacks(c, only, n, r);
 	if (!st)
 		st = c0_step_support(r, &s.support, f);
 	if (c0_comm_rank() != 0)
@@ -390,8 +513,12 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 		st = c0_fail(C0_EINVAL, "the support is empty: no emitter found (try a smaller lambda)");
 	if (!st)
 		st = c0_step_intensity(r, &s.intensity, &s.support, f, NULL, c->baseline && three_d);
+	for (int q = 0; q < n; q++)
+		r->bleach_factor[q] = 1;
 	if (!st && three_d)
-		st = volume(r, c, &s);
+		st = c0_step_bleach(r, c, f);
+	if (!st && three_d)
+		st = volume(r, &ct, tirf, &s);
 	if (st)
 		return st;
 	cJSON *p = cJSON_AddObjectToObject(r->rep, "parameters");
@@ -406,6 +533,27 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	for (int k = 0; k < r->nsup; k++)
 		s1[k] = r->sup[k] + 1;
 	c0_report_add_array(p, "support_stacks", s1, r->nsup);
+	int k = 0;
+	for (int q = 0; q < n; q++)
+		if (only[q])
+			s1[k++] = q + 1;
+	if (k) {
+		c0_report_add_array(p, "support_only_stacks", s1, k);
+		cJSON_AddStringToObject(p, "support_only_note",
+					"stacks at or below the critical angle have no evanescent field: their supports join the union, and they are left out of the MA-TIRF fit");
+	}
+	if (s.psf_fitted) {
+		cJSON *o = cJSON_AddObjectToObject(p, "psf_image");
+		cJSON_AddStringToObject(o, "file", c->psf_image);
+		cJSON_AddNumberToObject(o, "pixel_size_nm", s.psf_pixel_nm > 0 ? s.psf_pixel_nm : s.support.pixel_nm);
+		cJSON_AddStringToObject(o, "pixel_size_from", s.psf_pixel_nm > 0 ? "its calibration" : "the stacks (the image has none)");
+		cJSON_AddNumberToObject(o, "fwhm_px", s.psf.fwhm_px);
+		cJSON_AddNumberToObject(o, "centre_x_px", s.psf.cx);
+		cJSON_AddNumberToObject(o, "centre_y_px", s.psf.cy);
+		cJSON_AddNumberToObject(o, "background", s.psf.background);
+		cJSON_AddNumberToObject(o, "rms_residual_relative", s.psf.rel_rms);
+		cJSON_AddStringToObject(o, "method", "least-squares fit of a pixel-integrated Gaussian plus a constant to the mean of its planes");
+	}
 	return C0_OK;
 }
 
@@ -423,9 +571,11 @@ int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct
 	double pixel_nm;
 	for (int i = 0; i < n; i++)
 		names[i] = f[i].name, is_file[i] = stacks[i].path != NULL;
-	st = c0_stacks_pixel(c, f, &pixel_nm);
+	st = c0_stacks_pixel(c, f, n, &pixel_nm);
 	if (!st)
 		st = c0_run_conf_stages(c, pixel_nm, sc);
+	if (!st)   /* every stack's size and frames, before the first one's work */
+		st = c0_stacks_check(&sc->support, f, n);
 	if (!st)
 		st = c0_result_new(command, n, names, is_file, out);
 	if (st)

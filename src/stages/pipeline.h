@@ -7,6 +7,7 @@
 #include "stages/support.h"
 #include "stages/intensity.h"
 #include "stages/matirf.h"
+#include "optics/psffit.h"
 #include "io/frames.h"
 #include "io/outdir.h"
 #include "io/report.h"
@@ -16,6 +17,9 @@ struct c0_stage_confs {
 	struct c0_intensity_conf intensity;
 	struct c0_matirf_conf matirf;
 	double pool_nm;              /* depth pooling window (nm), 0: off */
+	struct c0_psf_fit psf;       /* with psf_fitted: the fit of psf_image */
+	double psf_pixel_nm;         /* its calibration, 0 when it has none */
+	int psf_fitted;
 };
 
 /* The stages' configs from c at camera pixel size pixel_nm (fwhm_nm resolved,
@@ -41,6 +45,7 @@ struct c0_result {
 	struct c0_intensity_result *ires; /* n, after the intensity step */
 	float **corrected;           /* n temporal means minus background, for the baseline */
 	struct c0_matirf_result vol, base;
+	double bleach_factor[C0_MAX_STACKS]; /* each stack's intensity is divided by this before MA-TIRF (1: none) */
 	double vol_pixel_nm, z0_nm, dz_nm;
 	cJSON *timings;
 };
@@ -52,8 +57,11 @@ void c0_result_set_argv(struct c0_result *r, int argc, char **argv);
 /* Opens the stacks as frame sources, all the same size. */
 int c0_stacks_open(const struct c0_stack *s, int n, struct c0_frames *f);
 void c0_stacks_close(struct c0_frames *f, int n);
-/* The camera pixel size: c->pixel_nm, else the first stack's. */
-int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, double *pixel_nm);
+/* The camera pixel size: c->pixel_nm (>= 0, finite), else the stacks'
+ * calibration, which must be the same for all n. */
+int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, int n, double *pixel_nm);
+/* Every stack against the support config (size against the PSF band, frames). */
+int c0_stacks_check(const struct c0_support_conf *sc, const struct c0_frames *f, int n);
 /* The start of every run: the stacks opened into f (close them with
  * c0_stacks_close), the stages' configs, an empty result for command. */
 int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
@@ -72,5 +80,9 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
  * are pooled (stages/depthpool.h). */
 int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
 		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline);
+/* Bleaching across the stacks (stages/bleach.h) from c: the fade estimated
+ * from the frame sums and the fitted backgrounds (or the known factors, or
+ * none) into r->bleach_factor and rep["bleaching"]. */
+int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f);
 /* Writes what r holds into an open output directory. */
 int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out);

@@ -1,15 +1,21 @@
 /* The run configuration: one table gives each parameter's name, type, field
  * and help; setting by name, and turning it into the stages' configs. */
 #include "stages/pipeline.h"
+#include "stages/depthpool.h"
+#include "stages/psfimage.h"
 #include "core/err.h"
 #include "c0_version.h"
 
+#include "optics/psf.h"
+
 #include <errno.h>
+#include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-enum ptype { P_DOUBLE, P_INT, P_FLAG, P_DOUBLES, P_INTS, P_ENUM };
+enum ptype { P_DOUBLE, P_INT, P_FLAG, P_DOUBLES, P_INTS, P_ENUM, P_STRING };
 
 struct param {
 	const char *name;
@@ -27,6 +33,7 @@ struct param {
 static const struct param params[] = {
 	NUM(pixel_nm, P_DOUBLE, "camera pixel size in the sample, nm (0: the first stack's calibration)"),
 	NUM(fwhm_nm, P_DOUBLE, "PSF full width at half maximum, nm (0: 0.51 emission_nm / na)"),
+	NUM(psf_image, P_STRING, "measured PSF image (TIFF): its fitted Gaussian FWHM instead of fwhm_nm (none)"),
 	NUM(emission_nm, P_DOUBLE, "emission wavelength, nm, with na instead of fwhm_nm (0)"),
 	NUM(na, P_DOUBLE, "numerical aperture of the objective, with emission_nm (0)"),
 	NUM(srf, P_INT, "super-resolution factor: fine pixel = pixel_nm / srf (4)"),
@@ -43,6 +50,8 @@ static const struct param params[] = {
 	NUM(beta, P_DOUBLE, "background smoothness weight (20)"),
 	NUM(nu, P_DOUBLE, "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (1; 0: sqrt(T))"),
 	NUM(mu, P_DOUBLE, "fixed intensity smoothness weight (0: discrepancy principle)"),
+	{ "discrepancy", P_ENUM, F(discrepancy), 0, 0, "relative|plain",
+	  "intensity mu: residual = the model's floor (at mu = 1e-3) plus the noise level, or the noise level alone (relative)" },
 	NUM(cg_tol, P_DOUBLE, "CG stopping tolerance, relative residual (1e-3)"),
 	NUM(cg_iterations, P_INT, "CG steps per active-set round (500)"),
 	NUM(graph_radius, P_DOUBLE, "intensity smoothness couples support pixels up to this far apart, fine pixels (2.25)"),
@@ -60,7 +69,13 @@ static const struct param params[] = {
 	NUM(axial_weight, P_DOUBLE, "axial weight of the regulariser relative to lateral (0)"),
 	NUM(matirf_iterations, P_INT, "maximum primal-dual iterations (3000)"),
 	NUM(matirf_tol, P_DOUBLE, "primal-dual stopping tolerance (1e-4)"),
-	NUM(depth_pool_nm, P_DOUBLE, "window over which intensities are summed for each pixel's depth, nm (-1: fwhm_nm, 0: off)"),
+	NUM(depth_pool_nm, P_DOUBLE, "window over which intensities are summed for each pixel's depth, nm (-1: 0.75 fwhm_nm, 0: off)"),
+	{ "bleach", P_ENUM, F(bleach), 0, 0, "estimate|off", "photobleaching across the stacks: estimate and correct the fade, or off (estimate; 3D mode)" },
+	LIST(bleach_factors, P_DOUBLES, "known bleaching factors, each stack's mean population relative to the start (none: estimated)"),
+	{ "acquisition", P_ENUM, F(acquisition), 0, 0, "sequential|interleaved",
+	  "stacks recorded one after another, or frame by frame in turn (sequential)" },
+	LIST(acquisition_order, P_INTS, "1-based stack numbers in the order they were recorded (none: as given)"),
+	LIST(gaps_frames, P_DOUBLES, "illuminated, unrecorded frames between consecutive recorded stacks (none)"),
 	NUM(baseline, P_FLAG, "1: also reconstruct the standard MA-TIRF volume from the background-corrected means (0)"),
 };
 enum { NPARAMS = sizeof params / sizeof *params };
@@ -103,6 +118,15 @@ int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value)
 	if (!value)
 		return c0_fail(C0_EINVAL, "%s: missing value", name);
 	char *f = (char *)c + p->off;
+	if (p->type == P_STRING) {   /* a file, kept by reference: the caller's string must outlive c */
+		FILE *fp = *value ? fopen(value, "rb") : NULL;
+		if (*value && !fp)
+			return c0_fail(C0_EINVAL, "%s %s: %s", name, value, strerror(errno));
+		if (fp)
+			fclose(fp);
+		*(const char **)f = *value ? value : NULL;
+		return C0_OK;
+	}
 	double v;
 	int k = number(value, &v);
 	switch (p->type) {
@@ -141,6 +165,8 @@ int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value)
 			*(int *)((char *)c + p->count) = n;
 		return C0_OK;
 	}
+	case P_STRING:
+		break;
 	case P_ENUM: {
 		const char *s = p->choices;
 		for (int i = 0; s; i++) {
@@ -170,20 +196,38 @@ void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
 int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_stage_confs *s)
 {
 	double fwhm = c->fwhm_nm;
-	if (!(fwhm > 0)) {
-		if (!(c->emission_nm > 0 && c->na > 0))
-			return c0_fail(C0_EINVAL, "fwhm_nm %g: give the PSF FWHM, or the emission wavelength (emission_nm) and numerical aperture (na)", fwhm);
-		fwhm = 0.51 * c->emission_nm / c->na;
+	s->psf_fitted = 0;
+	if (c->psf_image) {
+		if (fwhm > 0 || c->emission_nm > 0)
+			return c0_fail(C0_EINVAL, "psf_image %s: give the PSF width once (psf_image, fwhm_nm or emission_nm with na)", c->psf_image);
+		int st = c0_psf_fit_file(c->psf_image, &s->psf, &s->psf_pixel_nm);
+		if (st)
+			return st;
+		s->psf_fitted = 1;
+		fwhm = s->psf.fwhm_px * (s->psf_pixel_nm > 0 ? s->psf_pixel_nm : pixel_nm);   /* uncalibrated: the camera's pixels */
 	}
+	if (fwhm == 0) {
+		if (!c->emission_nm && !c->na)
+			return c0_fail(C0_EINVAL, "fwhm_nm %g: give the PSF FWHM, or the emission wavelength (emission_nm) and numerical aperture (na)", fwhm);
+		int st = c0_fwhm_from_na(c->emission_nm, c->na, c->n_glass, &fwhm);
+		if (st)
+			return st;
+	}
+	if (!(c->depth_pool_nm >= -1 && c->depth_pool_nm <= 100 * fwhm))
+		return c0_fail(C0_EINVAL, "depth_pool_nm %g: must be a window in nm (0: off, -1: the default, %g FWHM)", c->depth_pool_nm, C0_DEPTH_POOL_FWHM);
 	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
 					       .fista = { c->iterations, c->tol }, .cel0_outer = c->reweightings, .tile = c->tile };
 	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
-						   .graph_radius = c->graph_radius };
+						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE };
 	c0_run_conf_matirf(c, &s->matirf);
-	s->pool_nm = c->depth_pool_nm < 0 ? fwhm : c->depth_pool_nm;
+	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
+	if ((unsigned)c->discrepancy > C0_DISCREPANCY_PLAIN || (unsigned)c->bleach > C0_BLEACHING_OFF ||
+	    (unsigned)c->acquisition > C0_ACQ_INTERLEAVED)
+		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,
+			       (int)c->bleach, (int)c->acquisition);
 	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN)
 		return c0_fail(C0_EINVAL, "penalty %d / background %d / reg %d: out of range", (int)c->penalty,
 			       (int)c->background, (int)c->reg);
@@ -192,7 +236,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	    c->nnoise_variance > C0_MAX_STACKS)
 		return c0_fail(C0_EINVAL, "nangles %d / ngains %d / nsupport_stacks %d / nnoise_variance %d: must be 0..%d",
 			       c->nangles, c->ngains, c->nsupport_stacks, c->nnoise_variance, C0_MAX_STACKS);
-	return c0_intensity_check(&s->intensity);
+	int st = c0_psf_check(pixel_nm, fwhm, c->srf);
+	return st ? st : c0_intensity_check(&s->intensity);
 }
 
 int c0_run_conf_matirf_check(const struct c0_run_conf *c, const struct c0_matirf_conf *m, int nimages)
@@ -202,7 +247,7 @@ int c0_run_conf_matirf_check(const struct c0_run_conf *c, const struct c0_matirf
 	if (c->ngains && c->ngains != nimages)
 		return c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, nimages);
 	for (int q = 0; q < c->ngains; q++)
-		if (!(c->gains[q] > 0))
+		if (!(c->gains[q] > 0 && isfinite(c->gains[q])))
 			return c0_fail(C0_EINVAL, "gains: gain %d is %g, must be > 0", q + 1, c->gains[q]);
 	return c0_matirf_check(m, c->nangles, c->angles);
 }

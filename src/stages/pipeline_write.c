@@ -60,7 +60,8 @@ static int write_volume(const struct c0_result *r, const struct c0_matirf_result
 {
 	char name[128];
 	struct c0_tiff_wopts o = { .width = v->nx, .height = v->ny, .slices = v->nz, .dtype = C0_F32,
-				   .pixel_size_nm = pixel_nm, .z_spacing_nm = r->dz_nm, .software = "col0rme" };
+				   .pixel_size_nm = pixel_nm, .z_spacing_nm = r->dz_nm, .z_origin_nm = r->z0_nm + r->dz_nm / 2,
+				   .software = "col0rme" };
 	snprintf(name, sizeof name, "%svolume.tif", prefix);
 	int st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, v->f);
 	if (st)
@@ -103,7 +104,5 @@ int c0_result_write(const struct c0_result *r, const char *outdir, int force)
 		st = c0_outdir_open(&out, outdir, force);
 	if (st)
 		return st;
-	if ((st = c0_result_write_to(r, &out)))
-		c0_outdir_rollback(&out);
-	return st;
+	return c0_outdir_finish(&out, c0_result_write_to(r, &out));
 }

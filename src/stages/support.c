@@ -37,8 +37,12 @@ int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t fram
 		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
 		return c0_fail(C0_EINVAL, "lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
-	if (c->fista.maxit < 1 || !(c->fista.tol > 0))
+	if (c->fista.maxit < 1 || !(c->fista.tol > 0 && isfinite(c->fista.tol)))
 		return c0_fail(C0_EINVAL, "iterations %d / tol %g: must be positive", c->fista.maxit, c->fista.tol);
+	if (c->penalty == C0_PENALTY_CEL0 && c->cel0_outer < 1)
+		return c0_fail(C0_EINVAL, "reweightings %d: must be at least 1", c->cel0_outer);
+	if (c->lag < 0 || c->lag > 1000)
+		return c0_fail(C0_EINVAL, "lag %d: must be 0 (from the PSF) to 1000 pixels", c->lag);
 	int d = c0_support_lag(c);
 	if (c->tile && c->tile < 2 * d + 1)
 		return c0_fail(C0_EINVAL, "tile %d: smaller than the PSF band (%d pixels for lag %d)", c->tile, 2 * d + 1, d);
@@ -545,7 +549,10 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		st = C0_ENOMEM;
 	if (!(st = c0_comm_status(st))) {
 		c0_comm_max(&norm, 1);
-		if (!(norm > 0))
+		if (!isfinite(norm))
+			st = c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
+				     in->name);
+		else if (!(norm > 0))
 			st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
 	}
 	/* lambda relative to the image's lambda_max: the largest of the tiles' */

@@ -141,7 +141,7 @@ def test_bad_inputs(tmp):
     missing = os.path.join(tmp, "missing.tif")
     check(refused(cli(*base, "--angles", "62,66", s1, missing), "missing.tif"), "missing stack refused")
     check(refused(cli(*base, "--angles", "62,66,70", s1, s2), "--angles", "3 angles for 2 stacks"), "angle count mismatch")
-    check(refused(cli(*base, "--angles", "50,66", s1, s2), "--angles", "critical"), "angle below the critical angle")
+    check(refused(cli(*base, "--angles", "50,66", s1, s2), "--angles", "critical"), "one angle above the critical angle is not MA-TIRF")
     txt = os.path.join(tmp, "notes.tif")
     with open(txt, "w") as f:
         f.write("not a TIFF\n")

@@ -83,7 +83,7 @@ with tempfile.TemporaryDirectory() as tmp:
     check(np.allclose(depth[ww > 0], (wz / np.maximum(ww, 1e-300))[ww > 0], atol=0.01), "depth map = weighted mean z")
 
     # bad parameters: one error line naming the parameter, non-zero exit, nothing written
-    for args, needle in [(["--tau-on", "-5"], "--tau-on"), (["--angles", "50,62"], "critical"),
+    for args, needle in [(["--tau-on", "-5"], "--tau-on"), (["--angles", "95,62"], "incidence angle"),
                          (["--filaments", "0"], "empty structure"), (["--pixel-size", "0"], "--pixel-size"),
                          (["--frames", "abc"], "--frames")]:
         d = os.path.join(tmp, "bad")

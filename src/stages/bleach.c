@@ -1,0 +1,149 @@
+#include "stages/bleach.h"
+#include "io/frames.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+int c0_bleach_check(const struct c0_bleach_conf *c, int n)
+{
+	if (n > C0_BLEACH_MAX)
+		return c0_fail(C0_EINVAL, "bleach: at most %d stacks", C0_BLEACH_MAX);
+	if (c->norder) {
+		if (c->norder != n)
+			return c0_fail(C0_EINVAL, "acquisition_order: %d stack numbers for %d stacks (give each stack once, in recording order)",
+				       c->norder, n);
+		int seen[C0_BLEACH_MAX] = { 0 };
+		for (int i = 0; i < n; i++) {
+			if (c->order[i] < 0 || c->order[i] >= n)
+				return c0_fail(C0_EINVAL, "acquisition_order: %d is not a stack number (1..%d)", c->order[i] + 1, n);
+			if (seen[c->order[i]]++)
+				return c0_fail(C0_EINVAL, "acquisition_order: stack %d appears twice", c->order[i] + 1);
+		}
+	}
+	if (c->ngaps && c->interleaved)
+		return c0_fail(C0_EINVAL, "gaps_frames: interleaved stacks have no gaps between them");
+	if (c->ngaps > 1 && c->ngaps != n - 1)
+		return c0_fail(C0_EINVAL, "gaps_frames: %d gaps for %d stacks (give one, or one between each pair of consecutive stacks: %d)",
+			       c->ngaps, n, n - 1);
+	for (int i = 0; i < c->ngaps; i++)
+		if (!(c->gap_frames[i] >= 0))
+			return c0_fail(C0_EINVAL, "gaps_frames: gap %d is negative or not a number", i + 1);
+	if (c->mode == C0_BLEACH_KNOWN) {
+		if (c->nfactors != n)
+			return c0_fail(C0_EINVAL, "bleach_factors: %d factors for %d stacks", c->nfactors, n);
+		for (int i = 0; i < n; i++)
+			if (!(c->factor[i] > 0))
+				return c0_fail(C0_EINVAL, "bleach_factors: factor %d is %g, must be > 0", i + 1, c->factor[i]);
+	}
+	return C0_OK;
+}
+
+int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res)
+{
+	/* per stack: least-squares slope c_q of S_q(t), k_q = -c_q / m_q with
+	 * variance s_q^2 / (m_q^2 sum (t - tbar)^2), s_q^2 the residual variance */
+	double wsum = 0, wk = 0;
+	for (int q = 0; q < n; q++) {
+		const double Tq = (double)T[q], tbar = (Tq - 1) / 2;
+		double mean = 0, stt = 0, sty = 0;
+		for (int64_t t = 0; t < T[q]; t++)
+			mean += S[q][t];
+		mean /= Tq;
+		for (int64_t t = 0; t < T[q]; t++)
+			stt += (t - tbar) * (t - tbar), sty += (t - tbar) * (S[q][t] - mean);
+		const double slope = stt > 0 ? sty / stt : 0, m = mean - B[q];
+		double rss = 0;
+		for (int64_t t = 0; t < T[q]; t++) {
+			double r = S[q][t] - mean - slope * (t - tbar);
+			rss += r * r;
+		}
+		res->signal[q] = m;
+		res->k_stack[q] = NAN;
+		if (!(m > 0) || T[q] < 3 || !(stt > 0))
+			continue;
+		res->k_stack[q] = -slope / m;
+		const double var = rss / (Tq - 2) / (m * m * stt);
+		if (var > 0) {
+			wsum += 1 / var;
+			wk += res->k_stack[q] / var;
+		}
+	}
+	if (!(wsum > 0))
+		return c0_fail(C0_EINVAL, "bleaching: no stack has signal above its background to measure the fade from (set bleach off, or give bleach_factors)");
+	res->k = wk / wsum;
+	res->k_sd = 1 / sqrt(wsum);
+	return C0_OK;
+}
+
+void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res)
+{
+	double u = 0;
+	for (int i = 0; i < n; i++) {
+		const int q = c->norder ? c->order[i] : i;
+		if (c->interleaved)
+			res->start[q] = (double)i / n;
+		else {
+			res->start[q] = u;
+			u += (double)T[q] + (i < n - 1 && c->ngaps ? c->gap_frames[c->ngaps == 1 ? 0 : i] : 0);
+		}
+		/* mean of e^{-k (start + t)}, t = 0..T-1, in closed form */
+		const double k = res->k, Tq = (double)T[q];
+		res->factor[q] = k != 0 ? exp(-k * res->start[q]) * expm1(-k * Tq) / expm1(-k) / Tq : 1;
+	}
+}
+
+static int frame_sums(struct c0_frames *f, double **S, int64_t *T)
+{
+	const size_t np = (size_t)f->width * f->height;
+	float *v = c0_alloc(np, sizeof *v);
+	int st = C0_OK;
+	*T = f->count;
+	*S = c0_alloc((size_t)f->count, sizeof **S);
+	if (!v || !*S)
+		st = C0_ENOMEM;
+	for (int64_t t = 0; !st && t < f->count; t++) {
+		if ((st = c0_frames_read(f, t, v)))
+			break;
+		double s = 0;
+		for (size_t i = 0; i < np; i++)
+			s += v[i];
+		(*S)[t] = s;
+	}
+	free(v);
+	if (st)
+		free(*S), *S = NULL;
+	return st;
+}
+
+int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res)
+{
+	memset(res, 0, sizeof *res);
+	int st = c0_bleach_check(c, n);
+	if (st)
+		return st;
+	if (c->mode != C0_BLEACH_ESTIMATE) {
+		for (int q = 0; q < n; q++)
+			res->factor[q] = c->mode == C0_BLEACH_KNOWN ? c->factor[q] : 1, res->k_stack[q] = NAN;
+		return C0_OK;
+	}
+	double *S[C0_BLEACH_MAX] = { 0 };
+	int64_t T[C0_BLEACH_MAX];
+	int fail = 0;
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
+	for (int q = 0; q < n; q++)
+		if (frame_sums(&f[q], &S[q], &T[q]))
+#pragma omp atomic write
+			fail = 1;
+	if (fail)   /* the per-thread messages are lost: say which step failed */
+		st = c0_fail(C0_EIO, "bleach: could not read the frames of the stacks");
+	if (!st)
+		st = c0_bleach_fit(n, (const double *const *)S, T, B, res);
+	if (!st)
+		c0_bleach_factors(c, n, T, res);
+	for (int q = 0; q < n; q++)
+		free(S[q]);
+	return st;
+}

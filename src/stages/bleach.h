@@ -1,0 +1,55 @@
+/* Photobleaching across a multi-angle acquisition (DESIGN.md section 8).
+ *
+ * The stacks are recorded on the same fluorophores, so the population fades
+ * over the whole acquisition and a later angle looks dimmer, which the
+ * MA-TIRF model reads as depth. Model: the signal part of every pixel decays
+ * as e^{-k u}, u the frame's time on the acquisition's clock (in frames of
+ * the stacks). k is visible inside each stack: its frame sums S_q(t) fall
+ * with slope -k m_q, m_q the mean signal part (frame sum minus the
+ * background's sum from the intensity step). Each stack gives a slope; k is
+ * their inverse-variance weighted fit, its uncertainty from the fit
+ * residuals. Stack q's intensity is then divided by its factor
+ *   F_q = mean over its frames t of e^{-k u_q(t)}   (time 0 reference)
+ * with u_q(t) = start_q + t (stacks one after another, starts from the
+ * acquisition order and the gaps) or t + pos_q / n (interleaved: frame t
+ * of every stack recorded in turn). */
+#pragma once
+#include <stdint.h>
+
+#define C0_BLEACH_MAX 64
+
+enum c0_bleach_mode { C0_BLEACH_ESTIMATE, C0_BLEACH_KNOWN, C0_BLEACH_OFF };
+
+struct c0_bleach_conf {
+	enum c0_bleach_mode mode;     /* estimate */
+	int interleaved;              /* 0: stacks recorded one after another */
+	int order[C0_BLEACH_MAX];     /* 0-based stack indices in recording order */
+	int norder;                   /* 0: the stacks' own order */
+	double gap_frames[C0_BLEACH_MAX]; /* illuminated frames between consecutive recorded stacks */
+	int ngaps;                    /* 0: none; 1: the same everywhere; n - 1 */
+	double factor[C0_BLEACH_MAX]; /* known F_q (mode known) */
+	int nfactors;
+};
+
+struct c0_bleach_result {
+	double k, k_sd;               /* per frame, and its standard error */
+	double k_stack[C0_BLEACH_MAX];/* each stack's own estimate (NAN without signal) */
+	double factor[C0_BLEACH_MAX]; /* F_q */
+	double start[C0_BLEACH_MAX];  /* first frame's time on the acquisition clock (frames) */
+	double signal[C0_BLEACH_MAX]; /* m_q, mean signal part of a frame sum */
+};
+
+/* The order is a permutation of the n stacks, the gap count 0, 1 or n - 1
+ * and the gaps >= 0, the factors n positive values; errors name the
+ * parameter (acquisition_order, gaps_frames, bleach_factors). */
+int c0_bleach_check(const struct c0_bleach_conf *c, int n);
+/* k from the frame sums S[q] (T[q] values each) and the background's sum
+ * per frame B[q] (n stacks). */
+int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res);
+/* res->start and res->factor for rate k (res->k) and the frame counts. */
+void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
+/* The whole step for the stacks f: one pass each for its frame sums, then
+ * the fit (mode estimate) and the factors; mode known copies the factors,
+ * mode off sets them to 1. */
+struct c0_frames;
+int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res);

@@ -1,0 +1,205 @@
+"""Depth on realistic acquisitions (issue 12): photobleaching accumulated over
+the stacks in recording order, filament pairs 120 nm apart with the partner
+100 nm deeper; run's bleaching estimate and correction; a support-only stack
+below the critical angle; refusals of acquisition options that do not match
+the stacks.
+
+usage: test_realism.py COL0RME full|quick
+(quick: small cases and no accuracy bars, for the sanitizer build)
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+import tifffile
+
+from checks import check, done
+
+CLI, MODE = sys.argv[1], sys.argv[2]
+
+
+def cli(*args):
+    return subprocess.run([CLI, *args], capture_output=True, text=True)
+
+
+def refused(p, *needles):
+    lines = p.stderr.strip().splitlines()
+    return p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
+
+
+def simulate(tmp, name, *args):
+    data = os.path.join(tmp, name)
+    p = cli("simulate", "-o", data, *args)
+    check(p.returncode == 0, "simulate %s: %s" % (name, p.stderr))
+    sim = json.load(open(os.path.join(data, "sim.json")))
+    stacks = sorted(os.path.join(data, f) for f in os.listdir(data) if f.startswith("stack_q"))
+    return data, sim, stacks
+
+
+def run(tmp, name, data, sim, stacks, *args):
+    out = os.path.join(tmp, name)
+    ang = ",".join("%.6g" % a for a in sim["parameters"]["angles_deg"])
+    p = cli("run", "--fwhm", "229", "--angles", ang, "-o", out, *args, *stacks)
+    check(p.returncode == 0, "run %s: %s" % (name, p.stderr))
+    if p.returncode:
+        return None, None
+    e = cli("eval", "--run", out, "--truth", data)
+    check(e.returncode == 0, "eval %s: %s" % (name, e.stderr))
+    return json.load(open(os.path.join(out, "report.json"))), json.loads(e.stdout)["depth"]
+
+
+def test_depth(tmp):
+    """the done-when of issue 12 on two seeds; the same data without the correction fails"""
+    for seed in (1, 3):
+        data, sim, stacks = simulate(tmp, "pairs%d" % seed, "--seed", str(seed), "--pairs")
+        rep, d = run(tmp, "run%d" % seed, data, sim, stacks)
+        if rep is None:
+            continue
+        med, bias = d["median_abs_error_nm"], d["median_signed_error_nm"]
+        k, kt = rep["bleaching"]["rate_per_frame"], sim["estimates"]["bleaching"]["rate_per_frame"]
+        print("seed %d: median depth error %.1f nm, median signed %+.1f nm; bleaching rate %.3g/frame (true %.3g, sd %.2g)"
+              % (seed, med, bias, k, kt, rep["bleaching"]["rate_sd_per_frame"]), file=sys.stderr)
+        check(med <= 15, "seed %d: median depth error %.1f <= 15 nm" % (seed, med))
+        check(abs(bias) <= 5, "seed %d: |median signed error| %.1f <= 5 nm" % (seed, bias))
+        check(abs(k / kt - 1) <= 0.15, "seed %d: bleaching rate %.3g within 15%% of the simulated %.3g" % (seed, k, kt))
+        fade = sim["estimates"]["bleaching"]["fade_last_vs_first"]
+        check(0.14 <= fade <= 0.21, "seed %d: the simulated fade by the last stack is the paper's (%.3f)" % (seed, fade))
+        f, ft = rep["bleaching"]["factors"], sim["estimates"]["bleaching"]["stack_factors"]
+        check(all(abs(a / b - 1) < 0.02 for a, b in zip(f, ft)), "seed %d: stack factors %s match the simulated %s" % (seed, f, ft))
+        dis = [i["discrepancy"] for i in rep["intensity"]]
+        check(all(x == "met" for x in dis) and rep["intensity_parameters"]["mu_rule"] == "relative discrepancy",
+              "seed %d: the intensity's mu rule is met on every stack (%s)" % (seed, dis))
+        if seed == 1:
+            rep0, d0 = run(tmp, "off%d" % seed, data, sim, stacks, "--bleach", "off")
+            if rep0 is not None:
+                b0 = d0["median_signed_error_nm"]
+                print("seed %d without the bleaching correction: median %.1f nm, signed %+.1f nm"
+                      % (seed, d0["median_abs_error_nm"], b0), file=sys.stderr)
+                check(b0 > 8, "seed %d: without the correction the fade reads as depth (signed %+.1f > 8 nm)" % (seed, b0))
+
+
+def test_support_only(tmp):
+    """an epi stack below the critical angle joins the support and stays out of the volume"""
+    ang = [55, 61.48, 63.37, 65.39, 67.58, 70]
+    size = ["--width", "24", "--height", "24", "--frames", "150"] if MODE == "quick" else \
+        ["--width", "40", "--height", "40", "--frames", "300"]
+    data, sim, stacks = simulate(tmp, "epi", "--angles", ",".join(map(str, ang)), *size)
+    check(len(stacks) == 6, "six stacks")
+    check("excitation" in sim["estimates"]["angles"][0], "the simulator marks the 55 degree stack as epi")
+    rep, d = run(tmp, "epi_run", data, sim, stacks)
+    if rep is None:
+        return
+    out = os.path.join(tmp, "epi_run")
+    p = rep["parameters"]
+    check(p["support_stacks"] == [1, 2], "support from the epi stack and the smallest TIRF angle (%s)" % p["support_stacks"])
+    check(p.get("support_only_stacks") == [1] and "critical" in p.get("support_only_note", ""), "report names the support-only stack")
+    s = tifffile.imread(os.path.join(out, "support.tif"))
+    with tifffile.TiffFile(os.path.join(out, "rx.tif")) as t:   # page by page: the planes are not contiguous
+        rx = np.stack([pg.asarray() for pg in t.pages])
+    check(rx.shape[0] == 2 and np.array_equal(s > 0, (rx > 0).any(axis=0)), "support.tif is the union of the two supports")
+    check(((rx[0] > 0) & ~(rx[1] > 0)).any(), "the epi stack adds support pixels")
+    check(np.allclose(rep["matirf"]["angles_deg"], ang[1:]), "the volume uses only the five TIRF angles")
+    check(len(rep["bleaching"]["factors"]) == 6, "the epi stack is part of the acquisition's bleaching")
+    v = tifffile.imread(os.path.join(out, "volume.tif"))
+    check(v.shape[1:] == s.shape and v.max() > 0, "volume written")
+
+
+def test_bad_inputs(tmp):
+    data, sim, stacks = simulate(tmp, "bad", "--width", "16", "--height", "16", "--frames", "30", "--angles", "62,66,68")
+    out = os.path.join(tmp, "bad_out")
+    base = ["run", "--fwhm", "229", "--angles", "62,66,68", "-o", out]
+    check(refused(cli(*base, "--acquisition-order", "1,2", *stacks), "--acquisition-order", "2 stack numbers for 3"), "order too short")
+    check(refused(cli(*base, "--acquisition-order", "1,3,3", *stacks), "--acquisition-order", "twice"), "order repeats a stack")
+    check(refused(cli(*base, "--acquisition-order", "1,2,4", *stacks), "--acquisition-order", "4"), "order names no stack")
+    check(refused(cli(*base, "--gaps", "10,20,30", *stacks), "--gaps", "3 gaps for 3 stacks"), "gap count")
+    check(refused(cli(*base, "--gaps", "10,-5", *stacks), "--gaps", "negative"), "negative gap")
+    check(refused(cli(*base, "--acquisition", "interleaved", "--gaps", "10", *stacks), "--gaps", "interleaved"), "gaps when interleaved")
+    check(refused(cli(*base, "--acquisition", "random", *stacks), "--acquisition", "random"), "unknown acquisition")
+    check(refused(cli(*base, "--bleach", "0.9,x", *stacks), "--bleach"), "bad factors")
+    check(refused(cli(*base, "--bleach-factors", "1,0.9", *stacks), "--bleach-factors", "2 factors for 3"), "factor count")
+    check(refused(cli(*base, "--bleach-factors", "1,0.9,0", *stacks), "--bleach-factors", "factor 3"), "zero factor")
+    check(not os.path.exists(out), "nothing written for refused runs")
+    check(refused(cli("simulate", "-o", out, "--gaps", "1,2,3", "--angles", "62,66,68"), "--gaps"), "simulate: gap count")
+    check(refused(cli("simulate", "-o", out, "--bleach-order", "shuffled"), "--bleach-order"), "simulate: unknown order")
+    check(not os.path.exists(out), "nothing written by refused simulations")
+
+
+def test_orders(tmp):
+    """the simulator's orders: restart leaves no fade across stacks, interleaved
+    spreads it evenly, gaps add fade; run's estimate follows a given order"""
+    small = ["--width", "32", "--height", "32", "--frames", "200", "--tau-bleach", "5"] if MODE == "full" else \
+        ["--width", "20", "--height", "20", "--frames", "100", "--tau-bleach", "2"]
+    default = ["--width", "48", "--height", "48", "--frames", "300"]
+    fades = {}
+    for order in ("sequential", "interleaved", "restart"):
+        _, sim, _ = simulate(tmp, "o_" + order, "--bleach-order", order, *small)
+        fades[order] = sim["estimates"]["bleaching"]["fade_last_vs_first"]
+    _, sim, _ = simulate(tmp, "o_gaps", "--gaps", "2", *small)
+    fades["gaps"] = sim["estimates"]["bleaching"]["fade_last_vs_first"]
+    print("fade by the last stack: %s" % fades, file=sys.stderr)
+    check(fades["sequential"] > 0.3 and abs(fades["restart"]) < 0.05 and abs(fades["interleaved"]) < 0.05,
+          "fade: sequential %.3f, restart and interleaved near 0" % fades["sequential"])
+    check(fades["gaps"] > fades["sequential"] + 0.1, "illuminated gaps add fade (%.3f > %.3f)" % (fades["gaps"], fades["sequential"]))
+    if MODE != "full":
+        return
+    # stacks given in reverse: the first file was recorded last
+    data, sim, stacks = simulate(tmp, "o_rev", *default)
+    ang = sim["parameters"]["angles_deg"]
+    out = os.path.join(tmp, "o_rev_run")
+    p = cli("run", "--fwhm", "229", "--angles", ",".join("%.6g" % a for a in ang[::-1]), "--acquisition-order", "5,4,3,2,1",
+            "-o", out, *stacks[::-1])
+    check(p.returncode == 0, "run with an acquisition order: %s" % p.stderr)
+    if p.returncode == 0:
+        rep = json.load(open(os.path.join(out, "report.json")))["bleaching"]
+        f, ft = rep["factors"], sim["estimates"]["bleaching"]["stack_factors"][::-1]
+        check(all(abs(a / b - 1) < 0.03 for a, b in zip(f, ft)) and f == sorted(f), "factors follow the given order: %s vs %s" % (f, ft))
+
+
+def psf_image(path, fwhm_nm, px_nm, cx, cy, size=21, planes=3, seed=0):
+    """pixel-integrated Gaussian bead on a background, Poisson noise, ImageJ-calibrated"""
+    from math import erf, sqrt
+    s = fwhm_nm / px_nm / (2 * sqrt(2 * np.log(2)))
+    e = np.vectorize(lambda a: erf(a / (sqrt(2) * s)))
+    edges = np.arange(size + 1, dtype=float)
+    gx, gy = np.diff(e(edges - cx)) / 2, np.diff(e(edges - cy)) / 2
+    img = 100 + 5000 * np.outer(gy, gx)
+    rng = np.random.default_rng(seed)
+    stack = rng.poisson(img, (planes, size, size)).astype(np.uint16)
+    tifffile.imwrite(path, stack, imagej=True, resolution=(1000 / px_nm, 1000 / px_nm), metadata={"unit": "um"})
+
+
+def test_psf(tmp):
+    """the PSF width from a measured bead image (the paper's 292 nm at 106 nm pixels)"""
+    data, sim, stacks = simulate(tmp, "psfdata", "--width", "24", "--height", "24", "--frames", "100", "--angles", "62,66")
+    bead = os.path.join(tmp, "bead.tif")
+    psf_image(bead, 292, 106, 10.3, 9.8)
+    out = os.path.join(tmp, "psf_run")
+    p = cli("run", "--psf", bead, "--angles", "62,66", "-o", out, *stacks)
+    check(p.returncode == 0, "run --psf: %s" % p.stderr)
+    if p.returncode == 0:
+        rep = json.load(open(os.path.join(out, "report.json")))["parameters"]
+        f = rep["fwhm_nm"]
+        print("PSF image of FWHM 292 nm at 106 nm: fitted %.1f nm" % f, file=sys.stderr)
+        check(abs(f - 292) <= 0.03 * 292, "fitted FWHM %.1f within 3%% of 292 nm" % f)
+        check(abs(rep["psf_image"]["pixel_size_nm"] - 106) < 1e-3 and abs(rep["psf_image"]["centre_x_px"] - 10.3) < 0.1,
+              "the fit reports its pixel size and centre (%s)" % rep["psf_image"])
+    out2 = os.path.join(tmp, "psf_bad")
+    check(refused(cli("run", "--psf", bead, "--fwhm", "229", "--angles", "62,66", "-o", out2, *stacks), "--psf"),
+          "--psf with --fwhm refused")
+    flat = os.path.join(tmp, "flat.tif")
+    tifffile.imwrite(flat, np.full((16, 16), 7, np.uint16))
+    check(refused(cli("run", "--psf", flat, "--angles", "62,66", "-o", out2, *stacks), "--psf", "flat.tif"), "a flat PSF image refused")
+    check(not os.path.exists(out2), "nothing written for refused PSF images")
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    test_psf(tmp)
+    test_bad_inputs(tmp)
+    test_orders(tmp)
+    test_support_only(tmp)
+    if MODE == "full":
+        test_depth(tmp)
+done()

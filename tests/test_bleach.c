@@ -1,0 +1,80 @@
+/* Bleaching fit and factors (stages/bleach.h) on synthetic frame sums, the
+ * closed-form factors against the explicit mean, and bad options. */
+#include "check.h"
+#include "stages/bleach.h"
+#include "core/err.h"
+#include "core/rng.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static void test_fit(void)
+{
+	/* 4 stacks of different lengths, recorded 2, 0, 3, 1 with gaps */
+	const int n = 4;
+	const int64_t T[4] = { 400, 500, 300, 450 };
+	struct c0_bleach_conf c = { .norder = 4, .order = { 2, 0, 3, 1 }, .ngaps = 3, .gap_frames = { 50, 0, 120 } };
+	CHECK(c0_bleach_check(&c, n) == C0_OK);
+	const double k = 2e-4, A[4] = { 5e4, 2e4, 8e4, 1e4 }, B[4] = { 3e5, 2.5e5, 2e5, 1e5 };
+	/* starts from the order and gaps: 2 at 0, 0 at 300+50, 3 at 350+400, 1 at 750+450+120 */
+	const double start[4] = { 350, 1320, 0, 750 };
+	struct c0_rng r;
+	c0_rng_init(&r, 5, 0);
+	double *S[4];
+	for (int q = 0; q < n; q++) {
+		S[q] = malloc(sizeof(double) * (size_t)T[q]);
+		for (int t = 0; t < T[q]; t++)
+			S[q][t] = B[q] + A[q] * exp(-k * (start[q] + t)) * (1 + 0.01 * c0_rng_normal(&r));
+	}
+	struct c0_bleach_result res;
+	memset(&res, 0, sizeof res);
+	CHECK(c0_bleach_fit(n, (const double *const *)S, T, B, &res) == C0_OK);
+	CHECK_REL(res.k, k, 0.03);
+	CHECK(res.k_sd > 0 && fabs(res.k - k) < 4 * res.k_sd);
+	c0_bleach_factors(&c, n, T, &res);
+	for (int q = 0; q < n; q++) {
+		CHECK_CLOSE(res.start[q], start[q], 1e-9);
+		double f = 0;   /* the slow obvious mean */
+		for (int t = 0; t < T[q]; t++)
+			f += exp(-res.k * (start[q] + t)) / (double)T[q];
+		CHECK_REL(res.factor[q], f, 1e-9);
+	}
+	/* interleaved: every stack spans the same time, factors nearly equal */
+	struct c0_bleach_conf ci = { .interleaved = 1 };
+	c0_bleach_factors(&ci, n, T, &res);
+	CHECK_CLOSE(res.start[3], 0.75, 1e-12);
+	for (int q = 0; q < n; q++) {
+		double f = 0;
+		for (int t = 0; t < T[q]; t++)
+			f += exp(-res.k * (t + q / 4.0)) / (double)T[q];
+		CHECK_REL(res.factor[q], f, 1e-9);
+	}
+	/* no signal above the background: refused, not a division by zero */
+	double Bbig[4] = { 1e9, 1e9, 1e9, 1e9 };
+	CHECK(c0_bleach_fit(n, (const double *const *)S, T, Bbig, &res) == C0_EINVAL);
+	for (int q = 0; q < n; q++)
+		free(S[q]);
+}
+
+static void test_check(void)
+{
+	struct c0_bleach_conf c = { .norder = 3, .order = { 0, 1, 1 } };
+	CHECK(c0_bleach_check(&c, 3) == C0_EINVAL && strstr(c0_errmsg(), "twice"));
+	c.order[2] = 3;
+	CHECK(c0_bleach_check(&c, 3) == C0_EINVAL && strstr(c0_errmsg(), "not a stack number"));
+	c.norder = 2;
+	CHECK(c0_bleach_check(&c, 3) == C0_EINVAL && strstr(c0_errmsg(), "2 stack numbers for 3"));
+	struct c0_bleach_conf g = { .ngaps = 3, .gap_frames = { 1, 2, 3 } };
+	CHECK(c0_bleach_check(&g, 3) == C0_EINVAL && strstr(c0_errmsg(), "gaps_frames"));
+	g.ngaps = 2, g.gap_frames[1] = -1;
+	CHECK(c0_bleach_check(&g, 3) == C0_EINVAL && strstr(c0_errmsg(), "negative"));
+	struct c0_bleach_conf f = { .mode = C0_BLEACH_KNOWN, .nfactors = 2, .factor = { 1, 0 } };
+	CHECK(c0_bleach_check(&f, 2) == C0_EINVAL && strstr(c0_errmsg(), "factor 2"));
+}
+
+int main(void)
+{
+	RUN(test_fit);
+	RUN(test_check);
+	return CHECK_DONE();
+}
