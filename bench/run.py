@@ -1,7 +1,8 @@
 """Benchmarks: prints one table (size, time, throughput, peak memory, ratio to
 a baseline measured in the same run). Run from the repository root after
 scripts/setup.sh:  /usr/bin/python3 bench/run.py [--quick]
-(--quick skips the 256x256 cases: support, intensity, dense MA-TIRF;
+(--quick skips the 256x256 cases: support, intensity, dense MA-TIRF, and the
+350x350 MA-TIRF rows; --matirf350 runs only those;
 --large adds whole camera frames: support on 1024x1024x500 and 2048x2048x200,
 run on 5 angles of 512x512x500, each against the single-tile path measured in
 the same run where it fits, thread scaling and a run next to a busy process;
@@ -23,15 +24,18 @@ QUICK = "--quick" in sys.argv
 LARGE_ONLY = "--large-only" in sys.argv
 LARGE = "--large" in sys.argv or LARGE_ONLY
 rows = []
+LAST_CPU = [0.0]   # user + system CPU seconds of the last timed() child
 
 
-def timed(cmd):
+def timed(cmd, env=None):
     """(seconds, peak RSS MiB, stdout) of one child process (its own rusage via wait4)."""
     t0 = time.perf_counter()
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=dict(os.environ, **env) if env else None)
     out, err = p.stdout.read(), p.stderr.read()
     _, status, ru = os.wait4(p.pid, 0)
     dt = time.perf_counter() - t0
+    LAST_CPU[0] = ru.ru_utime + ru.ru_stime
     p.returncode = os.waitstatus_to_exitcode(status)
     if p.returncode:
         sys.exit("bench: %s failed:\n%s" % (" ".join(cmd), err))
@@ -51,19 +55,61 @@ def row(what, size, secs, thr, mem, ratio=""):
     rows.append((what, size, "%.3g" % secs, thr, "%.0f" % mem, ratio))
 
 
+def matirf350(tmp):
+    # MA-TIRF at the size of the public example: a 350x350 dense phantom, the
+    # example's 13 angles (equally spaced in NA 1.3478..1.4244), bins 0-300 nm.
+    # The exact solver (default) against the diagonal-step one it replaced,
+    # interleaved twice (the faster of each pair); Hessian-Schatten; 1 vs 2 threads.
+    import math
+    import numpy as np
+    import tifffile
+    ang13 = ",".join("%.4f" % math.degrees(math.asin((1.3478 + i * (1.4244 - 1.3478) / 12) / 1.518)) for i in range(13))
+    ph = os.path.join(tmp, "phantom350")
+    os.mkdir(ph)
+    subprocess.run([os.path.join(BUILD, "bench", "matirf_phantom"), ph, "350", "0.03"] + ang13.split(","), check=True)
+    imgs = sorted(os.path.join(ph, f) for f in os.listdir(ph) if f.startswith("img_"))
+    truth = tifffile.imread(os.path.join(ph, "truth_depth.tif"))
+
+    def mt(tag, extra, env=None):
+        o = os.path.join(tmp, "mt350_" + tag)
+        dt, mem, _ = timed([CLI, "matirf", "--angles", ang13, "--z-range", "0,300,20", "--force", "-o", o] + extra + imgs, env)
+        rep = json.load(open(os.path.join(o, "report.json")))["matirf"]
+        rep["mem"], rep["cpu"] = mem, LAST_CPU[0]
+        return dt, rep, tifffile.imread(os.path.join(o, "depth.tif"))
+
+    best = {}
+    for rnd in range(2):
+        for solver in ("exact", "diag"):
+            dt, rep, dep = mt(solver, ["--matirf-solver", solver])
+            if solver not in best or dt < best[solver][0]:
+                best[solver] = (dt, rep, dep)
+    (tn, rn, dn), (to, ro, do) = best["exact"], best["diag"]
+    for what, (t, r, d) in (("previous solver (diag)", best["diag"]), ("exact solver (default)", best["exact"])):
+        row("matirf, 350x350 phantom, " + what, "350x350x15 x13", t,
+            "%.1f CPU-s, %d its, %s, rel. change %.1e, objective %.6g, depth err %.1f nm" %
+            (r["cpu"], r["iterations"], "converged" if r["converged"] else "NOT converged", r["final_relative_change"],
+             r["objective"], np.median(np.abs(d - truth))), r["mem"],
+            "" if d is do else "%.2fx faster (%.2fx CPU); depth vs previous: median %.2f nm" %
+            (to / tn, ro["cpu"] / rn["cpu"], np.median(np.abs(dn - do))))
+    t1, t2 = [], []
+    for rnd in range(2):   # interleaved
+        t1.append(mt("t1", [], {"OMP_NUM_THREADS": "1"})[0])
+        t2.append(mt("t2", [], {"OMP_NUM_THREADS": "2"})[0])
+    row("matirf exact, OMP_NUM_THREADS 1 vs 2", "350x350x15 x13", min(t2), "1 thread %.2f s" % min(t1), best["exact"][1]["mem"],
+        "%.2fx speed-up" % (min(t1) / min(t2)))
+    dt, r, d = mt("hessian", ["--reg", "hessian"])
+    row("matirf Hessian-Schatten (exact)", "350x350x15 x13", dt,
+        "%.1f CPU-s, %d its, %s, rel. change %.1e, depth err %.1f nm" % (r["cpu"], r["iterations"], "converged" if r["converged"] else "NOT converged",
+                                                             r["final_relative_change"], np.median(np.abs(d - truth))), r["mem"])
+
+
 def support_row(what, d, w, T, extra=(), env=None, base=None):
     """one 'support' run on d/stack_q01.tif; returns its seconds"""
     o = os.path.join(d, "out_" + "_".join(what.split()))
     cmd = [CLI, "support", "--fwhm", "229", "--pixel-size", "100", "--force", "-o", o, *extra,
            os.path.join(d, "stack_q01.tif")]
     l0 = load()
-    if env:
-        old = dict(os.environ)
-        os.environ.update(env)
-    dt, mem, _ = timed(cmd)
-    if env:
-        os.environ.clear()
-        os.environ.update(old)
+    dt, mem, _ = timed(cmd, env)
     rep = json.load(open(os.path.join(o, "report.json")))
     s = rep["support"][0]
     row(what, "%dx%dx%d r4" % (w, w, T), dt,
@@ -110,10 +156,30 @@ def large(tmp):
         base = base or dt
 
 
+def table():
+    widths = [max(len(str(r[i])) for r in rows + [("stage", "size", "time s", "throughput", "peak MiB", "ratio")]) for i in range(6)]
+    hdr = ("stage", "size", "time s", "throughput", "peak MiB", "ratio")
+    print(" | ".join(h.ljust(w) for h, w in zip(hdr, widths)))
+    print("-+-".join("-" * w for w in widths))
+    for r in rows:
+        print(" | ".join(str(c).ljust(w) for c, w in zip(r, widths)))
+
+
+if "--matirf350" in sys.argv:   # only the MA-TIRF rows at the public example's size
+    with tempfile.TemporaryDirectory() as tmp:
+        matirf350(tmp)
+    table()
+    sys.exit(0)
+
+if LARGE_ONLY:   # only the whole-frame rows
+    with tempfile.TemporaryDirectory() as tmp:
+        large(tmp)
+    table()
+    sys.exit(0)
+
 with tempfile.TemporaryDirectory() as tmp:
-  if LARGE:
-    large(tmp)
-  if not LARGE_ONLY:
+    if LARGE:
+        large(tmp)
     # simulate: the default dataset (5 angles x 500 frames x 64x64)
     d = os.path.join(tmp, "sim64")
     dt, mem, _ = timed([CLI, "simulate", "-o", d])
@@ -183,6 +249,9 @@ with tempfile.TemporaryDirectory() as tmp:
             row("matirf, " + what, "256x256x20 x5", dt, thr, mem, "%.1fx the sparse pipeline case" % (rep["seconds"] / sparse_mt))
 
     if not QUICK:
+        matirf350(tmp)
+
+    if not QUICK:
         # intensity of one 256x256 angle on its support
         o = os.path.join(tmp, "int256")
         dt, mem, _ = timed([CLI, "intensity", "--fwhm", "229", "--pixel-size", "100", "--support",
@@ -200,9 +269,4 @@ with tempfile.TemporaryDirectory() as tmp:
         row("intensity, noise variance from support", "256x256x1000 r4", dt,
             "%d solves, %d CG its" % (rep["solves"], rep["cg_iterations"]), mem)
 
-widths = [max(len(str(r[i])) for r in rows + [("stage", "size", "time s", "throughput", "peak MiB", "ratio")]) for i in range(6)]
-hdr = ("stage", "size", "time s", "throughput", "peak MiB", "ratio")
-print(" | ".join(h.ljust(w) for h, w in zip(hdr, widths)))
-print("-+-".join("-" * w for w in widths))
-for r in rows:
-    print(" | ".join(str(c).ljust(w) for c, w in zip(r, widths)))
+table()

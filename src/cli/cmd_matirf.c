@@ -6,7 +6,8 @@
 
 #include <stdlib.h>
 
-static const char *const params[] = { "pixel_nm", C0_MATIRF_PARAMS, NULL };
+static const char *const params[] = { "pixel_nm", C0_MATIRF_PARAMS, "offset", "matirf_background", "estimate_background",
+				      "background_smooth", "psf_fwhm_nm", NULL };
 
 int cmd_matirf(int argc, char **argv)
 {
@@ -42,8 +43,8 @@ int cmd_matirf(int argc, char **argv)
 	if (!st)
 		st = c0_cli_open(&k);
 	if (!st)
-		st = c0_step_matirf(r, &k.m.c, &mc, (const float *const *)data, NULL, (int)in[0].height, (int)in[0].width,
-				    k.m.c.pixel_nm > 0 ? k.m.c.pixel_nm : in[0].pixel_size_nm, 0);
+		st = c0_step_matirf_raw(r, &k.m.c, &mc, (const float *const *)data, (int)in[0].height, (int)in[0].width,
+					k.m.c.pixel_nm > 0 ? k.m.c.pixel_nm : in[0].pixel_size_nm);
 	for (int q = 0; q < ni; q++)
 		free(data[q]);
 	return c0_cli_end(&k, "matirf", r, st, argc, argv);

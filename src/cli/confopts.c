@@ -58,6 +58,12 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "sparsity", { "sparsity", 0, C0_OPT_DOUBLE, &c->sparsity, "S", "weight of the l1 term that keeps few depths per pixel", NULL, 0, NULL } },
 		{ "axial_weight", { "axial-weight", 0, C0_OPT_DOUBLE, &c->axial_weight, "W", "axial weight of the regulariser relative to lateral", NULL, 0, NULL } },
 		{ "matirf_iterations", { "matirf-iterations", 0, C0_OPT_INT, &c->matirf_iterations, "N", "maximum primal-dual iterations", NULL, 0, NULL } },
+		{ "matirf_solver", { "matirf-solver", 0, C0_OPT_STRING, &m->solver, "exact|diag", "exact per-pixel data steps, or the earlier diagonal-step solver", NULL, 0, NULL } },
+		{ "offset", { "offset", 0, C0_OPT_DOUBLE, &c->offset, "ADU", "camera offset subtracted from every image (refused at or above an image's mean)", NULL, 0, NULL } },
+		{ "matirf_background", { "background", 0, C0_OPT_DOUBLE, &c->matirf_background, "V", "constant background subtracted after the offset", NULL, 0, NULL } },
+		{ "estimate_background", { "estimate-background", 0, C0_OPT_FLAG, &c->estimate_background, NULL, "estimate a smooth background common to all angles jointly (background.tif)", NULL, 0, NULL } },
+		{ "background_smooth", { "background-smooth", 0, C0_OPT_DOUBLE, &c->background_smooth, "PX2", "smoothness weight of the estimated background", NULL, 0, NULL } },
+		{ "psf_fwhm_nm", { "psf-fwhm", 0, C0_OPT_DOUBLE, &c->psf_fwhm_nm, "NM", "joint deconvolution: the images are the volume's projections blurred by a Gaussian PSF of this FWHM", "none", 0, NULL } },
 	};
 	if (r)
 		memcpy(r, all, sizeof all);
@@ -68,7 +74,7 @@ enum { MAXROWS = 64 };
 void c0_conf_cli_init(struct c0_conf_cli *m)
 {
 	c0_run_conf_init(&m->c);
-	m->penalty = "l1", m->background = "smooth", m->reg = "tv", m->nz = 0, m->pixel_given = 0, m->channel = 0;
+	m->penalty = "l1", m->background = "smooth", m->reg = "tv", m->solver = "exact", m->nz = 0, m->pixel_given = 0, m->channel = 0;
 	m->discrepancy = "relative", m->bleach = "estimate", m->acquisition = "sequential";
 }
 
@@ -100,6 +106,8 @@ int c0_conf_cli_finish(struct c0_conf_cli *m)
 		st = c0_run_conf_set(&m->c, "background", m->background);
 	if (!st)
 		st = c0_run_conf_set(&m->c, "reg", m->reg);
+	if (!st)
+		st = c0_run_conf_set(&m->c, "matirf_solver", m->solver);
 	if (!st && m->pixel_given && !(m->c.pixel_nm > 0 && isfinite(m->c.pixel_nm)))
 		st = c0_fail(C0_EINVAL, "pixel_nm %g: must be a positive number of nm", m->c.pixel_nm);
 	if (!st)

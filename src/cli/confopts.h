@@ -9,7 +9,7 @@
 
 struct c0_conf_cli {
 	struct c0_run_conf c;
-	const char *penalty, *background, *reg;  /* the named choices, set by name at the end */
+	const char *penalty, *background, *reg, *solver;  /* the named choices, set by name at the end */
 	const char *discrepancy, *bleach, *acquisition;
 	int nz;                                  /* values given to --z-range */
 	int pixel_given;                         /* --pixel-size was given (then it must be positive) */
@@ -18,7 +18,7 @@ struct c0_conf_cli {
 
 /* The MA-TIRF parameters of 'run' and 'matirf', in help order. */
 #define C0_MATIRF_PARAMS "angles", "n_glass", "n_sample", "wavelength_nm", "s_fraction", "gains", "z_range_nm", "reg", \
-	"kappa", "sparsity", "axial_weight", "matirf_iterations"
+	"kappa", "sparsity", "axial_weight", "matirf_iterations", "matirf_solver"
 
 void c0_conf_cli_init(struct c0_conf_cli *m);
 /* Appends the rows of the NULL-terminated parameter names to o (room

@@ -70,7 +70,7 @@ int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n
 	struct c0_result *r;
 	if ((st = c0_result_new("matirf", n, np, is_file, &r)))
 		return st;
-	if ((st = c0_step_matirf(r, c, &mc, images, NULL, h, w, c->pixel_nm, 0))) {
+	if ((st = c0_step_matirf_raw(r, c, &mc, images, h, w, c->pixel_nm))) {
 		c0_result_free(r);
 		return st;
 	}

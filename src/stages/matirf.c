@@ -2,7 +2,11 @@
 #include "ops/diff3.h"
 #include "ops/grad3m.h"
 #include "ops/tirfop.h"
+#include "ops/blur2.h"
+#include "solve/cg.h"
+#include "optics/psf.h"
 #include "solve/pdhg.h"
+#include "solve/nnqp.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -31,6 +35,12 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 		return c0_fail(C0_EINVAL, "z_range_nm %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
 		return c0_fail(C0_EINVAL, "z_range_nm: more than 512 depth bins");
+	if (!(c->bg_smooth >= 0))
+		return c0_fail(C0_EINVAL, "matirf_background_smooth %g: must be >= 0", c->bg_smooth);
+	if (!(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
+		return c0_fail(C0_EINVAL, "psf_fwhm_nm: %g pixels sigma, must be in [0, 12]", c->psf_sigma_px);
+	if (!(c->gamma > 0))
+		return c0_fail(C0_EINVAL, "matirf: gamma %g must be > 0", c->gamma);
 	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
 		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: must be finite and >= 0", c->kappa, c->wz,
 			       c->sparsity);
@@ -41,9 +51,27 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	return C0_OK;
 }
 
+int c0_matirf_subtract(float *const *x, int nq, size_t np, double v, const char *what)
+{
+	if (!(v == v) || v < 0)
+		return c0_fail(C0_EINVAL, "%s %g: must be >= 0", what, v);
+	for (int q = 0; q < nq && v > 0; q++) {
+		double s = 0;
+		for (size_t p = 0; p < np; p++)
+			s += x[q][p];
+		if (!(v < s / np))
+			return c0_fail(C0_EINVAL, "%s %g: not below the mean of image %d (%g): nothing would be left of it", what,
+				       v, q + 1, s / np);
+	}
+	for (int q = 0; q < nq && v > 0; q++)
+		for (size_t p = 0; p < np; p++)
+			x[q][p] -= (float)v;
+	return C0_OK;
+}
+
 void c0_matirf_result_free(struct c0_matirf_result *r)
 {
-	free(r->f), free(r->z_nm), free(r->depth), free(r->total);
+	free(r->f), free(r->z_nm), free(r->depth), free(r->total), free(r->background);
 	memset(r, 0, sizeof *r);
 }
 
@@ -59,36 +87,119 @@ struct ctx {
 	struct c0_grad3m g;       /* TV: gradient over the columns */
 	struct c0_diff3 d;        /* Hessian: full grid (M = all pixels) */
 	double kappa, l1;
+	/* the exact solver (C0_MATIRF_EXACT): K = R's operator, one primal step
+	 * tau1, H = W^T W + I / tau1 and c = W^T b - l1 per voxel */
+	int exact;
+	/* joint deconvolution: the data rows are B W u, B a Gaussian blur of
+	 * each angle's image (full grid); work: nq M floats */
+	struct c0_blur2 blur;
+	float *dwork;
+	/* background estimation: b = b0 - bg, bg updated from the residual every
+	 * BG_EVERY iterations; u is the solver's primal iterate */
+	const float *b0, *u;
+	float *bg, *b_mut;
+	double *bgd, *bgr;
+	double bg_smooth;
+	int ny, nx;
+	double tau1, hcol, H[C0_NNQP_MAX * C0_NNQP_MAX], Hi[C0_NNQP_MAX * C0_NNQP_MAX];
+	float *c;
 	struct c0_progress *pr;
 };
 
 /* K u = [W u per column; R's operator u] */
+/* K u = [W u per column; R's operator u], or R's operator alone for the
+ * exact solver */
 static void K(void *vc, const float *u, float *y)
 {
 	struct ctx *c = vc;
 	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
-	c0_tirfop_forward(&w, u, y);
+	float *yr = c->exact ? y : y + c->nq * w.M;
+	if (!c->exact)
+		c0_tirfop_forward(&w, u, y);
+	if (c->blur.k)
+		c0_blur2_apply(&c->blur, y, c->nq);
 	if (c->reg == C0_REG_TV)
-		c0_grad3m_forward(&c->g, u, y + c->nq * w.M);
+		c0_grad3m_forward(&c->g, u, yr);
 	else
-		c0_hess3(&c->d, u, y + c->nq * w.M);
+		c0_hess3(&c->d, u, yr);
 }
 
 static void KT(void *vc, const float *y, float *u)
 {
 	struct ctx *c = vc;
 	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
+	const float *yr = c->exact ? y : y + c->nq * w.M;
 	if (c->reg == C0_REG_TV)
-		c0_grad3m_adjoint(&c->g, y + c->nq * w.M, u);
+		c0_grad3m_adjoint(&c->g, yr, u);
 	else
-		c0_hess3_adjoint(&c->d, y + c->nq * w.M, u);
-	c0_tirfop_adjoint_add(&w, y, u);
+		c0_hess3_adjoint(&c->d, yr, u);
+	if (c->blur.k) {
+		memcpy(c->dwork, y, sizeof(float) * c->nq * w.M);
+		c0_blur2_apply(&c->blur, c->dwork, c->nq);
+		c0_tirfop_adjoint_add(&w, c->dwork, u);
+	} else if (!c->exact)
+		c0_tirfop_adjoint_add(&w, y, u);
 }
+
+/* (I + lambda grad^T grad) on the ny x nx grid, Neumann borders */
+static void smooth_op(void *vc, const double *in, double *out)
+{
+	const struct ctx *c = vc;
+	const int ny = c->ny, nx = c->nx;
+	const double l = c->bg_smooth;
+	for (int y = 0; y < ny; y++)
+		for (int x = 0; x < nx; x++) {
+			const size_t i = (size_t)y * nx + x;
+			double v = in[i], s = 0;
+			if (x > 0) s += v - in[i - 1];
+			if (x < nx - 1) s += v - in[i + 1];
+			if (y > 0) s += v - in[i - nx];
+			if (y < ny - 1) s += v - in[i + nx];
+			out[i] = v + l * s;
+		}
+}
+
+/* bg = max((I + lambda grad^T grad)^-1 mean_q (b0_q - (B W u)_q), 0): the
+ * background common to all angles that minimises the data term given u,
+ * smoothed (Soubies et al., ISBI 2019); then the data the solver sees. */
+static void background_update(struct ctx *c, const double *W)
+{
+	const size_t M = c->M;
+	const struct c0_tirfop w = { c->nq, c->nz, M, W };
+	c0_tirfop_forward(&w, c->u, c->dwork);
+	if (c->blur.k)
+		c0_blur2_apply(&c->blur, c->dwork, c->nq);
+	for (size_t k = 0; k < M; k++) {
+		double s = 0;
+		for (int q = 0; q < c->nq; q++)
+			s += c->b0[q * M + k] - c->dwork[q * M + k];
+		c->bgr[k] = s / c->nq;
+	}
+	struct c0_cg_info ci;
+	c0_cg(smooth_op, c, M, c->bgr, NULL, c->bgd, 1e-6, 500, &ci);
+	for (size_t k = 0; k < M; k++) {
+		c->bg[k] = c->bgd[k] > 0 ? (float)c->bgd[k] : 0;
+		for (int q = 0; q < c->nq; q++)
+			c->b_mut[q * M + k] = c->b0[q * M + k] - c->bg[k];
+	}
+	if (c->exact)
+		for (int j = 0; j < c->nz; j++)
+			for (size_t k = 0; k < M; k++) {
+				double s = -c->l1;
+				for (int q = 0; q < c->nq; q++)
+					s += W[q * c->nz + j] * c->b_mut[q * M + k];
+				c->c[j * M + k] = (float)s;
+			}
+}
+
+#define BG_EVERY 10
 
 static void iter(void *vc, int it)
 {
 	struct ctx *c = vc;
 	c0_progress_update(c->pr, it);
+	if (c->bg && it % BG_EVERY == 0)
+		background_update(c, c->W);
 }
 
 /* The proximal maps per entry, shared by the plain and the fused steps.
@@ -194,11 +305,12 @@ static void spectral_clip(double h[6], double k)
  * projects on the kappa ball of the dual norm (group l2 for TV, spectral for
  * Schatten-1; the sum of |entries| bounds the spectral norm, so most voxels
  * skip the eigen-decomposition). */
+static void dual_reg(struct ctx *c, float *y, const float *s, float rho, double sums[2]);
+
 static void dual_step(void *vc, float *y, const float *s, float rho, double sums[2])
 {
 	struct ctx *c = vc;
-	const size_t M = c->M, N = c->N, nd = (size_t)c->nq * M;
-	const float k = (float)c->kappa;
+	const size_t M = c->M, nd = (size_t)c->nq * M;
 	float d2 = 0, n2 = 0;   /* per thread; sums is double */
 	for (int q = 0; q < c->nq; q++) {
 		const float sg = (float)c->sig_d[q], *bq = c->b + q * M, *sq = s + q * M;
@@ -207,7 +319,16 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 		for (size_t i = 0; i < M; i++)
 			prox_data_entry(&yq[i], sq[i], bq[i], sg, rho, &d2, &n2);
 	}
-	y += nd, s += nd;
+	sums[0] += d2, sums[1] += n2;
+	dual_reg(c, y + nd, s + nd, rho, sums);
+}
+
+/* the regulariser's rows of the dual step */
+static void dual_reg(struct ctx *c, float *y, const float *s, float rho, double sums[2])
+{
+	const size_t N = c->N;
+	const float k = (float)c->kappa;
+	float d2 = 0, n2 = 0;
 	const float s0 = (float)c->sig_r[0], s1 = (float)c->sig_r[1], s2 = (float)c->sig_r[2];
 	if (c->reg == C0_REG_TV && !(k > 0)) {   /* no regulariser: its dual goes to 0 */
 		for (size_t i = 0; i < c->ncomp * N; i++)
@@ -228,6 +349,26 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 	} else {
 		/* Schatten-1's dual is the spectral norm: clip the eigenvalues to [-kappa, kappa] */
 		const double r2 = sqrt(2.0);
+		if (c->d.wz == 0) {
+			/* lateral Hessian: the z rows stay 0 and the matrix is 2x2, whose
+			 * eigenvalues m +- r have a closed form; clipped ones rebuild it
+			 * as c2 I + (c1 - c2) (A - e2 I) / (2 r) */
+			const float s0 = (float)c->sig_r[0], s1 = (float)c->sig_r[1], s3 = (float)c->sig_r[3], ir2 = (float)(1 / r2);
+			float *y0 = y, *y1 = y + N, *y3 = y + 3 * N;
+			const float *t0 = s, *t1 = s + N, *t3 = s + 3 * N;
+#pragma omp parallel for simd schedule(static) reduction(+ : d2, n2) if (N > 20000)
+			for (size_t i = 0; i < N; i++) {
+				float a = y0[i] + s0 * t0[i], b = y1[i] + s1 * t1[i], o = (y3[i] + s3 * t3[i]) * ir2;
+				float m = 0.5f * (a + b), h = 0.5f * (a - b), r = sqrtf(h * h + o * o);
+				float e1 = m + r, e2 = m - r;
+				float c1 = fminf(fmaxf(e1, -k), k), c2 = fminf(fmaxf(e2, -k), k);
+				float f = r > 0 ? (c1 - c2) / (2 * r) : 0;
+				float na = r > 0 ? c2 + f * (a - e2) : c1, nb = r > 0 ? c2 + f * (b - e2) : c1, no = f * o;
+				c0_pdhg_dual_entry(&y0[i], na, rho, &d2, &n2);
+				c0_pdhg_dual_entry(&y1[i], nb, rho, &d2, &n2);
+				c0_pdhg_dual_entry(&y3[i], no * (float)r2, rho, &d2, &n2);
+			}
+		} else
 #pragma omp parallel for schedule(static) reduction(+ : d2, n2) if (N > 20000)
 		for (size_t i = 0; i < N; i++) {
 			double h[6];
@@ -238,6 +379,37 @@ static void dual_step(void *vc, float *y, const float *s, float rho, double sums
 			for (int e = 0; e < 6; e++)
 				c0_pdhg_dual_entry(&y[e * N + i], (float)h[e], rho, &d2, &n2);
 		}
+	}
+	sums[0] += d2, sums[1] += n2;
+}
+
+static void dual_step_exact(void *vc, float *y, const float *s, float rho, double sums[2])
+{
+	dual_reg(vc, y, s, rho, sums);
+}
+
+/* The exact solver's primal step: G = data + l1 + positivity, whose prox is
+ * a small non-negative quadratic program per column,
+ *   min_{u >= 0} 1/2 u^T H u - (c + v / tau)^T u,  v = x - tau K^T y,
+ * warm-started from the column's current values. */
+static void primal_step_exact(void *vc, float *x, float *t, float rho, double sums[2])
+{
+	struct ctx *c = vc;
+	const size_t M = c->M;
+	const int nz = c->nz;
+	const double tau = c->tau1;
+	float d2 = 0, n2 = 0;
+#pragma omp parallel for schedule(dynamic, 512) reduction(+ : d2, n2) if (c->N > 50000)
+	for (size_t k = 0; k < M; k++) {
+		double g[C0_NNQP_MAX], u[C0_NNQP_MAX];
+		for (int l = 0; l < nz; l++) {
+			const size_t i = l * M + k;
+			g[l] = c->c[i] + (x[i] - tau * t[i]) / tau;
+			u[l] = x[i];
+		}
+		c0_nnqp(nz, c->H, c->Hi, g, u);   /* at its cap u is still feasible and no worse */
+		for (int l = 0; l < nz; l++)
+			c0_pdhg_primal_entry(&x[l * M + k], &t[l * M + k], (float)u[l], rho, &d2, &n2);
 	}
 	sums[0] += d2, sums[1] += n2;
 }
@@ -288,7 +460,7 @@ static void dual_fused(void *vc, const float *t, float *y, float rho, double sum
 	struct ctx *c = vc;
 	const struct c0_grad3m *g = &c->g;
 	const size_t M = c->M, N = c->N;
-	const int nq = c->nq, nz = c->nz;
+	const int nq = c->exact ? 0 : c->nq, nz = c->nz;   /* the exact solver's dual has no data rows */
 	const float k = (float)c->kappa, s0 = (float)(c->sig_r[0] * g->wl), s1 = (float)(c->sig_r[1] * g->wl);
 	float *yd = y, *gx = y + nq * M, *gy = gx + N;
 	float d2 = 0, n2 = 0;   /* per thread; sums is double */
@@ -320,6 +492,79 @@ static void dual_fused(void *vc, const float *t, float *y, float rho, double sum
 		}
 	}
 	sums[0] += d2, sums[1] += n2;
+}
+
+/* Steps of the exact solver: the diagonal (Pock-Chambolle) steps of K = R's
+ * operator with one tau for all voxels (their largest column sum), traded
+ * against sigma by gamma; H = W^T W + I / tau and c = W^T b - l1. */
+static void exact_setup(struct ctx *x, const struct c0_matirf_conf *c, const double *W)
+{
+	const int nz = x->nz, nq = x->nq;
+	const size_t M = x->M;
+	double cmax = 0;
+	if (x->reg == C0_REG_TV) {
+		for (int j = 0; j < nz; j++)
+			for (size_t k = 0; k < M; k++)
+				cmax = fmax(cmax, c0_grad3m_colsum(&x->g, (int)k, j));
+	} else
+		cmax = x->hcol;
+	const double gamma = c->gamma;
+	x->tau1 = gamma / (cmax > 0 ? cmax : 1);
+	for (int comp = 0; comp < x->ncomp; comp++)
+		x->sig_r[comp] /= gamma;
+	for (int i = 0; i < nz; i++)
+		for (int j = 0; j < nz; j++) {
+			double s = i == j ? 1 / x->tau1 : 0;
+			for (int q = 0; q < nq; q++)
+				s += W[q * nz + i] * W[q * nz + j];
+			x->H[i * nz + j] = s;
+		}
+	c0_spd_inverse(nz, x->H, x->Hi);
+	for (int j = 0; j < nz; j++)
+		for (size_t k = 0; k < M; k++) {
+			double s = -x->l1;
+			for (int q = 0; q < nq; q++)
+				s += W[q * nz + j] * x->b[q * M + k];
+			x->c[j * M + k] = (float)s;
+		}
+}
+
+/* The objective at u (scaled units): 1/2 ||W u - b||^2 + kappa R(u) + l1 sum u,
+ * to compare solvers; work: ncomp N floats. */
+static double objective(struct ctx *c, const float *u, float *work)
+{
+	const size_t M = c->M, N = c->N;
+	double data = 0, reg = 0, l1 = 0;
+	for (size_t k = 0; k < M; k++)
+		for (int q = 0; q < c->nq; q++) {
+			double s = -c->b[q * M + k];
+			for (int j = 0; j < c->nz; j++)
+				s += c->W[q * c->nz + j] * u[j * M + k];
+			data += 0.5 * s * s;
+		}
+	for (size_t i = 0; i < N; i++)
+		l1 += u[i];
+	if (c->reg == C0_REG_TV) {
+		c0_grad3m_forward(&c->g, u, work);
+		for (size_t i = 0; i < N; i++) {
+			double s = 0;
+			for (int e = 0; e < c->ncomp; e++)
+				s += (double)work[e * N + i] * work[e * N + i];
+			reg += sqrt(s);
+		}
+	} else {
+		c0_hess3(&c->d, u, work);
+		const double r2 = sqrt(2.0);
+		for (size_t i = 0; i < N; i++) {
+			double h[6], v[3][3];
+			for (int e = 0; e < 6; e++)
+				h[e] = work[e * N + i];
+			double a[3][3] = { { h[0], h[3] / r2, h[4] / r2 }, { h[3] / r2, h[1], h[5] / r2 }, { h[4] / r2, h[5] / r2, h[2] } };
+			eig3(a, v);
+			reg += fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+		}
+	}
+	return data + c->kappa * reg + c->l1 * l1;
 }
 
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
@@ -359,7 +604,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		return C0_ENOMEM;
 	for (size_t p = 0; p < np; p++)
 		for (int q = 0; q < nq; q++)
-			mask[p] |= c->reg == C0_REG_HESSIAN || x[q][p] > 0;
+			mask[p] |= c->reg == C0_REG_HESSIAN || c->bg_smooth > 0 || c->psf_sigma_px > 0 || x[q][p] > 0;
 	st = c0_grad3m_init(&ctx.g, mask, ny, nx, nz, 1, c->wz);
 	free(mask);
 	if (st)
@@ -367,9 +612,36 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	const size_t M = (size_t)ctx.g.M, N = M * nz, nd = (size_t)nq * M;
 	const int ncomp = c->reg == C0_REG_TV ? ctx.g.nc : 6;
 	ctx.M = (int)M, ctx.N = N, ctx.ncomp = ncomp;
-	const size_t m = nd + ncomp * N;
+	/* the exact solver's per-pixel prox has no room for a lateral blur */
+	ctx.exact = c->solver == C0_MATIRF_EXACT && nz <= C0_NNQP_MAX && !(c->psf_sigma_px > 0);
+	ctx.ny = ny, ctx.nx = nx, ctx.bg_smooth = c->bg_smooth;
+	float kern[2 * 64 + 1];
+	if (c->psf_sigma_px > 0) {
+		double kd[2 * 64 + 1];
+		int r = (int)ceil(C0_PSF_CUTOFF * c->psf_sigma_px);
+		r = r > 64 ? 64 : r;
+		c0_psf_pixel_weights(0.5, c->psf_sigma_px, -r, 2 * r + 1, kd);
+		for (int i = 0; i <= 2 * r; i++)
+			kern[i] = (float)kd[i];
+		ctx.blur = (struct c0_blur2){ ny, nx, r, kern, c0_alloc(np, sizeof(float)) };
+		if (!ctx.blur.work)
+			st = C0_ENOMEM;
+	}
+	if ((c->psf_sigma_px > 0 || c->bg_smooth > 0) && !(ctx.dwork = c0_alloc((size_t)nq * M, sizeof(float))))
+		st = C0_ENOMEM;
+	float *b0 = NULL;
+	if (c->bg_smooth > 0) {
+		ctx.bg = c0_alloc(M, sizeof *ctx.bg), ctx.bgd = c0_alloc(M, sizeof *ctx.bgd), ctx.bgr = c0_alloc(M, sizeof *ctx.bgr);
+		b0 = c0_alloc(nd, sizeof *b0);
+		res->background = c0_alloc(np, sizeof *res->background);
+		if (!ctx.bg || !ctx.bgd || !ctx.bgr || !b0 || !res->background)
+			st = C0_ENOMEM;
+	}
+	const size_t m = ctx.exact ? ncomp * N : nd + ncomp * N;
 	float *b = c0_alloc(nd, sizeof *b), *u = c0_alloc(N, sizeof *u), *y = c0_alloc(m, sizeof *y);
 	float *tau = c0_alloc(N, sizeof *tau);
+	if (ctx.exact && !(ctx.c = c0_alloc(N, sizeof *ctx.c)))
+		st = C0_ENOMEM;
 	if (c->reg == C0_REG_HESSIAN && !(ctx.d.work = c0_alloc(2 * N, sizeof *ctx.d.work)))
 		st = C0_ENOMEM;
 	res->f = c0_alloc(np * nz, sizeof *res->f);
@@ -380,16 +652,21 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		st = C0_ENOMEM;
 		goto out;
 	}
-	ctx.b = b, ctx.tau = tau;
+	ctx.b = b, ctx.tau = tau, ctx.u = u;
 	for (int q = 0; q < nq; q++)
 		for (size_t k = 0; k < M; k++)
 			b[q * M + k] = (float)(x[q][ctx.g.pixel[k]] / mx);
+	if (b0) {
+		memcpy(b0, b, sizeof *b0 * nd);
+		ctx.b0 = b0, ctx.b_mut = b;
+	}
 	/* diagonal steps: 1 / (absolute row or column sums of K) */
 	const double wa[3] = { 1, 1, c->wz };
 	double hcol = 0;
 	for (int a = 0; a < 3; a++)
 		for (int e = a; e < 3; e++)
 			hcol += (a == e ? 4 : 4 * sqrt(2.0)) * wa[a] * wa[e];
+	ctx.hcol = hcol;
 	for (int j = 0; j < nz; j++) {
 		double sw = 0;
 		for (int q = 0; q < nq; q++)
@@ -412,17 +689,38 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 		ctx.sig_r[comp] = rs > 0 ? 1 / rs : 1;
 	}
 	struct c0_pdhg_problem pb = { N, m, &ctx, K, KT, primal_step, dual_step, iter, NULL, NULL };
-	if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused)
+	if (ctx.exact) {
+		pb.primal_step = primal_step_exact, pb.dual_step = dual_step_exact;
+		exact_setup(&ctx, c, W);
+		if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused)
+			pb.dual_fused = dual_fused;   /* its TV part alone */
+	} else if (c->reg == C0_REG_TV && ctx.g.nc == 2 && c->kappa > 0 && c->fused && !ctx.blur.k)
 		pb.primal_fused = primal_fused, pb.dual_fused = dual_fused;
 	struct c0_pdhg_info info;
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "matirf (iterations, at most)", c->pdhg.maxit);
 	ctx.pr = &pr;
-	st = c0_pdhg_solve(&pb, &c->pdhg, u, y, &info);
+	struct c0_pdhg_conf pc = c->pdhg;
+	if (pc.tol == 0)             /* each solver's default */
+		pc.tol = ctx.exact ? 1e-3 : 1e-4;
+	st = c0_pdhg_solve(&pb, &pc, u, y, &info);
 	c0_progress_end(&pr);
 	if (st)
 		goto out;
 	res->nz = nz, res->ny = ny, res->nx = nx, res->iters = info.iters, res->converged = info.converged;
+	res->exact = ctx.exact, res->rel_change = fmax(info.dx, info.dy);
+	if (ctx.bg) {
+		background_update(&ctx, W);      /* the background of the final iterate */
+		double sb = 0;
+		for (size_t k = 0; k < M; k++)
+			res->background[ctx.g.pixel[k]] = (float)(ctx.bg[k] * mx), sb += ctx.bg[k] * mx;
+		res->background_mean = sb / (M ? M : 1);
+	}
+	{
+		float *work = c0_alloc(ncomp * N, sizeof *work);
+		res->objective = work ? objective(&ctx, u, work) : NAN;
+		free(work);
+	}
 	for (int j = 0; j < nz; j++) {
 		res->z_nm[j] = c->z0_nm + (j + 0.5) * c->dz_nm;
 		for (size_t k = 0; k < M; k++)
@@ -437,7 +735,8 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	}
 out:
 	c0_grad3m_free(&ctx.g);
-	free(b), free(u), free(y), free(tau), free(ctx.d.work);
+	free(b), free(u), free(y), free(tau), free(ctx.d.work), free(ctx.c);
+	free(ctx.blur.work), free(ctx.dwork), free(ctx.bg), free(ctx.bgd), free(ctx.bgr), free(b0);
 	if (st)
 		c0_matirf_result_free(res);
 	res->seconds = c0_now() - t0;

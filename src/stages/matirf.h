@@ -14,6 +14,10 @@
 
 #include "col0rme.h"   /* enum c0_reg */
 
+/* enum c0_matirf_solver (col0rme.h): exact, PDHG whose primal step solves
+ * the data + l1 + positivity prox exactly per pixel (a small NNQP); diag,
+ * the data rows in the dual with diagonal steps (the earlier solver) */
+
 struct c0_matirf_conf {
 	struct c0_tirf tirf;
 	double z0_nm, z1_nm, dz_nm;  /* 0, 400, 20: depth bins [z0, z1) */
@@ -21,10 +25,19 @@ struct c0_matirf_conf {
 	double kappa;                /* 3e-2: weight of R, for data scaled to max 1 */
 	double wz;                   /* 0: axial weight of R relative to lateral (0: lateral TV) */
 	double sparsity;             /* 3e-2: weight s of the l1 term, same scale */
-	struct c0_pdhg_conf pdhg;    /* 3000 iterations, tol 1e-4 */
+	struct c0_pdhg_conf pdhg;    /* 3000 iterations; tol 0: the solver's (1e-3 exact, 1e-4 diag); relax 1.8 */
 	int fused;                   /* 1: TV's steps in one pass each; 0: the operator sequence (tests) */
+	enum c0_matirf_solver solver;/* exact */
+	double gamma;                /* 3: exact solver's primal step relative to the diagonal one */
+	/* 0: the images are background-free; > 0: estimate a smooth background
+	 * common to all angles jointly with f, as (I + bg_smooth grad^T grad)^-1
+	 * of the mean residual, clipped at 0 (bg_smooth in px^2) */
+	double bg_smooth;
+	/* 0: no deconvolution; > 0: the forward model blurs each angle's image
+	 * by a Gaussian of this sigma (camera pixels); uses the diag solver */
+	double psf_sigma_px;
 };
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, C0_PDHG_DEFAULTS, 1 }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_EXACT, 3, 0, 0 }
 
 struct c0_matirf_result {
 	int nz, ny, nx;
@@ -32,12 +45,19 @@ struct c0_matirf_result {
 	double *z_nm;                /* bin centres */
 	float *depth;                /* ny x nx intensity-weighted mean depth (nm), 0 where empty */
 	float *total;                /* ny x nx sum over depth */
-	int iters, converged;
+	int iters, converged, exact;   /* exact: which solver ran */
 	double seconds, scale;
+	double rel_change;           /* the last iteration's relative change (max of primal, dual) */
+	double objective;            /* at the result, data scaled to max 1 (compares solvers) */
+	float *background;           /* ny x nx estimated background (image units), or NULL */
+	double background_mean;
 };
 
 int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles);
 /* x: nq images of ny x nx; gain: nq per-angle gains or NULL. */
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		    const float *const *x, int ny, int nx, struct c0_matirf_result *res);
+/* x_q -= v for every image (a camera offset or a constant background),
+ * refused when v is not below the mean of some image; what names the option. */
+int c0_matirf_subtract(float *const *x, int nq, size_t np, double v, const char *what);
 void c0_matirf_result_free(struct c0_matirf_result *r);

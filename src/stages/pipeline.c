@@ -5,6 +5,7 @@
 #include "stages/pipeline.h"
 #include "stages/bleach.h"
 #include "stages/depthpool.h"
+#include "optics/psf.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -340,8 +341,57 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	cJSON_AddNumberToObject(j, "data_scale", res->scale);
 	cJSON_AddNumberToObject(j, "iterations", res->iters);
 	cJSON_AddBoolToObject(j, "converged", res->converged);
+	cJSON_AddStringToObject(j, "solver", res->exact ? "exact" : "diag");
+	cJSON_AddNumberToObject(j, "final_relative_change", res->rel_change);
+	cJSON_AddNumberToObject(j, "objective", res->objective);
 	cJSON_AddNumberToObject(j, "seconds", res->seconds);
 	cJSON_AddNumberToObject(r->timings, key, c0_now() - t);
+	return C0_OK;
+}
+
+int c0_step_matirf_raw(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+		       const float *const *img, int ny, int nx, double pixel_nm)
+{
+	const int nq = c->nangles;
+	const size_t np = (size_t)ny * nx;
+	struct c0_matirf_conf mm = *m;
+	if (c->psf_fwhm_nm != 0) {
+		if (!(c->psf_fwhm_nm > 0) || !(pixel_nm > 0))
+			return c0_fail(C0_EINVAL, "psf_fwhm_nm %g: needs a positive FWHM and the pixel size (pixel_nm or the TIFF calibration)",
+				       c->psf_fwhm_nm);
+		mm.psf_sigma_px = c0_psf_sigma_px(c->psf_fwhm_nm, pixel_nm);
+	}
+	if (c->estimate_background) {
+		if (!(c->background_smooth > 0))
+			return c0_fail(C0_EINVAL, "background_smooth %g: must be > 0", c->background_smooth);
+		mm.bg_smooth = c->background_smooth;
+	}
+	float *x[C0_MAX_STACKS] = { 0 };
+	int st = C0_OK;
+	for (int q = 0; q < nq && !st; q++)
+		if (!(x[q] = c0_alloc(np, sizeof **x)))
+			st = C0_ENOMEM;
+		else
+			memcpy(x[q], img[q], np * sizeof **x);
+	if (!st)
+		st = c0_matirf_subtract(x, nq, np, c->offset, "offset");
+	if (!st)
+		st = c0_matirf_subtract(x, nq, np, c->matirf_background, "matirf_background");
+	if (!st)
+		st = c0_step_matirf(r, c, &mm, (const float *const *)x, NULL, ny, nx, pixel_nm, 0);
+	for (int q = 0; q < nq; q++)
+		free(x[q]);
+	if (st)
+		return st;
+	cJSON *j = cJSON_GetObjectItem(r->rep, "matirf");
+	cJSON_AddNumberToObject(j, "offset", c->offset);
+	if (r->vol.background) {
+		cJSON_AddStringToObject(j, "background", "estimated");
+		cJSON_AddNumberToObject(j, "background_mean", r->vol.background_mean);
+		cJSON_AddNumberToObject(j, "background_smooth_px2", c->background_smooth);
+	} else
+		cJSON_AddNumberToObject(j, "background", c->matirf_background);
+	cJSON_AddNumberToObject(j, "psf_fwhm_nm", c->psf_fwhm_nm);
 	return C0_OK;
 }
 

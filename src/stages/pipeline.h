@@ -80,6 +80,12 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
  * are pooled (stages/depthpool.h). */
 int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
 		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline);
+/* The standard MA-TIRF path on raw images (the matirf command): c's offset
+ * and constant background subtracted (from copies; refused at or above an
+ * image's mean), optional joint background estimation and deconvolution,
+ * then c0_step_matirf into r->vol. */
+int c0_step_matirf_raw(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+		       const float *const *img, int ny, int nx, double pixel_nm);
 /* Bleaching across the stacks (stages/bleach.h) from c: the fade estimated
  * from the frame sums and the fitted backgrounds (or the known factors, or
  * none) into r->bleach_factor and rep["bleaching"]. */

@@ -77,6 +77,10 @@ static int write_volume(const struct c0_result *r, const struct c0_matirf_result
 	snprintf(name, sizeof name, "%sdepth.png", prefix);
 	st = c0_png_write_rgb(c0_outdir_file(out, name), w, h, rgb);
 	free(rgb);
+	if (!st && v->background) {       /* estimated jointly (standard MA-TIRF path) */
+		snprintf(name, sizeof name, "%sbackground.tif", prefix);
+		st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, v->background);
+	}
 	return st;
 }
 

@@ -1,0 +1,34 @@
+#include "ops/blur2.h"
+
+void c0_blur2_apply(const struct c0_blur2 *b, float *img, int n)
+{
+	const int ny = b->ny, nx = b->nx, r = b->r;
+	const float *k = b->k + r;
+	for (int m = 0; m < n; m++) {
+		float *a = img + (size_t)m * ny * nx, *w = b->work;
+#pragma omp parallel for schedule(static) if ((size_t)ny * nx > 50000)
+		for (int y = 0; y < ny; y++) {         /* along x into work */
+			const float *ar = a + (size_t)y * nx;
+			float *wr = w + (size_t)y * nx;
+			for (int x = 0; x < nx; x++) {
+				const int d0 = x - r < 0 ? -x : -r, d1 = x + r >= nx ? nx - 1 - x : r;
+				float s = 0;
+				for (int d = d0; d <= d1; d++)
+					s += k[d] * ar[x + d];
+				wr[x] = s;
+			}
+		}
+#pragma omp parallel for schedule(static) if ((size_t)ny * nx > 50000)
+		for (int y = 0; y < ny; y++) {         /* along y back into the image */
+			const int d0 = y - r < 0 ? -y : -r, d1 = y + r >= ny ? ny - 1 - y : r;
+			float *ar = a + (size_t)y * nx;
+			for (int x = 0; x < nx; x++)
+				ar[x] = 0;
+			for (int d = d0; d <= d1; d++) {
+				const float kd = k[d], *wr = w + (size_t)(y + d) * nx;
+				for (int x = 0; x < nx; x++)
+					ar[x] += kd * wr[x];
+			}
+		}
+	}
+}
