@@ -2,12 +2,17 @@
 a baseline measured in the same run). Run from the repository root after
 scripts/setup.sh:  /usr/bin/python3 bench/run.py [--quick]
 (--quick skips the 256x256 cases: support, intensity, dense MA-TIRF, and the
-350x350 MA-TIRF rows; --matirf350 runs only those)
+350x350 MA-TIRF rows; --matirf350 runs only those;
+--large adds whole camera frames: support on 1024x1024x500 and 2048x2048x200,
+run on 5 angles of 512x512x500, each against the single-tile path measured in
+the same run where it fits, thread scaling and a run next to a busy process;
+--large-only runs just those. They take tens of minutes on 2 cores.)
 
 Each timed command runs in its own process; peak memory is that process's
 maximum resident set size."""
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -16,6 +21,8 @@ import time
 BUILD = os.environ.get("BUILD", "build")
 CLI = os.path.join(BUILD, "col0rme")
 QUICK = "--quick" in sys.argv
+LARGE_ONLY = "--large-only" in sys.argv
+LARGE = "--large" in sys.argv or LARGE_ONLY
 rows = []
 LAST_CPU = [0.0]   # user + system CPU seconds of the last timed() child
 
@@ -38,6 +45,10 @@ def timed(cmd, env=None):
 def sim(out, w, frames, angles="62", extra=()):
     subprocess.run([CLI, "simulate", "-o", out, "--width", str(w), "--height", str(w), "--frames", str(frames),
                     "--angles", angles, "--filaments", str(max(5, w // 12)), *extra], check=True, capture_output=True)
+
+
+def load():
+    return "load %.1f" % os.getloadavg()[0]
 
 
 def row(what, size, secs, thr, mem, ratio=""):
@@ -92,6 +103,59 @@ def matirf350(tmp):
                                                              r["final_relative_change"], np.median(np.abs(d - truth))), r["mem"])
 
 
+def support_row(what, d, w, T, extra=(), env=None, base=None):
+    """one 'support' run on d/stack_q01.tif; returns its seconds"""
+    o = os.path.join(d, "out_" + "_".join(what.split()))
+    cmd = [CLI, "support", "--fwhm", "229", "--pixel-size", "100", "--force", "-o", o, *extra,
+           os.path.join(d, "stack_q01.tif")]
+    l0 = load()
+    dt, mem, _ = timed(cmd, env)
+    rep = json.load(open(os.path.join(o, "report.json")))
+    s = rep["support"][0]
+    row(what, "%dx%dx%d r4" % (w, w, T), dt,
+        "%d tiles, %d its max, %s; cov %.0f fr/s; %d thr; %s" % (s["tiles"], s["iterations"],
+                                                                "converged" if s["converged"] else "cap",
+                                                                s["covariance_frames_per_s"], rep["threads"], l0),
+        mem, "%.2fx the baseline" % (base / dt) if base else "baseline" if base is None else "no baseline (one tile: ~12 GB)")
+    return dt
+
+
+def large(tmp):
+    # support on whole frames: tiles (default) against one tile (today's path)
+    for w, T, with_base in ((1024, 500, True), (2048, 200, False)):
+        d = os.path.join(tmp, "L%d" % w)
+        sim(d, w, T)
+        base = support_row("support, one tile (baseline)", d, w, T, ("--tile", str(w))) if with_base else 0
+        support_row("support, tiles (default)", d, w, T, base=base)
+        if w == 1024:
+            # thread scaling and a busy neighbour (the passive wait policy vs spinning threads)
+            t1 = support_row("support, tiles, 1 thread", d, w, T, ("--threads", "1"))
+            support_row("support, tiles, 2 threads", d, w, T, ("--threads", "2"), base=t1)
+            busy = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+            try:
+                tb = support_row("support, next to a busy process, spinning (OMP_WAIT_POLICY=ACTIVE)", d, w, T,
+                                 env={"OMP_WAIT_POLICY": "ACTIVE"})
+                support_row("support, next to a busy process, passive (default)", d, w, T, base=tb)
+            finally:
+                busy.kill()
+                busy.wait()
+        shutil.rmtree(d)
+    # the whole method on 5 angles of 512x512x500
+    d = os.path.join(tmp, "R512")
+    sim(d, 512, 500, angles="62,63.5,65,66.5,68")
+    stacks = [os.path.join(d, "stack_q%02d.tif" % q) for q in range(1, 6)]
+    base = None
+    for what, extra in (("run, one support tile (baseline)", ("--tile", "512")), ("run, tiles (default)", ())):
+        o = os.path.join(tmp, "run_" + what.split(",")[1].split()[0])
+        l0 = load()
+        dt, mem, _ = timed([CLI, "run", "--fwhm", "229", "--angles", "62,63.5,65,66.5,68", "-o", o, *extra] + stacks)
+        ts = json.load(open(os.path.join(o, "report.json")))["timings_s"]
+        row(what, "5 x 512x512x500 r4", dt, "support %.0f s, intensity %.0f s, matirf %.0f s; %s"
+            % (ts["support"], ts["intensity"], ts["matirf"], l0), mem,
+            "%.2fx the baseline" % (base / dt) if base else "baseline")
+        base = base or dt
+
+
 def table():
     widths = [max(len(str(r[i])) for r in rows + [("stage", "size", "time s", "throughput", "peak MiB", "ratio")]) for i in range(6)]
     hdr = ("stage", "size", "time s", "throughput", "peak MiB", "ratio")
@@ -107,7 +171,15 @@ if "--matirf350" in sys.argv:   # only the MA-TIRF rows at the public example's 
     table()
     sys.exit(0)
 
+if LARGE_ONLY:   # only the whole-frame rows
+    with tempfile.TemporaryDirectory() as tmp:
+        large(tmp)
+    table()
+    sys.exit(0)
+
 with tempfile.TemporaryDirectory() as tmp:
+    if LARGE:
+        large(tmp)
     # simulate: the default dataset (5 angles x 500 frames x 64x64)
     d = os.path.join(tmp, "sim64")
     dt, mem, _ = timed([CLI, "simulate", "-o", d])

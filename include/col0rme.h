@@ -66,6 +66,7 @@ struct c0_run_conf {
 			        * it before the covariance and the means ("on"); 0: "off" */
 	int frc;               /* 1: solve each half of the frames too, for the FRC resolution and the
 			        * localisation precision (render.tif) */
+	int tile;              /* 0: support tile side in camera pixels (tiles overlap by two lags); 0: 256, or the image when smaller */
 	/* intensity and background per stack */
 	enum c0_background background; /* smooth */
 	double beta;           /* 20: background smoothness weight (coarse grid) */

@@ -158,7 +158,7 @@ int cmd_eval(int argc, char **argv)
 		"matching within --radius), PSNR of intensities, median and mean depth errors of depth maps.\n"
 		"--run with --truth pairs support.tif, intensity_qNN.tif, depth.tif and baseline_depth.tif\n"
 		"with the simulator's truth files.",
-		opts, C0_NOPTS(opts), 0, 0 };
+		opts, C0_NOPTS(opts), 0, 0, 0 };
 	char *pos[1];
 	int npos, rc = c0_opts_parse(&spec, argc, argv, &npos, pos);
 	if (rc)

@@ -48,7 +48,7 @@ int cmd_info(int argc, char **argv)
 	};
 	const struct c0_cmd_spec spec = { "info", "[options] FILE...",
 		"Print dimensions, frames, sample type, calibration and min/mean/max of TIFF stacks.",
-		opts, C0_NOPTS(opts), 1, -1 };
+		opts, C0_NOPTS(opts), 1, -1, 0 };
 	char **files = malloc(sizeof(char *) * (size_t)argc);
 	int nf = 0, rc = c0_opts_parse(&spec, argc, argv, &nf, files);
 	if (rc) {

@@ -46,7 +46,7 @@ int cmd_intensity(int argc, char **argv)
 		"Estimate each stack's mean intensity on the support (fine grid) and its smooth background\n"
 		"(coarse grid), with the smoothness weight set by the discrepancy principle. Writes\n"
 		"OUTDIR/intensity_qNN.tif, OUTDIR/background_qNN.tif and OUTDIR/report.json.",
-		NULL, 0, 1, C0_MAX_STACKS };
+		NULL, 0, 1, C0_MAX_STACKS, 1 };
 	struct c0_cli k;
 	int rc = c0_cli_start(&k, &spec, params, extra, 1, argc, argv);
 	if (rc)

@@ -17,7 +17,7 @@ int cmd_matirf(int argc, char **argv)
 		"OUTDIR/volume.tif (float32, depth bins x H x W, z spacing = bin width),\n"
 		"OUTDIR/depth.tif (intensity-weighted mean depth, nm), OUTDIR/depth.png (depth colour\n"
 		"code with colour bar) and OUTDIR/report.json (\"z_nm\": bin centres).",
-		NULL, 0, 2, C0_MAX_STACKS };
+		NULL, 0, 2, C0_MAX_STACKS, 1 };
 	struct c0_cli k;
 	int rc = c0_cli_start(&k, &spec, params, NULL, 0, argc, argv);
 	if (rc)

@@ -4,7 +4,7 @@
 #include "cli/cmdkit.h"
 
 static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_stacks",
-				      "penalty", "lambda", "drift", "no_drift", "frc", "nu", "discrepancy", "mu", "graph_radius", "depth_pool_nm",
+				      "penalty", "lambda", "tile", "drift", "no_drift", "frc", "nu", "discrepancy", "mu", "graph_radius", "depth_pool_nm",
 				      "bleach", "bleach_factors", "acquisition", "acquisition_order", "gaps_frames", "baseline",
 				      C0_MATIRF_PARAMS, NULL };
 
@@ -22,7 +22,7 @@ int cmd_run(int argc, char **argv)
 		"depth.png, render.tif (the intensities splatted with a Gaussian of the localisation\n"
 		"precision, one plane per stack), drift.csv, drift.png and report.json (every\n"
 		"parameter and estimate; \"z_nm\": bin centres).",
-		NULL, 0, 1, C0_MAX_STACKS };
+		NULL, 0, 1, C0_MAX_STACKS, 1 };
 	struct c0_cli k;
 	int rc = c0_cli_start(&k, &spec, params, NULL, 0, argc, argv);
 	if (rc)

@@ -146,7 +146,7 @@ int cmd_simulate(int argc, char **argv)
 		"stack_qNN.tif, truth_intensity_qNN.tif (ADU/frame, fine grid), truth_background_qNN.tif,\n"
 		"truth_depth.tif (nm), truth_support.tif (positions at the first frame), emitters.csv,\n"
 		"drift_truth.csv (with --drift-nm) and sim.json.",
-		opts, C0_NOPTS(opts), 0, 0 };
+		opts, C0_NOPTS(opts), 0, 0, 1 };
 	char **pos = malloc(sizeof(char *) * (size_t)argc);
 	int np, rc = c0_opts_parse(&spec, argc, argv, &np, pos);
 	free(pos);

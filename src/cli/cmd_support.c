@@ -3,7 +3,7 @@
 #include "cli/cmdkit.h"
 
 static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "penalty", "lambda",
-				      "iterations", "tol", "reweightings", "lag", NULL };
+				      "iterations", "tol", "reweightings", "lag", "tile", NULL };
 
 int cmd_support(int argc, char **argv)
 {
@@ -12,7 +12,7 @@ int cmd_support(int argc, char **argv)
 		"(COL0RME); with several stacks the support is the union. Writes OUTDIR/support.tif\n"
 		"(uint8 0/1; fine pixel (i, j) covers [i p/r, (i+1) p/r) nm from the top-left corner),\n"
 		"OUTDIR/rx.tif (float32 emitter variance, one plane per stack) and OUTDIR/report.json.",
-		NULL, 0, 1, C0_MAX_STACKS };
+		NULL, 0, 1, C0_MAX_STACKS, 1 };
 	struct c0_cli k;
 	int rc = c0_cli_start(&k, &spec, params, NULL, 0, argc, argv);
 	if (rc)

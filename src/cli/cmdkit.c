@@ -1,6 +1,7 @@
 #include "cli/cmdkit.h"
 #include "cli/commands.h"
 #include "core/err.h"
+#include "core/comm.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -9,7 +10,8 @@ int c0_cli_error(const char *cmd)
 {
 	char msg[2048];
 	c0_cli_flags(c0_errmsg(), msg, sizeof msg);   /* the library names parameters; we show flags */
-	fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
+	if (c0_comm_rank() == 0)      /* under MPI every rank has the message */
+		fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
 	return 1;
 }
 
@@ -35,18 +37,19 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	return 0;
 }
 
+/* Under MPI every rank computes and rank 0 alone writes. */
 int c0_cli_open(struct c0_cli *k)
 {
 	int st = c0_outdir_check_inputs(k->outdir, (const char *const *)k->paths, k->n);
-	if (!st)
+	if (!st && c0_comm_rank() == 0)
 		st = c0_outdir_open(&k->out, k->outdir, k->force);
-	k->opened = !st;
-	return st;
+	k->opened = !st && c0_comm_rank() == 0;
+	return c0_comm_status(st);
 }
 
 int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, int argc, char **argv)
 {
-	if (!st) {
+	if (!st && c0_comm_rank() == 0) {
 		c0_result_set_argv(r, argc, argv);
 		st = c0_result_write_to(r, &k->out);
 	}

@@ -33,6 +33,7 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "tol", { "tol", 0, C0_OPT_DOUBLE, &c->tol, "F", "stop when the relative change of the iterate falls below this", NULL, 0, NULL } },
 		{ "reweightings", { "reweightings", 0, C0_OPT_INT, &c->reweightings, "N", "CEL0 reweighting steps", NULL, 0, NULL } },
 		{ "lag", { "lag", 0, C0_OPT_INT, &c->lag, "PX", "covariance lag radius in pixels", "ceil(6 sigma / pixel)", 0, NULL } },
+		{ "tile", { "tile", 0, C0_OPT_INT, &c->tile, "PX", "support tile side in camera pixels (tiles overlap by two lags)", "256, or the image when smaller", 0, NULL } },
 		{ "background", { "background", 0, C0_OPT_STRING, &m->background, "MODE", "none, constant or smooth", NULL, 0, NULL } },
 		{ "beta", { "beta", 0, C0_OPT_DOUBLE, &c->beta, "B", "background smoothness weight", NULL, 0, NULL } },
 		{ "nu", { "nu", 0, C0_OPT_DOUBLE, &c->nu, "F", "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (0: sqrt(T))", NULL, 0, NULL } },

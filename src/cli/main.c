@@ -3,6 +3,8 @@
 #include "cli/confopts.h"
 #include "core/err.h"
 #include "core/progress.h"
+#include "core/threads.h"
+#include "core/comm.h"
 #include "c0_version.h"
 
 #include <stdio.h>
@@ -34,6 +36,7 @@ static void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
+	c0_threads_startup(argv);
 	if (argc < 2) {
 		usage(stderr);
 		return 2;
@@ -53,8 +56,13 @@ int main(int argc, char **argv)
 			verbose = 1;
 	c0_progress_enable(verbose || isatty(STDERR_FILENO));
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-		if (!strcmp(argv[1], commands[i].name))
-			return commands[i].run(argc - 1, argv + 1);
+		if (!strcmp(argv[1], commands[i].name)) {
+			if (c0_comm_init(&argc, &argv))
+				return c0_cli_error(argv[1]);
+			int rc = commands[i].run(argc - 1, argv + 1);
+			c0_comm_finalize();
+			return rc;
+		}
 	fprintf(stderr, "col0rme: error: unknown command '%s'\n", argv[1]);
 	usage(stderr);
 	return 2;

@@ -1,4 +1,5 @@
 #include "cli/opts.h"
+#include "core/threads.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -44,6 +45,8 @@ void c0_opts_help(const struct c0_cmd_spec *spec)
 		show_default(o, def, sizeof def);
 		printf("  %-28s %s%s\n", head, o->help, def);
 	}
+	if (spec->threads)
+		printf("  %-28s %s\n", "    --threads N", "worker threads (default: the CPUs this process may run on)");
 	printf("  %-28s %s\n", "-h, --help", "show this help");
 }
 
@@ -120,7 +123,7 @@ static int set_value(const struct c0_cmd_spec *spec, const struct c0_opt *o, con
 
 int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *npos, char **pos)
 {
-	int np = 0, only_pos = 0;
+	int np = 0, only_pos = 0, threads = 0;
 	for (int i = 1; i < argc; i++) {
 		char *a = argv[i];
 		if (only_pos || a[0] != '-' || !a[1]) {
@@ -139,6 +142,15 @@ int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *np
 		}
 		const struct c0_opt *o = NULL;
 		const char *val = NULL;
+		if (spec->threads && (!strcmp(a, "--threads") || !strncmp(a, "--threads=", 10))) {
+			const char *v = a[9] ? a + 10 : i + 1 < argc ? argv[++i] : "";
+			char *end;
+			long n = strtol(v, &end, 10);
+			if (!*v || *end || n < 1 || n > 4096)
+				return bad(spec, "threads", v, "expected a positive number of threads");
+			threads = (int)n;
+			continue;
+		}
 		if (a[1] == '-') {
 			const char *name = a + 2, *eq = strchr(name, '=');
 			size_t l = eq ? (size_t)(eq - name) : strlen(name);
@@ -175,5 +187,6 @@ int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *np
 		return 2;
 	}
 	*npos = np;
+	c0_threads_set(threads);
 	return 0;
 }

@@ -31,6 +31,7 @@ struct c0_cmd_spec {
 	const struct c0_opt *opts;
 	int nopts;
 	int min_pos, max_pos;  /* positional argument count (max < 0: any) */
+	int threads;           /* 1: the command takes --threads N (core/threads.h) */
 };
 
 #define C0_NOPTS(a) ((int)(sizeof(a) / sizeof((a)[0])))

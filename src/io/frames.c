@@ -52,6 +52,17 @@ int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
 	return C0_OK;
 }
 
+int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *dst)
+{
+	if (f->tiff)
+		return c0_tiff_read_rows_f32(f->tiff, t, y0, ny, dst);
+	if (t < 0 || t >= f->count || y0 < 0 || ny < 1 || y0 + ny > f->height)
+		return c0_fail(C0_EINVAL, "%s: frame %lld rows %d..%d out of range", f->name, (long long)t, y0, y0 + ny - 1);
+	const size_t n = (size_t)f->height * f->width;
+	memcpy(dst, f->data + (size_t)t * n + (size_t)y0 * f->width, (size_t)ny * f->width * sizeof *dst);
+	return C0_OK;
+}
+
 void c0_frames_close(struct c0_frames *f)
 {
 	if (f->tiff)

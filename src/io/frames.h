@@ -20,6 +20,9 @@ int c0_frames_wrap(struct c0_frames *f, const float *data, int64_t count, int he
 		   const char *name);
 /* Frame t (0-based) into dst (height x width values). */
 int c0_frames_read(struct c0_frames *f, int64_t t, float *dst);
+/* Rows y0..y0+ny-1 of frame t into dst (ny x width): a file reads only the
+ * strips that hold them (each MPI rank reads its own rows). */
+int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *dst);
 void c0_frames_close(struct c0_frames *f);
 /* Multi-channel files (ImageJ channels=, OME SizeC or series) as one stack
  * per channel: a path whose file has C > 1 channels of several planes each

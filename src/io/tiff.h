@@ -51,6 +51,9 @@ const struct c0_tiff_info *c0_tiff_get_info(const struct c0_tiff_reader *r);
  * access is cheapest; any order works. */
 int c0_tiff_read_f32(struct c0_tiff_reader *r, int64_t page, float *dst);
 int c0_tiff_read_f64(struct c0_tiff_reader *r, int64_t page, double *dst);
+/* Rows y0 .. y0+ny-1 of plane `page` into dst (ny*width values): only the
+ * strips or tiles that hold them are read. */
+int c0_tiff_read_rows_f32(struct c0_tiff_reader *r, int64_t page, int64_t y0, int64_t ny, float *dst);
 void c0_tiff_close(struct c0_tiff_reader *r);
 
 /* Whole-file convenience: allocates pages*height*width floats. */

@@ -270,7 +270,7 @@ static int open_file(const char *path, const char *name, struct c0_tiff_reader *
 		return C0_ENOMEM;
 	snprintf(r->name, sizeof r->name, "%s", name);
 	TIFFOpenOptions *o = options(r);
-	r->tif = TIFFOpenExt(path, "r", o);
+	r->tif = TIFFOpenExt(path, "rm", o);   /* read, not map: a mapped stack counts as resident memory */
 	TIFFOpenOptionsFree(o);
 	return finish_open(r, out);
 }
@@ -393,9 +393,10 @@ int c0_tiff_channel_spec(const char *path, char *file, size_t n)
 
 /* NaN or infinity in a float stack would poison every sum it enters; the
  * message says where, so that the user can mend the file. */
-static int check_finite(const struct c0_tiff_reader *r, int64_t page, const float *d32, const double *d64)
+static int check_finite(const struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, const float *d32,
+			const double *d64)
 {
-	const size_t n = (size_t)r->info.width * r->info.height;
+	const size_t n = (size_t)r->info.width * (size_t)(yb - ya);
 	size_t i = 0;
 	if (d32) {
 		while (i < n && isfinite(d32[i]))
@@ -408,7 +409,7 @@ static int check_finite(const struct c0_tiff_reader *r, int64_t page, const floa
 		return C0_OK;
 	double v = d32 ? d32[i] : d64[i];
 	return c0_fail(C0_EFORMAT, "%s: frame %lld, pixel (x %lld, y %lld) is %s; non-finite pixels are not supported (replace them first)",
-		       r->name, (long long)page + 1, (long long)(i % r->info.width), (long long)(i / r->info.width),
+		       r->name, (long long)page + 1, (long long)(i % r->info.width), (long long)(ya + (int64_t)(i / r->info.width)),
 		       isnan(v) ? "NaN" : v > 0 ? "+infinity" : "-infinity");
 }
 
@@ -440,9 +441,10 @@ static void convert(enum c0_dtype t, const uint8_t *src, size_t n, float *d32, d
 #undef CONV
 }
 
-static int read_strips(struct c0_tiff_reader *r, int64_t page, float *d32, double *d64);
+static int read_strips(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64);
 
-static int read_page(struct c0_tiff_reader *r, int64_t page, float *d32, double *d64)
+/* rows [ya, yb) of a page into rows 0.. of the destination */
+static int read_page(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64)
 {
 	int st = seek_page(r, page);
 	if (st)
@@ -461,7 +463,7 @@ static int read_page(struct c0_tiff_reader *r, int64_t page, float *d32, double 
 		size_t tsz = (size_t)tw * th * bs;
 		if ((st = ensure_buf(r, tsz)))
 			return st;
-		for (int64_t y0 = 0; y0 < H; y0 += th)
+		for (int64_t y0 = ya / th * th; y0 < yb; y0 += th)
 			for (int64_t x0 = 0; x0 < W; x0 += tw) {
 				uint32_t ti = TIFFComputeTile(r->tif, (uint32_t)x0, (uint32_t)y0, 0, 0);
 				if (TIFFReadEncodedTile(r->tif, ti, r->buf, (tmsize_t)tsz) != (tmsize_t)tsz)
@@ -469,20 +471,20 @@ static int read_page(struct c0_tiff_reader *r, int64_t page, float *d32, double 
 						       (long long)page + 1, ti, r->tiffmsg[0] ? r->tiffmsg : "truncated file");
 				int64_t nx = W - x0 < tw ? W - x0 : tw, ny = H - y0 < th ? H - y0 : th;
 				for (int64_t y = 0; y < ny; y++) {
-					size_t o = (size_t)(y0 + y) * W + x0;
+					if (y0 + y < ya || y0 + y >= yb)
+						continue;
+					size_t o = (size_t)(y0 + y - ya) * W + x0;
 					convert(r->info.dtype, r->buf + (size_t)y * tw * bs, nx, d32 ? d32 + o : NULL, d64 ? d64 + o : NULL);
 				}
 			}
-	} else {
-		if ((st = read_strips(r, page, d32, d64)))
-			return st;
-	}
+	} else if ((st = read_strips(r, page, ya, yb, d32, d64)))
+		return st;
 	if (r->allow_nonfinite || (r->info.dtype != C0_F32 && r->info.dtype != C0_F64))
 		return C0_OK;
-	return check_finite(r, page, d32, d64);
+	return check_finite(r, page, ya, yb, d32, d64);
 }
 
-static int read_strips(struct c0_tiff_reader *r, int64_t page, float *d32, double *d64)
+static int read_strips(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64)
 {
 	const int64_t W = r->info.width, H = r->info.height;
 	const size_t bs = c0_dtype_size(r->info.dtype);
@@ -493,27 +495,37 @@ static int read_strips(struct c0_tiff_reader *r, int64_t page, float *d32, doubl
 		rps = (uint32_t)H;
 	if ((st = ensure_buf(r, (size_t)rps * W * bs)))
 		return st;
-	for (int64_t y0 = 0; y0 < H; y0 += rps) {
+	for (int64_t y0 = ya / rps * rps; y0 < yb; y0 += rps) {
 		int64_t ny = H - y0 < rps ? H - y0 : rps;
 		tmsize_t want = (tmsize_t)(ny * W * bs);
 		uint32_t s = TIFFComputeStrip(r->tif, (uint32_t)y0, 0);
 		if (TIFFReadEncodedStrip(r->tif, s, r->buf, want) != want)
 			return c0_fail(C0_EFORMAT, "%s: page %lld: cannot read strip %u (%s)", r->name,
 				       (long long)page + 1, s, r->tiffmsg[0] ? r->tiffmsg : "truncated file");
-		size_t o = (size_t)y0 * W;
-		convert(r->info.dtype, r->buf, (size_t)(ny * W), d32 ? d32 + o : NULL, d64 ? d64 + o : NULL);
+		int64_t a = y0 > ya ? y0 : ya, b = y0 + ny < yb ? y0 + ny : yb;
+		size_t o = (size_t)(a - ya) * W;
+		convert(r->info.dtype, r->buf + (size_t)(a - y0) * W * bs, (size_t)((b - a) * W), d32 ? d32 + o : NULL,
+			d64 ? d64 + o : NULL);
 	}
 	return C0_OK;
 }
 
 int c0_tiff_read_f32(struct c0_tiff_reader *r, int64_t page, float *dst)
 {
-	return read_page(r, page, dst, NULL);
+	return read_page(r, page, 0, r->info.height, dst, NULL);
+}
+
+int c0_tiff_read_rows_f32(struct c0_tiff_reader *r, int64_t page, int64_t y0, int64_t ny, float *dst)
+{
+	if (y0 < 0 || ny < 1 || y0 + ny > r->info.height)
+		return c0_fail(C0_EINVAL, "%s: rows %lld..%lld are outside the %lld-row image", r->name, (long long)y0,
+			       (long long)(y0 + ny - 1), (long long)r->info.height);
+	return read_page(r, page, y0, y0 + ny, dst, NULL);
 }
 
 int c0_tiff_read_f64(struct c0_tiff_reader *r, int64_t page, double *dst)
 {
-	return read_page(r, page, NULL, dst);
+	return read_page(r, page, 0, r->info.height, NULL, dst);
 }
 
 int c0_tiff_load_f32(const char *path, struct c0_tiff_info *info, float **data)

@@ -3,18 +3,23 @@
 #include "core/mem.h"
 
 #include <math.h>
+
 #include <stdlib.h>
 #include <string.h>
 
-#define BLOCK 32   /* frames per pass over the accumulators */
+#define BLOCK 32                 /* at most this many frames per pass over the sums */
+#define BLOCK_BYTES (64 << 20)   /* and at most this much memory for them */
 
 struct c0_cov_acc {
-	struct c0_cov c;
+	int W, H, d, nlag;
+	int *dy, *dx;
+	int64_t frames;
+	float *sum;         /* nlag * H * W sums of products of shifted values */
 	double *shift;      /* first frame: sums are of y - shift, which keeps them small */
 	double *s1;
 	double *st;         /* sum over frames of t (y - shift): the linear trend */
-	double *blk;        /* BLOCK frames, shifted */
-	int nb;
+	float *blk;         /* up to `block` frames, shifted */
+	int nb, block;
 };
 
 int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
@@ -25,28 +30,45 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 	struct c0_cov_acc *a = c0_alloc(1, sizeof *a);
 	if (!a)
 		return C0_ENOMEM;
-	struct c0_cov *c = &a->c;
-	c->W = W, c->H = H, c->d = d;
-	c->nlag = (d + 1) * (2 * d + 1) - d;
+	a->W = W, a->H = H, a->d = d;
+	a->nlag = (d + 1) * (2 * d + 1) - d;
 	size_t n = (size_t)W * H;
-	c->dy = c0_alloc((size_t)c->nlag, sizeof(int));
-	c->dx = c0_alloc((size_t)c->nlag, sizeof(int));
-	c->r = c0_alloc((size_t)c->nlag * n, sizeof(double));
-	c->mean = c0_alloc(n, sizeof(double));
+	a->block = c0_cov_block_frames(n);
+	a->dy = c0_alloc((size_t)a->nlag, sizeof(int));
+	a->dx = c0_alloc((size_t)a->nlag, sizeof(int));
+	a->sum = c0_alloc((size_t)a->nlag * n, sizeof(float));
 	a->shift = c0_alloc(n, sizeof(double));
 	a->s1 = c0_alloc(n, sizeof(double));
 	a->st = c0_alloc(n, sizeof(double));
-	a->blk = c0_alloc(n * BLOCK, sizeof(double));
-	if (!c->dy || !c->dx || !c->r || !c->mean || !a->shift || !a->s1 || !a->st || !a->blk) {
+	a->blk = c0_alloc(n * (size_t)a->block, sizeof(float));
+	if (!a->dy || !a->dx || !a->sum || !a->shift || !a->s1 || !a->st || !a->blk) {
 		c0_cov_acc_free(a);
-		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, c->nlag);
+		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, (d + 1) * (2 * d + 1) - d);
 	}
 	int l = 0;
 	for (int dy = 0; dy <= d; dy++)
 		for (int dx = -d; dx <= d; dx++)
 			if (dy > 0 || dx >= 0)
-				c->dy[l] = dy, c->dx[l] = dx, l++;
+				a->dy[l] = dy, a->dx[l] = dx, l++;
 	*out = a;
+	return C0_OK;
+}
+
+int c0_cov_block_frames(size_t pixels)
+{
+	size_t b = BLOCK_BYTES / (pixels * sizeof(float));
+	return b < 1 ? 1 : b > BLOCK ? BLOCK : (int)b;
+}
+
+int c0_cov_acc_set_block(struct c0_cov_acc *a, int frames)
+{
+	if (a->frames || frames < 1)
+		return c0_fail(C0_EINVAL, "covariance: the block size is set before the first frame (got %d)", frames);
+	float *b = c0_alloc((size_t)a->W * a->H * (size_t)frames, sizeof *b);
+	if (!b)
+		return C0_ENOMEM;
+	free(a->blk);
+	a->blk = b, a->block = frames;
 	return C0_OK;
 }
 
@@ -60,89 +82,142 @@ void c0_cov_acc_free(struct c0_cov_acc *a)
 {
 	if (!a)
 		return;
-	c0_cov_free(&a->c);
-	free(a->shift), free(a->s1), free(a->st), free(a->blk);
+	free(a->dy), free(a->dx), free(a->sum), free(a->shift), free(a->s1), free(a->st), free(a->blk);
 	free(a);
 }
 
+/* The sums are float (half the memory of the band: whole sCMOS frames fit);
+ * each pass adds a block of frames in double and rounds once. */
 static void flush(struct c0_cov_acc *a)
 {
-	struct c0_cov *c = &a->c;
-	const int W = c->W, H = c->H, nb = a->nb;
+	const int W = a->W, H = a->H, nb = a->nb;
 	const size_t n = (size_t)W * H;
+	if (!nb)
+		return;
 	/* each (lag, row) owns one accumulator row: no races, frames reused from cache */
-#pragma omp parallel for collapse(2) schedule(dynamic, 8)
-	for (int l = 0; l < c->nlag; l++)
-		for (int y = 0; y < H; y++) {
-			const int dy = c->dy[l], dx = c->dx[l];
-			if (y + dy >= H)
-				continue;
-			const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? W - dx : W;
-			double *acc = c->r + (size_t)l * n + (size_t)y * W;
-			for (int b = 0; b < nb; b++) {
-				const double *p = a->blk + b * n + (size_t)y * W;
-				const double *q = a->blk + b * n + (size_t)(y + dy) * W + dx;
+#pragma omp parallel
+	{
+		double *row = malloc(sizeof *row * (size_t)W);
+#pragma omp for collapse(2) schedule(dynamic, 8)
+		for (int l = 0; l < a->nlag; l++)
+			for (int y = 0; y < H; y++) {
+				const int dy = a->dy[l], dx = a->dx[l];
+				if (y + dy >= H || !row)
+					continue;
+				const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? W - dx : W;
+				float *acc = a->sum + (size_t)l * n + (size_t)y * W;
 				for (int x = x0; x < x1; x++)
-					acc[x] += p[x] * q[x];
+					row[x] = acc[x];
+				for (int b = 0; b < nb; b++) {
+					const float *p = a->blk + b * n + (size_t)y * W;
+					const float *q = a->blk + b * n + (size_t)(y + dy) * W + dx;
+#pragma omp simd
+					for (int x = x0; x < x1; x++)
+						row[x] += (double)p[x] * q[x];
+				}
+				for (int x = x0; x < x1; x++)
+					acc[x] = (float)row[x];
 			}
-		}
+		free(row);
+	}
 	a->nb = 0;
 }
 
 int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
 {
-	struct c0_cov *c = &a->c;
-	const size_t n = (size_t)c->W * c->H;
-	if (c->frames == 0)
+	const size_t n = (size_t)a->W * a->H;
+	if (a->frames == 0)
 		for (size_t i = 0; i < n; i++)
 			a->shift[i] = frame[i];
-	double *dst = a->blk + a->nb * n;
-	const double t = (double)c->frames;
+	float *dst = a->blk + a->nb * n;
+	const double t = (double)a->frames;
 	for (size_t i = 0; i < n; i++) {
-		dst[i] = frame[i] - a->shift[i];
+		double v = frame[i] - a->shift[i];
+		dst[i] = (float)v;
 		a->s1[i] += dst[i];
 		a->st[i] += t * dst[i];
 	}
-	c->frames++;
-	if (++a->nb == BLOCK)
+	a->frames++;
+	if (++a->nb == a->block)
 		flush(a);
 	return C0_OK;
 }
 
-int c0_cov_acc_finish(struct c0_cov_acc *a, struct c0_cov *out)
+/* a_i / sqrt(Stt) of pixel k */
+static double trend(const struct c0_cov_acc *a, size_t k)
 {
-	struct c0_cov *c = &a->c;
-	if (c->frames < 3) {
-		int st = c0_fail(C0_EINVAL, "covariance needs at least 3 frames (got %lld)", (long long)c->frames);
-		c0_cov_acc_free(a);
-		return st;
-	}
+	const double T = (double)a->frames, tbar = (T - 1) / 2, Stt = T * (T * T - 1) / 12;
+	return (a->st[k] - tbar * a->s1[k]) / sqrt(Stt);
+}
+
+int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct c0_cov *out)
+{
+	memset(out, 0, sizeof *out);
+	if (a->frames < 3)
+		return c0_fail(C0_EINVAL, "covariance needs at least 3 frames (got %lld)", (long long)a->frames);
+	if (y0 < 0 || x0 < 0 || h < 1 || w < 1 || y0 + h > a->H || x0 + w > a->W)
+		return c0_fail(C0_EINVAL, "covariance: window %dx%d at (%d, %d) outside %dx%d", w, h, x0, y0, a->W, a->H);
 	flush(a);
-	const int W = c->W, H = c->H;
-	const size_t n = (size_t)W * H;
-	const double T = (double)c->frames;
+	struct c0_cov *c = out;
+	c->W = w, c->H = h, c->d = a->d, c->nlag = a->nlag, c->frames = a->frames;
+	const size_t n = (size_t)w * h, N = (size_t)a->W * a->H;
+	c->dy = c0_alloc((size_t)c->nlag, sizeof(int));
+	c->dx = c0_alloc((size_t)c->nlag, sizeof(int));
+	c->r = c0_alloc((size_t)c->nlag * n, sizeof(double));
+	c->mean = c0_alloc(n, sizeof(double));
+	if (!c->dy || !c->dx || !c->r || !c->mean) {
+		c0_cov_free(c);
+		return c0_fail(C0_ENOMEM, "covariance: out of memory for a %dx%d window x %d lags", w, h, a->nlag);
+	}
+	memcpy(c->dy, a->dy, sizeof(int) * (size_t)c->nlag);
+	memcpy(c->dx, a->dx, sizeof(int) * (size_t)c->nlag);
+	const double T = (double)a->frames;
 	/* a per-pixel linear trend (bleaching, slow drift of the lamp) is not
 	 * fluctuation: remove it. With a_i = sum_t (t - tbar) y_i and
 	 * Stt = sum_t (t - tbar)^2, the detrended cross-product is
 	 * sum (y_i - ybar_i)(y_j - ybar_j) - a_i a_j / Stt, over T - 2 degrees of freedom. */
-	const double tbar = (T - 1) / 2, Stt = T * (T * T - 1) / 12;
-	for (size_t i = 0; i < n; i++) {
-		c->mean[i] = a->s1[i] / T;       /* shifted mean */
-		a->st[i] = (a->st[i] - tbar * a->s1[i]) / sqrt(Stt);   /* a_i / sqrt(Stt) */
+	double *tr = c0_alloc(n, sizeof *tr);
+	if (!tr) {
+		c0_cov_free(c);
+		return C0_ENOMEM;
 	}
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			const size_t k = (size_t)(y0 + y) * a->W + x0 + x, i = (size_t)y * w + x;
+			c->mean[i] = a->s1[k] / T;   /* shifted mean */
+			tr[i] = trend(a, k);
+		}
+	/* each entry only from its own pixels' sums: a window gives the same
+	 * numbers as the whole image, whatever the tiling */
 	for (int l = 0; l < c->nlag; l++) {
 		const int dy = c->dy[l], dx = c->dx[l];
-		for (int y = 0; y + dy < H; y++)
-			for (int x = dx < 0 ? -dx : 0; x < (dx > 0 ? W - dx : W); x++) {
-				size_t i = (size_t)y * W + x, j = (size_t)(y + dy) * W + x + dx;
-				double *r = c->r + (size_t)l * n + i;
-				*r = (*r - T * c->mean[i] * c->mean[j] - a->st[i] * a->st[j]) / (T - 2);
+		for (int y = 0; y + dy < h; y++)
+			for (int x = dx < 0 ? -dx : 0; x < (dx > 0 ? w - dx : w); x++) {
+				size_t i = (size_t)y * w + x, j = (size_t)(y + dy) * w + x + dx;
+				double s = a->sum[(size_t)l * N + (size_t)(y0 + y) * a->W + x0 + x];
+				c->r[(size_t)l * n + i] = (s - T * c->mean[i] * c->mean[j] - tr[i] * tr[j]) / (T - 2);
 			}
 	}
-	for (size_t i = 0; i < n; i++)
-		c->mean[i] += a->shift[i];
-	*out = *c;
-	memset(c, 0, sizeof *c);
-	c0_cov_acc_free(a);
+	free(tr);
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++)
+			c->mean[(size_t)y * w + x] += a->shift[(size_t)(y0 + y) * a->W + x0 + x];
 	return C0_OK;
+}
+
+double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x)
+{
+	flush(a);
+	const size_t i = (size_t)y * a->W + x;
+	const double T = (double)a->frames, m = a->s1[i] / T, b = trend(a, i);
+	return (a->sum[i] - T * m * m - b * b) / (T - 2);
+}
+
+int64_t c0_cov_acc_frames(const struct c0_cov_acc *a) { return a->frames; }
+
+int c0_cov_acc_finish(struct c0_cov_acc *a, struct c0_cov *out)
+{
+	int st = c0_cov_acc_window(a, 0, 0, a->H, a->W, out);
+	c0_cov_acc_free(a);
+	return st;
 }

@@ -4,8 +4,13 @@
  * of them (R is symmetric): lags (dy, dx) with dy > 0, or dy = 0 and dx >= 0.
  * r[l][y][x] = cov(pixel (y, x), pixel (y + dy_l, x + dx_l)) over time, each
  * pixel's mean and linear trend in time removed (a fade would otherwise add
- * to every covariance), normalised by T - 2; 0 where the partner falls outside. */
+ * to every covariance), normalised by T - 2; 0 where the partner falls outside.
+ * The accumulator holds float sums of products of values shifted by the
+ * first frame, added in double a block of frames at a time (relative
+ * rounding ~1e-7, far below the covariance's own sampling error): the
+ * band of a 2048x2048 frame then fits in 1.4 GB (lag 6). */
 #pragma once
+#include <stddef.h>
 #include <stdint.h>
 
 struct c0_cov {
@@ -20,6 +25,18 @@ struct c0_cov_acc;
 
 int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out);
 int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame);
+/* The covariance of the window (rows y0..y0+h-1, columns x0..x0+w-1) as if
+ * the stack had only those pixels (pairs leaving the window are 0). The
+ * accumulator is kept: windows of one image are cut from one pass. */
+int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct c0_cov *out);
+/* Temporal variance of one pixel so far. */
+double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x);
+int64_t c0_cov_acc_frames(const struct c0_cov_acc *a);
+/* Frames added per pass over the sums for an image of this many pixels (the
+ * sums round once per pass). An accumulator over some rows of an image sets
+ * the whole image's value, so that it gives the same numbers bit for bit. */
+int c0_cov_block_frames(size_t pixels);
+int c0_cov_acc_set_block(struct c0_cov_acc *a, int frames);
 /* Finishes (needs >= 3 frames) and frees the accumulator. */
 int c0_cov_acc_finish(struct c0_cov_acc *a, struct c0_cov *out);
 void c0_cov_acc_free(struct c0_cov_acc *a);

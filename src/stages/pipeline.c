@@ -11,6 +11,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 #include "core/progress.h"
+#include "core/comm.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -205,12 +206,17 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		cJSON_AddNumberToObject(o, "noise_variance", s->sigma2);
 		cJSON_AddNumberToObject(o, "iterations", s->iters);
 		cJSON_AddBoolToObject(o, "converged", s->converged);
+		cJSON_AddNumberToObject(o, "duality_gap", s->gap);
+		cJSON_AddNumberToObject(o, "tiles", s->tiles);
+		cJSON_AddNumberToObject(o, "tile_px", s->tile);
 		cJSON_AddNumberToObject(o, "support_pixels", s->support_pixels);
 		cJSON_AddNumberToObject(o, "covariance_s", s->t_cov);
 		cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);
 		cJSON_AddNumberToObject(o, "solve_s", s->t_solve);
 		c0_report_add_array(o, "objective", s->hist, s->nhist);
-		cJSON_AddStringToObject(o, "lambda_rule", s->lambda_auto ? "automatic" : "given");
+		cJSON_AddStringToObject(o, "lambda_rule", s->lambda_auto ? "automatic"
+					: c->lambda_rel > 0 ? "given"
+					: "the penalty's fixed default (the automatic rule and the FRC need one tile and one process)");
 		if (s->lambda_auto) {
 			const struct c0_lambda_result *v = &s->cv;
 			cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
@@ -656,6 +662,8 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 		st = c0_step_drift(r, f, n);
 	if (!st)
 		st = c0_step_support(r, &s.support, f);
+	if (c0_comm_rank() != 0)
+		return st;      /* MPI: the other ranks share the support step; rank 0 has the result */
 	int any = 0;
 	for (size_t i = 0; !st && i < (size_t)r->Ly * r->Lx; i++)
 		any |= r->mask[i];

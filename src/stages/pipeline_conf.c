@@ -47,6 +47,7 @@ static const struct param params[] = {
 	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
 	{ "drift", P_ENUM, F(drift), 0, 0, "off|on", "estimate lateral drift from block means and undo it before the covariance and the means (on)" },
 	NUM(frc, P_FLAG, "1: also solve each half of the frames for the FRC resolution and the localisation precision (1)"),
+	NUM(tile, P_INT, "support tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
 	{ "background", P_ENUM, F(background), 0, 0, "none|constant|smooth", "background model (smooth)" },
 	NUM(beta, P_DOUBLE, "background smoothness weight (20)"),
 	NUM(nu, P_DOUBLE, "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (1; 0: sqrt(T))"),
@@ -226,7 +227,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
 					       .fista = { c->iterations, c->tol }, .cel0_outer = c->reweightings,
-					       .frc = c->frc };
+					       .frc = c->frc, .tile = c->tile };
 	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,

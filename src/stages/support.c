@@ -6,9 +6,12 @@
 #include "core/err.h"
 #include "core/mem.h"
 #include "core/progress.h"
+#include "core/comm.h"
+#include "stages/tiles.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
 
 int c0_support_lag(const struct c0_support_conf *c)
@@ -42,6 +45,10 @@ int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t fram
 	if (c->lag < 0 || c->lag > 1000)
 		return c0_fail(C0_EINVAL, "lag %d: must be 0 (from the PSF) to 1000 pixels", c->lag);
 	int d = c0_support_lag(c);
+	if (c->tile && c->tile < 2 * d + 1)
+		return c0_fail(C0_EINVAL, "tile %d: smaller than the PSF band (%d pixels for lag %d)", c->tile, 2 * d + 1, d);
+	if (c->tile && c->tile > (W > H ? W : H))
+		return c0_fail(C0_EINVAL, "tile %d: larger than the %dx%d image of %s", c->tile, W, H, name);
 	if (W < 2 * d + 1 || H < 2 * d + 1)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels is smaller than the PSF band (%d x %d pixels for lag %d)",
 			       name, W, H, 2 * d + 1, 2 * d + 1, d);
@@ -63,6 +70,7 @@ struct ctx {
 	double trR, R2, HW;
 	double *Ax;
 	const uint8_t *mask;     /* if set, x is free only here */
+	double lam;
 };
 
 /* f(x) = min_s 1/2 ||R - M(x) - s I||^2 (s in closed form) and its gradient */
@@ -83,12 +91,165 @@ static double smooth(void *vctx, const double *x, double *g)
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
 
+/* The same on a working set: x and g hold only the pixels ws[0..nws), the
+ * others are 0. A x = Hy X Hx costs 2 band products per stored pixel instead
+ * of per grid pixel: the support is a few percent of the grid. */
+struct wctx {
+	struct ctx *c;
+	const size_t *ws;
+	size_t nws;
+	double *T;           /* Ly x Lx scratch, zero outside the rows in use */
+	uint8_t *row;        /* rows of T touched by the last call */
+};
+
+static double smooth_ws(void *vctx, const double *xw, double *gw)
+{
+	struct wctx *w = vctx;
+	const struct c0_covop *op = w->c->op;
+	const struct c0_band *Hy = &op->Hy, *Hx = &op->Hx;
+	const int Ly = op->Ly, Lx = op->Lx;
+	for (int a = 0; a < Ly; a++)
+		if (w->row[a])
+			memset(w->T + (size_t)a * Lx, 0, sizeof *w->T * (size_t)Lx), w->row[a] = 0;
+	/* T = X Hx (Hx symmetric: row b of Hx is its column b) */
+	for (size_t k = 0; k < w->nws; k++) {
+		if (xw[k] == 0)
+			continue;
+		const size_t i = w->ws[k];
+		const int a = (int)(i / (size_t)Lx), b = (int)(i % (size_t)Lx);
+		const double v = xw[k], *h = Hx->v + (size_t)b * Hx->w;
+		double *t = w->T + (size_t)a * Lx + Hx->start[b];
+		for (int u = 0; u < Hx->w; u++)
+			t[u] += v * h[u];
+		w->row[a] = 1;
+	}
+	double xc = 0, xax = 0, xn = 0;
+	for (size_t k = 0; k < w->nws; k++) {
+		const size_t i = w->ws[k];
+		const int a = (int)(i / (size_t)Lx), b = (int)(i % (size_t)Lx);
+		const double *h = Hy->v + (size_t)a * Hy->w, *t = w->T + (size_t)Hy->start[a] * Lx + b;
+		double ax = 0;
+		for (int u = 0; u < Hy->w; u++)
+			ax += h[u] * t[(size_t)u * Lx];
+		gw[k] = ax;
+		xc += xw[k] * w->c->C[i], xax += xw[k] * ax, xn += xw[k] * op->n[i];
+	}
+	const struct ctx *c = w->c;
+	const double s = fmax(0, (c->trR - xn) / c->HW);
+	for (size_t k = 0; k < w->nws; k++)
+		gw[k] += s * op->n[w->ws[k]] - c->C[w->ws[k]];
+	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
+}
+
+/* l1 by FISTA: a short run on the whole grid finds where the support can
+ * be; then FISTA on the working set (pixels that are non-zero or whose
+ * gradient would make them so), whose optimality is checked on the whole
+ * grid whenever it converges: pixels that would move join the set and the
+ * solve goes on from where it was. */
+#define WS_WARMUP 100
+static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, double *x, struct c0_fista_info *info)
+{
+	const struct c0_covop *op = ctx->op;
+	const size_t L = (size_t)op->Ly * op->Lx;
+	struct c0_fista_conf f0 = *fc;
+	f0.maxit = fc->maxit < WS_WARMUP ? fc->maxit : WS_WARMUP;
+	int st = c0_fista_nn(smooth, ctx, L, lip, NULL, ctx->lam, x, &f0, info);
+	int used = info->iters;
+	if (st || info->converged || used >= fc->maxit)
+		return st;
+	struct wctx w = { ctx, NULL, 0, c0_alloc(L, sizeof(double)), c0_alloc((size_t)op->Ly, 1) };
+	size_t *ws = c0_alloc(L, sizeof *ws);
+	double *xw = c0_alloc(L, sizeof *xw), *g = ctx->Ax;
+	uint8_t *in = c0_alloc(L, 1);
+	if (!w.T || !w.row || !ws || !xw || !in) {
+		st = C0_ENOMEM;
+		goto out;
+	}
+	w.ws = ws;
+	struct c0_fista_info part = *info;
+	for (;;) {
+		/* the gradient on the whole grid: who would move? */
+		smooth(ctx, x, g);
+		/* join: a gradient that would move the pixel by more than rounding
+		 * (1e-3 lambda); leave: at 0 and held there by a margin (0.1 lambda) */
+		int grew = 0;
+		for (size_t i = 0; i < L; i++) {
+			const double m = g[i] + ctx->lam;
+			if (!in[i] && (x[i] > 0 || m < -1e-3 * ctx->lam))
+				in[i] = 1, grew = 1;
+			else if (in[i] && x[i] == 0 && m > 0.1 * ctx->lam)
+				in[i] = 0;
+		}
+		if (!grew && part.converged)
+			break;
+		w.nws = 0;
+		for (size_t i = 0; i < L; i++)
+			if (in[i])
+				xw[w.nws] = x[i], ws[w.nws++] = i;
+		struct c0_fista_conf fw = *fc;
+		fw.maxit = fc->maxit - used;
+		part.hist = info->hist ? info->hist + used : NULL;
+		part.nhist = info->hist && info->nhist > used ? info->nhist - used : 0;
+		if ((st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, ctx->lam, xw, &fw, &part)))
+			break;
+
+		used += part.iters;
+		memset(x, 0, L * sizeof *x);
+		for (size_t k = 0; k < w.nws; k++)
+			x[ws[k]] = xw[k];
+		if (used >= fc->maxit) {
+			part.converged = 0;
+			break;
+		}
+	}
+	info->iters = used, info->converged = part.converged, info->obj = part.obj;
+
+	info->restarts += part.restarts;
+out:
+	free(w.T), free(w.row), free(ws), free(xw), free(in);
+	return st;
+}
+
+/* Relative duality gap of the l1 problem at x >= 0 (with s in closed form):
+ * the residual rho = R - A x - s I scaled into the dual feasible set,
+ * theta = rho / max(1, max_a (A^T rho)_a / lam), gives
+ *   D = <R, theta> - ||theta||^2 / 2 <= P* <= P = ||rho||^2 / 2 + lam sum x,
+ * and every term is one of the sums the objective needs already. */
+static double gap(void *vctx, const double *x)
+{
+	struct ctx *c = vctx;
+	const struct c0_covop *op = c->op;
+	const size_t L = (size_t)op->Ly * op->Lx;
+	c0_covop_normal(c->op, x, c->Ax);
+	double xc = 0, xax = 0, xn = 0, x1 = 0;
+#pragma omp parallel for reduction(+ : xc, xax, xn, x1) if (L > 100000)
+	for (size_t i = 0; i < L; i++)
+		xc += x[i] * c->C[i], xax += x[i] * c->Ax[i], xn += x[i] * op->n[i], x1 += x[i];
+	const double s = fmax(0, (c->trR - xn) / c->HW);
+	double worst = 0;      /* max_a (A^T rho)_a = max_a -g_a */
+#pragma omp parallel for reduction(max : worst) if (L > 100000)
+	for (size_t i = 0; i < L; i++)
+		worst = fmax(worst, c->C[i] - c->Ax[i] - s * op->n[i]);
+	const double f = 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
+	const double P = f + c->lam * x1, k = fmax(1, worst / c->lam);
+	const double D = (c->R2 - xc - s * c->trR) / k - f / (k * k);
+	return (P - D) / fmax(P, 1e-300);
+}
+
+/* A tile solves with the whole image's normalisation and lambda, so that
+ * every tile answers the same question. */
+struct scale {
+	double norm;     /* largest pixel variance of the image */
+	double lam;      /* absolute lambda (normalised units) */
+	int lmax_only;   /* stop after lambda_max (for the image's lambda_max) */
+};
+
 static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
-		 struct c0_support_result *res);
+		 const struct scale *g, struct c0_support_result *res);
 
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
 {
-	return solve(c, cov, NULL, NULL, res);
+	return solve(c, cov, NULL, NULL, NULL, res);
 }
 
 int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2)
@@ -98,7 +259,7 @@ int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, 
 	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
 	struct c0_support_result r;
 	memset(&r, 0, sizeof r);
-	int st = solve(&cc, cov, mask, NULL, &r);
+	int st = solve(&cc, cov, mask, NULL, NULL, &r);
 	*sigma2 = r.sigma2;
 	c0_support_result_free(&r);
 	return st;
@@ -106,7 +267,7 @@ int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, 
 
 /* x0 (or NULL): a start in camera units (rx of another solve) */
 static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
-		 struct c0_support_result *res)
+		 const struct scale *g, struct c0_support_result *res)
 {
 	double t0 = c0_now();
 	const int W = cov->W, H = cov->H, r = c->srf;
@@ -115,14 +276,14 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), cov->d);
 	if (st)
 		return st;
-	double *R = c0_alloc((size_t)cov->nlag * n, sizeof *R), *C = c0_alloc(L, sizeof *C);
+	double *C = c0_alloc(L, sizeof *C);
 	double *x = c0_alloc(L, sizeof *x), *Ax = c0_alloc(L, sizeof *Ax);
 	res->Ly = H * r, res->Lx = W * r, res->lag = cov->d, res->nlag = cov->nlag, res->frames = cov->frames;
 	res->mask = c0_alloc(L, 1);
 	res->rx = c0_alloc(L, sizeof *res->rx);
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!R || !C || !x || !Ax || !res->mask || !res->rx || !res->hist) {
+	if (!C || !x || !Ax || !res->mask || !res->rx || !res->hist) {
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -131,6 +292,8 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	double mx = 0;
 	for (size_t i = 0; i < n; i++)
 		mx = fmax(mx, cov->r[i]);
+	if (g)
+		mx = g->norm;
 	if (!(mx > 0)) {
 		st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
 		goto out;
@@ -138,18 +301,20 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	res->norm = mx;
 	for (size_t i = 0; x0 && i < L; i++)
 		x[i] = x0[i] / mx;
-	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, mask };
+	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, mask, 0 };
 	for (int l = 0; l < cov->nlag; l++) {
 		double w = c0_cov_weight(cov, l);
 		for (size_t i = 0; i < n; i++) {
 			double v = cov->r[(size_t)l * n + i] / mx;
-			R[(size_t)l * n + i] = v;
 			ctx.R2 += w * v * v;
 			if (l == 0)
 				ctx.trR += v;
 		}
 	}
-	c0_covop_adjoint(&op, cov, R, C);
+	/* C = A^T (R / mx), without a normalised copy of the band */
+	c0_covop_adjoint(&op, cov, cov->r, C);
+	for (size_t i = 0; i < L; i++)
+		C[i] /= mx;
 	/* lambda_max: the smallest lambda for which x = 0 (with s = tr R / HW) is optimal */
 	double s0 = fmax(0, ctx.trR / ctx.HW), lmax = 0;
 	for (size_t i = 0; i < L; i++) {
@@ -160,18 +325,24 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 			lmax = fmax(lmax, gi * gi / (2 * op.n[i] * op.n[i]));
 	}
 	res->lambda_max = lmax;
-	res->lambda = mask ? 0 : lambda_rel(c) * lmax;
+	if (g && g->lmax_only)
+		goto out;
+	res->lambda = mask ? 0 : g ? g->lam : lambda_rel(c) * lmax;
 	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
-	if (lmax > 0 || mask) {
-		if (c->penalty == C0_PENALTY_L1 || mask)
+	ctx.lam = res->lambda;
+	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
+		if (mask)
 			st = c0_fista_nn(smooth, &ctx, L, op.lip, NULL, res->lambda, x, &c->fista, &info);
+		else if (c->penalty == C0_PENALTY_L1)
+			st = solve_l1(&ctx, &c->fista, op.lip, x, &info);
 		else
 			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &c->fista, c->cel0_outer, c->fista.tol, &info);
 	}
 	if (st)
 		goto out;
 	res->iters = info.iters;
-	res->converged = lmax > 0 ? info.converged : 1;
+	res->converged = lmax > res->lambda || mask ? info.converged : 1;
+	res->gap = c->penalty == C0_PENALTY_L1 && !mask && lmax > res->lambda ? gap(&ctx, x) : 0;
 	res->nhist = info.iters < res->nhist ? info.iters : res->nhist;
 	double xn = 0;
 	for (size_t i = 0; i < L; i++) {
@@ -182,7 +353,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	}
 	res->sigma2 = fmax(0, (ctx.trR - xn) / ctx.HW) * mx;
 out:
-	free(R), free(C), free(x), free(Ax);
+	free(C), free(x), free(Ax);
 	c0_covop_free(&op);
 	res->t_solve = c0_now() - t0;
 	return st;
@@ -290,7 +461,7 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 		cc.fista.maxit = FRC_MAXIT;
 	int st = C0_OK;
 	for (int k = 0; k < 2 && !st; k++)
-		st = solve(&cc, &half[k], NULL, NULL, &h[k]);
+		st = solve(&cc, &half[k], NULL, NULL, NULL, &h[k]);
 	if (!st)
 		st = c0_frc_compute(h[0].rx, h[1].rx, res->Ly, res->Lx, &res->frc);
 	if (!st) {
@@ -305,7 +476,9 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	return st;
 }
 
-int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
+/* One tile and one process: the covariance with its two interleaved halves
+ * (automatic lambda, FRC) in one pass of whole frames. */
+static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
 	struct c0_cov cov = { 0 }, half[2] = { { 0 } };
@@ -318,6 +491,10 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		st = c0_cov_pool(&half[0], &half[1], &cov);
 		tc += c0_now() - t0;
 	}
+	for (size_t i = 0; !st && i < (size_t)cov.W * cov.H; i++)
+		if (!isfinite(cov.r[i]))
+			st = c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
+				     in->name);
 	struct c0_progress ps;
 	c0_progress_begin(&ps, "support", 1);
 	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
@@ -333,6 +510,209 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		res->mean = cov.mean;
 		cov.mean = NULL;
 	}
+	res->tiles = 1, res->tile = c0_support_tile_size(c, in->width, in->height);
 	c0_cov_free(&cov);
+	return st;
+}
+
+/* One tile: its window's covariance from the accumulator (rows from ya),
+ * solved with the image's scale; with lmax_only just its lambda_max. */
+static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tile *t,
+		      const struct scale *g, struct c0_support_result *tr)
+{
+	struct c0_cov cov;
+	memset(tr, 0, sizeof *tr);
+	int st = c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &cov);
+	if (!st)
+		st = solve(c, &cov, NULL, NULL, g, tr);
+	if (!st && !g->lmax_only)
+		tr->mean = cov.mean, cov.mean = NULL;
+	c0_cov_free(&cov);
+	return st;
+}
+
+/* Runs fn over this process's tiles side by side (one tile per thread: the
+ * solvers' own loops then run serially, so a tile's numbers do not depend
+ * on how many threads or processes share the work). */
+static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
+		     int k0, int k1, const struct scale *g, struct c0_support_result *res, double *lmax, double *tile_s2,
+		     double *tile_stats)
+{
+	const int r = c->srf, Lx = tl->t[tl->n - 1].x0 + tl->t[tl->n - 1].w;
+	int fail = C0_OK;
+	char msg[512] = "";
+	struct c0_progress pr;
+	int done = 0;
+	c0_progress_begin(&pr, g->lmax_only ? "support (lambda_max)" : "support (tiles)", k1 - k0);
+#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
+	for (int k = k0; k < k1; k++) {
+		const struct c0_tile *t = &tl->t[k];
+		struct c0_support_result tr;
+		int st = tile_solve(c, acc, ya, t, g, &tr);
+		if (!st && g->lmax_only)
+			lmax[k] = tr.lambda_max;
+		if (!st && !g->lmax_only) {
+			/* keep the interior: fine rows and columns inside the window */
+			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+			for (int y = 0; y < t->ih * r; y++) {
+				const size_t src = (size_t)(oy * r + y) * tr.Lx + (size_t)ox * r;
+				const size_t dst = (size_t)(t->iy0 * r + y) * (Lx * r) + (size_t)t->ix0 * r;
+				memcpy(res->mask + dst, tr.mask + src, (size_t)t->iw * r);
+				memcpy(res->rx + dst, tr.rx + src, (size_t)t->iw * r * sizeof(float));
+			}
+			for (int y = 0; y < t->ih; y++)
+				memcpy(res->mean + (size_t)(t->iy0 + y) * Lx + t->ix0, tr.mean + (size_t)(oy + y) * t->w + ox,
+				       (size_t)t->iw * sizeof(double));
+			tile_s2[k] = tr.sigma2;
+			double *ts = tile_stats + 4 * (size_t)k;
+			ts[0] = tr.iters, ts[1] = tr.converged, ts[2] = tr.gap, ts[3] = tr.lambda_max;
+#pragma omp critical(c0_support_hist)
+			for (int i = 0; i < res->nhist; i++)      /* a finished tile keeps its last value */
+				res->hist[i] += tr.nhist ? tr.hist[i < tr.nhist ? i : tr.nhist - 1] : 0;
+		}
+		if (st) {
+#pragma omp critical(c0_support_fail)
+			if (!fail)
+				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+		c0_support_result_free(&tr);
+#pragma omp critical(c0_support_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	c0_progress_end(&pr);
+	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
+}
+
+int c0_support_tile_size(const struct c0_support_conf *c, int W, int H)
+{
+	int big = W > H ? W : H;
+	return c->tile > 0 ? c->tile : C0_SUPPORT_TILE < big ? C0_SUPPORT_TILE : big;
+}
+
+int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
+{
+	memset(res, 0, sizeof *res);
+	const int W = in->width, H = in->height, r = c->srf, d = c0_support_lag(c);
+	int st = c0_support_check(c, W, H, in->count, in->name);
+	if (st)
+		return st;
+	double t0 = c0_now();
+	/* the tile grid (halo: two lags), and this process's share of it */
+	struct c0_tiling tl;
+	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
+		return st;
+	const int rank = c0_comm_rank(), size = c0_comm_size();
+	if (tl.n == 1 && size == 1) {
+		c0_tiling_free(&tl);
+		return stack_whole(c, in, res);
+	}
+	/* several tiles or processes: the frame halves are not kept, so lambda is
+	 * the penalty's fixed default unless given, and there is no FRC */
+	int k0, k1, ya, yb, ia, ib;
+	c0_tiling_share(&tl, rank, size, &k0, &k1, &ya, &yb, &ia, &ib);
+	const int rows = yb - ya;
+	/* one pass over the frames, each reading only this process's rows */
+	struct c0_cov_acc *acc = NULL;
+	float *frame = NULL;
+	if (rows > 0) {
+		st = c0_cov_acc_new(W, rows, d, &acc);
+		if (!st)
+			st = c0_cov_acc_set_block(acc, c0_cov_block_frames((size_t)W * H));
+		/* a frame hook (drift) needs whole frames */
+		if (!st && !(frame = c0_alloc((size_t)W * (c->frame_fn ? H : rows), sizeof *frame)))
+			st = C0_ENOMEM;
+		struct c0_progress pr;
+		c0_progress_begin(&pr, "covariance", (double)in->count);
+		for (int64_t t = 0; t < in->count && !st; t++) {
+			if (c->frame_fn) {
+				st = c0_frames_read(in, t, frame);
+				if (!st)
+					st = c->frame_fn(c->frame_ctx, t, frame, H, W);
+				if (!st)
+					st = c0_cov_acc_add(acc, frame + (size_t)ya * W);
+			} else {
+				st = c0_frames_read_rows(in, t, ya, rows, frame);
+				if (!st)
+					st = c0_cov_acc_add(acc, frame);
+			}
+			c0_progress_update(&pr, (double)t + 1);
+		}
+		c0_progress_end(&pr);
+		free(frame);
+	}
+	res->t_cov = c0_now() - t0;
+	double t1 = c0_now();
+	/* the image's normalisation: its largest pixel variance */
+	double norm = 0;
+	for (int y = ia; !st && y < ib; y++)
+		for (int x = 0; x < W; x++)
+			norm = fmax(norm, c0_cov_acc_variance(acc, y - ya, x));
+	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
+	double *lmax = c0_alloc(nt, sizeof *lmax), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
+	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->count;
+	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
+	res->mask = c0_alloc(L, 1);
+	res->rx = c0_alloc(L, sizeof *res->rx);
+	res->mean = c0_alloc((size_t)W * H, sizeof *res->mean);
+	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
+	if (!st && (!lmax || !s2 || !stats || !res->mask || !res->rx || !res->mean || !res->hist))
+		st = C0_ENOMEM;
+	if (!(st = c0_comm_status(st))) {
+		c0_comm_max(&norm, 1);
+		if (!isfinite(norm))
+			st = c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
+				     in->name);
+		else if (!(norm > 0))
+			st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+	}
+	/* lambda relative to the image's lambda_max: the largest of the tiles' */
+	struct scale g = { norm, 0, 1 };
+	if (!st)
+		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+	if (!st) {
+		c0_comm_max(lmax, tl.n);
+		for (int k = 0; k < tl.n; k++)
+			res->lambda_max = fmax(res->lambda_max, lmax[k]);
+		res->lambda = lambda_rel(c) * res->lambda_max;
+		res->norm = norm;
+		g.lam = res->lambda, g.lmax_only = 0;
+		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+	}
+	c0_cov_acc_free(acc);
+	/* rank 0 gathers the interiors (each tile's numbers come from one rank,
+	 * so sums over tiles are made in tile order, whatever the ranks) */
+	if (!st) {
+		c0_comm_sum(s2, tl.n);
+		c0_comm_sum(stats, 4 * tl.n);
+		c0_comm_sum(res->hist, res->nhist);
+		st = c0_comm_gather_rows(res->mask, (size_t)W * r, ia * r, (ib - ia) * r);
+		if (!st)
+			st = c0_comm_gather_rows(res->rx, (size_t)W * r * sizeof(float), ia * r, (ib - ia) * r);
+		if (!st)
+			st = c0_comm_gather_rows(res->mean, (size_t)W * sizeof(double), ia, ib - ia);
+	}
+	if (!st) {
+		double area = 0;
+		res->converged = 1;
+		for (int k = 0; k < tl.n; k++) {
+			const struct c0_tile *t = &tl.t[k];
+			const double *ts = stats + 4 * (size_t)k;
+			res->sigma2 += s2[k] * t->ih * t->iw, area += (double)t->ih * t->iw;
+			res->iters = ts[0] > res->iters ? (int)ts[0] : res->iters;
+			res->converged &= ts[1] > 0;
+			res->gap = fmax(res->gap, ts[2]);
+		}
+		res->sigma2 /= area;
+		res->nhist = res->iters < res->nhist ? res->iters : res->nhist;
+		for (size_t i = 0; i < L; i++)
+			res->support_pixels += res->mask[i];
+		res->tiles = tl.n, res->tile = c0_support_tile_size(c, W, H);
+		res->precision_nm = -1;
+	}
+	free(lmax), free(s2), free(stats);
+	c0_tiling_free(&tl);
+	res->t_solve = c0_now() - t1;
+	if (st)
+		c0_support_result_free(res);
 	return st;
 }

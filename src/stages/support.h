@@ -29,10 +29,14 @@ struct c0_support_conf {
 	int cel0_outer;            /* 10 reweightings */
 	int frc;                   /* 1: also solve each half of the frames (on its own, at most 300
 				    * iterations) for the FRC resolution and the localisation precision */
+	int tile;                  /* tile side in camera pixels; 0: C0_SUPPORT_TILE (or the image when smaller) */
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, 1, NULL, NULL }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, 1, 0, NULL, NULL }
+/* Default tile side (docs/parameters.md): tiles are solved side by side and
+ * overlap by two covariance lags on each side. */
+#define C0_SUPPORT_TILE 256
 
 struct c0_support_result {
 	int Ly, Lx, lag, nlag;
@@ -44,6 +48,7 @@ struct c0_support_result {
 	double lambda, lambda_max; /* in normalised covariance units */
 	double norm;               /* normalisation: largest pixel variance */
 	int iters, converged, support_pixels;
+	double gap;                /* l1: relative duality gap at the end, (P - D) / P */
 	double *hist;              /* objective per iteration */
 	int nhist;
 	double t_cov, t_solve;     /* seconds */
@@ -53,6 +58,7 @@ struct c0_support_result {
 	double frc_nm, t_frc;      /* its 1/7 resolution (0: does not cross up to the fine grid's Nyquist), seconds */
 	double precision_nm;       /* localisation sd per axis from the halves' supports (c0_pair_precision),
 				    * for all frames (the halves' / sqrt 2); -1: unknown */
+	int tiles, tile;           /* tile count and side (camera pixels) */
 };
 
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name);
@@ -60,12 +66,19 @@ int c0_support_lag(const struct c0_support_conf *c);
 /* Measured on simulated filaments (docs/parameters.md): l1 1e-2, cel0 3e-5.
  * The two differ because CEL0's lambda_max is on the l0 scale. */
 double c0_support_default_lambda(enum c0_penalty p);
-/* Streams the stack once for its covariance and its two interleaved halves
- * (for the automatic lambda and the FRC), then solves. */
+/* Streams the stack once for the covariance of every tile and its two
+ * interleaved halves (for the automatic lambda and the FRC), each process
+ * reading its rows only, then solves the tiles side by side and keeps
+ * their interiors. sigma2: the tiles' noise variances averaged over their
+ * interiors; iters: the most of any tile; converged: every tile did. With
+ * one tile (images up to the tile size) this is the plain whole-image
+ * solve. Under MPI the result is complete on rank 0. */
 int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *f, struct c0_support_result *res);
 /* Solves from a finished covariance (which is left unchanged). */
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res);
 void c0_support_result_free(struct c0_support_result *r);
+/* The tile side used for a WxH image. */
+int c0_support_tile_size(const struct c0_support_conf *c, int W, int H);
 /* One streaming pass: banded covariance (lag from the PSF) and temporal mean. */
 int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *f, struct c0_cov *cov, double *seconds);
 /* The same pass, even frames into half[0], odd into half[1]. */

@@ -119,7 +119,9 @@ def test_nonfinite(tmp, s16):
     f = os.path.join(tmp, "huge.tif")
     tifffile.imwrite(f, b)
     p = cli(*base, f, s16[1])
-    check(refused(p, ".tif: plane", "not written"), "(e) 3e38 pixel: no NaN output written silently")
+    # refused when writing a non-finite plane, or earlier when the covariance overflows
+    check(refused(p, ".tif: plane", "not written") or refused(p, "huge.tif", "not finite"),
+          "(e) 3e38 pixel: no NaN output written silently")
     check(not os.path.exists(out) and not staging_left(tmp), "(e) nothing left by the refused run")
     info = cli("info", "--json", os.path.join(tmp, "bad_NaN.tif"))
     check(info.returncode == 0, "info still describes a file with NaN: %s" % info.stderr)

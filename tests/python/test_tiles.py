@@ -1,0 +1,130 @@
+"""Tiles, threads and processes through the CLI.
+
+- tiles vs one tile on the same stack agree (stated tolerance: exact-pixel
+  Jaccard >= 0.9, emitter variance within 5 % in L2, noise variance within
+  5 % (each tile fits its own noise variance, which emitters just outside
+  its window inflate: 40-pixel tiles here are 60 % border); the tiles see
+  the same covariance but solve separately, so iterates stopped at the same
+  count differ a little near tile edges);
+- results do not depend on the thread count (bit-identical files);
+- the program sets the passive OpenMP wait policy itself and counts threads
+  from the affinity mask (the report records both, and the MPI rank count);
+- a tile smaller than the PSF band or larger than the image is refused with
+  one line, leaving nothing behind;
+- with MPI: 'run' on 1 and 2 ranks writes identical files.
+
+usage: test_tiles.py COL0RME [MPIRUN]
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+import tifffile
+
+from checks import check, done
+
+CLI = sys.argv[1]
+MPIRUN = sys.argv[2] if len(sys.argv) > 2 and sys.argv[2] else None
+ENV = dict(os.environ)
+ENV.pop("OMP_WAIT_POLICY", None)       # the program must set it itself
+
+
+def cli(*args, pre=(), env=ENV):
+    return subprocess.run([*pre, CLI, *args], capture_output=True, text=True, env=env)
+
+
+def refused(p, *needles):
+    lines = p.stderr.strip().splitlines()
+    return p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
+
+
+def pages(path):
+    """every page on its own: tifffile's ImageJ reader assumes the planes lie
+    back to back, which libtiff's layout (IFD between planes) does not give"""
+    with tifffile.TiffFile(path) as t:
+        return np.stack([p.asarray() for p in t.pages])
+
+
+def same_files(a, b, names):
+    return all(np.array_equal(pages(os.path.join(a, n)), pages(os.path.join(b, n))) for n in names)
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    sim = os.path.join(tmp, "sim")
+    p = cli("simulate", "-o", sim, "--width", "96", "--height", "96", "--frames", "300", "--angles", "62,66",
+            "--filaments", "8")
+    check(p.returncode == 0, "simulate: " + p.stderr)
+    stack = os.path.join(sim, "stack_q01.tif")
+    common = ["--fwhm", "229", "--pixel-size", "100", "--iterations", "400"]
+
+    one, tiled, tiled1 = (os.path.join(tmp, n) for n in ("one", "tiled", "tiled1"))
+    p = cli("support", *common, "-o", one, stack)
+    check(p.returncode == 0, "support, one tile: " + p.stderr)
+    p = cli("support", *common, "--tile", "40", "-o", tiled, stack)
+    check(p.returncode == 0, "support, tiles: " + p.stderr)
+    p = cli("support", *common, "--tile", "40", "--threads", "1", "-o", tiled1, stack)
+    check(p.returncode == 0, "support, tiles, 1 thread: " + p.stderr)
+    r1 = json.load(open(os.path.join(one, "report.json")))
+    rt = json.load(open(os.path.join(tiled, "report.json")))
+    s1, st = r1["support"][0], rt["support"][0]
+    check(s1["tiles"] == 1 and st["tiles"] == 9 and st["tile_px"] == 40, "tile counts %d, %d" % (s1["tiles"], st["tiles"]))
+    a = tifffile.imread(os.path.join(one, "support.tif")) > 0
+    b = tifffile.imread(os.path.join(tiled, "support.tif")) > 0
+    ja = (a & b).sum() / max((a | b).sum(), 1)
+    ra, rb = tifffile.imread(os.path.join(one, "rx.tif")), tifffile.imread(os.path.join(tiled, "rx.tif"))
+    rel = np.linalg.norm(ra - rb) / np.linalg.norm(ra)
+    print("tiles vs one tile: Jaccard %.3f, rx rel. L2 %.4f, noise variance %.4g vs %.4g"
+          % (ja, rel, st["noise_variance"], s1["noise_variance"]))
+    check(ja >= 0.9, "tiles vs one tile: Jaccard %.3f" % ja)
+    check(rel <= 0.05, "tiles vs one tile: rx differs by %.3f" % rel)
+    check(abs(st["noise_variance"] / s1["noise_variance"] - 1) <= 0.05, "noise variance %g vs %g"
+          % (st["noise_variance"], s1["noise_variance"]))
+    check(abs(st["lambda_max"] / s1["lambda_max"] - 1) <= 0.02, "lambda_max %g vs %g" % (st["lambda_max"], s1["lambda_max"]))
+    check(same_files(tiled, tiled1, ("support.tif", "rx.tif")), "1 and 2 threads give different files")
+    check("duality_gap" in st and st["duality_gap"] >= 0, "the report gives the duality gap")
+
+    # threads: the passive wait policy, the count from the affinity mask
+    check(rt["omp_wait_policy"] == "PASSIVE", "OMP_WAIT_POLICY is %r" % rt["omp_wait_policy"])
+    check(rt["mpi_ranks"] == 1, "mpi_ranks %r" % rt.get("mpi_ranks"))
+    check(json.load(open(os.path.join(tiled1, "report.json")))["threads"] == 1, "--threads 1")
+    if os.path.exists("/usr/bin/taskset"):
+        o = os.path.join(tmp, "aff")
+        p = cli("support", *common, "-o", o, stack, pre=("taskset", "-c", "0"), env={k: v for k, v in ENV.items() if k != "OMP_NUM_THREADS"})
+        check(p.returncode == 0 and json.load(open(os.path.join(o, "report.json")))["threads"] == 1,
+              "one CPU in the affinity mask, one thread")
+
+    # bad tile sizes: one line, nothing written
+    for t, words in (("5", ("--tile 5", "smaller than the PSF band")), ("97", ("--tile 97", "larger than"))):
+        o = os.path.join(tmp, "bad" + t)
+        p = cli("support", *common, "--tile", t, "-o", o, stack)
+        check(refused(p, *words), "--tile %s: %r" % (t, p.stderr))
+        check(not os.path.exists(o) or not os.listdir(o), "--tile %s left output" % t)
+    p = cli("support", *common, "--threads", "0", "-o", os.path.join(tmp, "bad0"), stack)
+    check(refused(p, "--threads 0"), "--threads 0: %r" % p.stderr)
+
+    # MPI: the whole method on 1 and 2 ranks, identical files
+    if MPIRUN:
+        env = dict(ENV, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+        small = os.path.join(tmp, "small")
+        p = cli("simulate", "-o", small, "--width", "48", "--height", "48", "--frames", "200", "--angles", "62,66",
+                "--filaments", "5")
+        check(p.returncode == 0, "simulate: " + p.stderr)
+        args = ["run", "--fwhm", "229", "--pixel-size", "100", "--tile", "24", "--angles", "62,66",
+                os.path.join(small, "stack_q01.tif"), os.path.join(small, "stack_q02.tif")]
+        outs = {}
+        for n in (1, 2):
+            o = os.path.join(tmp, "mpi%d" % n)
+            pre = (MPIRUN, "--allow-run-as-root", "--oversubscribe", "-np", str(n))
+            p = cli(*args[:1], *args[1:], "-o", o, pre=pre, env=env)
+            check(p.returncode == 0, "mpirun -np %d: %s" % (n, p.stderr[-2000:]))
+            outs[n] = o
+        if all(os.path.exists(os.path.join(o, "report.json")) for o in outs.values()):
+            names = sorted(f for f in os.listdir(outs[1]) if f.endswith(".tif"))
+            check(names == sorted(f for f in os.listdir(outs[2]) if f.endswith(".tif")), "the same files")
+            check(len(names) >= 6 and same_files(outs[1], outs[2], names), "1 and 2 ranks give different files")
+            check(json.load(open(os.path.join(outs[2], "report.json")))["mpi_ranks"] == 2, "mpi_ranks 2")
+            print("mpi: %d files identical on 1 and 2 ranks" % len(names))
+done()
