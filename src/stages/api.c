@@ -119,6 +119,23 @@ static int number(const char *name, const char *s, double *v)
 	return C0_OK;
 }
 
+/* A comma-separated list of at most C0_MAX_ANGLES numbers. */
+static int numbers(const char *name, const char *value, double *out, int *n)
+{
+	*n = 0;
+	for (const char *p = value; *p; ++*n) {
+		char buf[64];
+		size_t k = strcspn(p, ",");
+		if (k >= sizeof buf || *n >= C0_MAX_ANGLES)
+			return c0_fail(C0_EINVAL, "%s \"%s\": at most %d values", name, value, C0_MAX_ANGLES);
+		memcpy(buf, p, k), buf[k] = 0;
+		if (number(name, buf, &out[*n]))
+			return C0_EINVAL;
+		p += k + (p[k] == ',');
+	}
+	return C0_OK;
+}
+
 int c0_simulation_new(struct c0_simulation **out)
 {
 	*out = c0_alloc(1, sizeof **out);
@@ -136,18 +153,10 @@ int c0_simulation_set(struct c0_simulation *s, const char *name, const char *val
 		return c0_fail(C0_EINVAL, "%s: the simulation has already run", name);
 	double v;
 	if (!strcmp(name, "angles") || !strcmp(name, "nangles")) {
-		int n = 0;
-		for (const char *p = value; *p; n++) {
-			char buf[64];
-			size_t k = strcspn(p, ",");
-			if (k >= sizeof buf || n >= C0_MAX_ANGLES)
-				return c0_fail(C0_EINVAL, "%s \"%s\": at most %d values", name, value, C0_MAX_ANGLES);
-			memcpy(buf, p, k), buf[k] = 0;
-			if (number(name, buf, &v))
-				return C0_EINVAL;
-			s->angles[n] = v;
-			p += k + (p[k] == ',');
-		}
+		int n;
+		if (numbers(name, value, s->angles, &n))
+			return C0_EINVAL;
+		v = n ? s->angles[n - 1] : 0;
 		if (!strcmp(name, "nangles")) {
 			if (n != 1 || v != floor(v) || v < 1 || v > C0_MAX_ANGLES)
 				return c0_fail(C0_EINVAL, "nangles \"%s\": need a whole number 1..%d", value, C0_MAX_ANGLES);
@@ -170,18 +179,9 @@ int c0_simulation_set(struct c0_simulation *s, const char *name, const char *val
 		return c0_fail(C0_EINVAL, "bleach_order \"%s\": expected sequential, interleaved or restart", value);
 	}
 	if (!strcmp(name, "gaps_s")) {
-		int n = 0;
-		for (const char *p = value; *p; n++) {
-			char buf[64];
-			size_t k = strcspn(p, ",");
-			if (k >= sizeof buf || n >= C0_MAX_ANGLES)
-				return c0_fail(C0_EINVAL, "%s \"%s\": at most %d values", name, value, C0_MAX_ANGLES);
-			memcpy(buf, p, k), buf[k] = 0;
-			if (number(name, buf, &v))
-				return C0_EINVAL;
-			s->c.gap_s[n] = v;
-			p += k + (p[k] == ',');
-		}
+		int n;
+		if (numbers(name, value, s->c.gap_s, &n))
+			return C0_EINVAL;
 		s->c.ngaps = n;
 		return C0_OK;
 	}
