@@ -35,7 +35,7 @@ enum c0_status {
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
-enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG };           /* "exact", "diag" */
+enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO }; /* "exact", "diag", "auto" */
 enum c0_discrepancy { C0_DISCREPANCY_RELATIVE, C0_DISCREPANCY_PLAIN };  /* "relative", "plain" */
 enum c0_bleaching { C0_BLEACHING_ESTIMATE, C0_BLEACHING_OFF };       /* "estimate", "off" */
 enum c0_acquisition { C0_ACQ_SEQUENTIAL, C0_ACQ_INTERLEAVED };       /* "sequential", "interleaved" */
@@ -94,7 +94,7 @@ struct c0_run_conf {
 	double axial_weight;   /* 0: axial weight of the regulariser relative to lateral */
 	int matirf_iterations; /* 3000: maximum primal-dual iterations */
 	double matirf_tol;     /* 0: primal-dual stopping tolerance; 0: the solver's, 1e-3 exact, 1e-4 diag */
-	enum c0_matirf_solver matirf_solver; /* exact: per-pixel exact data steps; diag: the earlier diagonal-step solver */
+	enum c0_matirf_solver matirf_solver; /* (auto: exact with hessian, diag with tv) exact: per-pixel exact data steps; diag: diagonal steps */
 	/* the standard MA-TIRF path on raw images (c0_run_matirf, `col0rme matirf`) */
 	double offset;         /* 0: camera offset subtracted from every image */
 	double matirf_background; /* 0: constant background subtracted after the offset */
@@ -118,7 +118,7 @@ struct c0_run_conf {
 	.reweightings = 10, .drift = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 20, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
 	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = 3e-2, .sparsity = 3e-2, \
-	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_EXACT, .background_smooth = 100, .depth_pool_nm = -1 }
+	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .background_smooth = 100, .depth_pool_nm = -1 }
 
 void c0_run_conf_init(struct c0_run_conf *c);
 /* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),

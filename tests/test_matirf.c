@@ -456,7 +456,7 @@ static void test_depth(void)
 	double e = depth_error(&c, 0.10, &res);
 	fprintf(stderr, "matirf TV, 10 %% noise: median depth error %.1f nm, relative residual %.3f\n", e, res);
 	CHECK(e <= 20);
-	c.reg = C0_REG_HESSIAN;
+	c.reg = C0_REG_HESSIAN, c.solver = C0_MATIRF_EXACT;   /* what the run conf's auto picks: diag does not converge here */
 	e = depth_error(&c, 0.10, &res);
 	fprintf(stderr, "matirf Hessian, 10 %% noise: median depth error %.1f nm, relative residual %.3f\n", e, res);
 	CHECK(e <= 20);

@@ -27,7 +27,7 @@ struct c0_matirf_conf {
 	double sparsity;             /* 3e-2: weight s of the l1 term, same scale */
 	struct c0_pdhg_conf pdhg;    /* 3000 iterations; tol 0: the solver's (1e-3 exact, 1e-4 diag); relax 1.8 */
 	int fused;                   /* 1: TV's steps in one pass each; 0: the operator sequence (tests) */
-	enum c0_matirf_solver solver;/* exact */
+	enum c0_matirf_solver solver;/* diag (exact or diag; the run conf's auto is resolved before) */
 	double gamma;                /* 3: exact solver's primal step relative to the diagonal one */
 	/* 0: the images are background-free; > 0: estimate a smooth background
 	 * common to all angles jointly with f, as (I + bg_smooth grad^T grad)^-1
@@ -37,7 +37,7 @@ struct c0_matirf_conf {
 	 * by a Gaussian of this sigma (camera pixels); uses the diag solver */
 	double psf_sigma_px;
 };
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_EXACT, 3, 0, 0 }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0 }
 
 struct c0_matirf_result {
 	int nz, ny, nx;
