@@ -58,7 +58,7 @@ def row(what, size, secs, thr, mem, ratio=""):
 def matirf350(tmp):
     # MA-TIRF at the size of the public example: a 350x350 dense phantom, the
     # example's 13 angles (equally spaced in NA 1.3478..1.4244), bins 0-300 nm.
-    # The exact solver (default) against the diagonal-step one it replaced,
+    # The exact solver against the diagonal-step one (the default with TV),
     # interleaved twice (the faster of each pair); Hessian-Schatten; 1 vs 2 threads.
     import math
     import numpy as np
@@ -84,7 +84,7 @@ def matirf350(tmp):
             if solver not in best or dt < best[solver][0]:
                 best[solver] = (dt, rep, dep)
     (tn, rn, dn), (to, ro, do) = best["exact"], best["diag"]
-    for what, (t, r, d) in (("previous solver (diag)", best["diag"]), ("exact solver (default)", best["exact"])):
+    for what, (t, r, d) in (("diag solver (default with TV)", best["diag"]), ("exact solver (default with the Hessian)", best["exact"])):
         row("matirf, 350x350 phantom, " + what, "350x350x15 x13", t,
             "%.1f CPU-s, %d its, %s, rel. change %.1e, objective %.6g, depth err %.1f nm" %
             (r["cpu"], r["iterations"], "converged" if r["converged"] else "NOT converged", r["final_relative_change"],
