@@ -194,6 +194,19 @@ static double depth_error(const struct c0_matirf_conf *c, double noise, double *
 	return err[k / 2];
 }
 
+/* The phantom seen at the first nq angles with 10 % noise (no I0 factor). */
+static void phantom_images(const struct c0_matirf_conf *c, int n, int nq, double *depth, double *amp, float **img)
+{
+	phantom(n, depth, amp);
+	for (int q = 0; q < nq; q++) {
+		double p;
+		c0_tirf_p(&c->tirf, ANG[q], &p);
+		img[q] = malloc(sizeof(float) * n * n);
+		for (int i = 0; i < n * n; i++)
+			img[q][i] = amp[i] > 0 ? (float)(1000 * amp[i] * exp(-p * depth[i]) * (1 + 0.1 * c0_rng_normal(&rng))) : 0;
+	}
+}
+
 /* the one-pass TV steps against the operator sequence they fuse: the same
  * iterates (to float rounding) after a fixed number of iterations, on a
  * ragged mask (the phantom) with its chunk boundaries inside the rows */
@@ -201,16 +214,9 @@ static void test_fused(void)
 {
 	const int n = 40, nq = 5;
 	double depth[40 * 40], amp[40 * 40];
-	phantom(n, depth, amp);
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
 	float *img[5];
-	for (int q = 0; q < nq; q++) {
-		double p;
-		c0_tirf_p(&c.tirf, ANG[q], &p);
-		img[q] = malloc(sizeof(float) * n * n);
-		for (int i = 0; i < n * n; i++)
-			img[q][i] = amp[i] > 0 ? (float)(1000 * amp[i] * exp(-p * depth[i]) * (1 + 0.1 * c0_rng_normal(&rng))) : 0;
-	}
+	phantom_images(&c, n, nq, depth, amp, img);
 	c.pdhg.maxit = 300, c.pdhg.tol = 1e-30;   /* no stop */
 	c.solver = C0_MATIRF_DIAG;
 	struct c0_matirf_result a, b;
@@ -289,16 +295,9 @@ static void test_solvers(void)
 {
 	const int n = 40, nq = 5;
 	double depth[40 * 40], amp[40 * 40];
-	phantom(n, depth, amp);
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
 	float *img[5];
-	for (int q = 0; q < nq; q++) {
-		double p;
-		c0_tirf_p(&c.tirf, ANG[q], &p);
-		img[q] = malloc(sizeof(float) * n * n);
-		for (int i = 0; i < n * n; i++)
-			img[q][i] = amp[i] > 0 ? (float)(1000 * amp[i] * exp(-p * depth[i]) * (1 + 0.1 * c0_rng_normal(&rng))) : 0;
-	}
+	phantom_images(&c, n, nq, depth, amp, img);
 	struct c0_matirf_result r[4];
 	for (int k = 0; k < 4; k++) {
 		c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;

@@ -476,6 +476,17 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	return st;
 }
 
+/* The normalisation (largest pixel variance) of a streamed stack. */
+static int check_norm(const char *name, double norm)
+{
+	if (!isfinite(norm))
+		return c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
+			       name);
+	if (!(norm > 0))
+		return c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+	return C0_OK;
+}
+
 /* One tile and one process: the covariance with its two interleaved halves
  * (automatic lambda, FRC) in one pass of whole frames. */
 static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
@@ -491,10 +502,11 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 		st = c0_cov_pool(&half[0], &half[1], &cov);
 		tc += c0_now() - t0;
 	}
+	double norm = 0;
 	for (size_t i = 0; !st && i < (size_t)cov.W * cov.H; i++)
-		if (!isfinite(cov.r[i]))
-			st = c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
-				     in->name);
+		norm = isfinite(cov.r[i]) ? fmax(norm, cov.r[i]) : INFINITY;
+	if (!st)
+		st = check_norm(in->name, norm);
 	struct c0_progress ps;
 	c0_progress_begin(&ps, "support", 1);
 	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
@@ -659,11 +671,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		st = C0_ENOMEM;
 	if (!(st = c0_comm_status(st))) {
 		c0_comm_max(&norm, 1);
-		if (!isfinite(norm))
-			st = c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
-				     in->name);
-		else if (!(norm > 0))
-			st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+		st = check_norm(in->name, norm);
 	}
 	/* lambda relative to the image's lambda_max: the largest of the tiles' */
 	struct scale g = { norm, 0, 1 };
