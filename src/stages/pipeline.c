@@ -295,14 +295,7 @@ static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_sup
 		if (s2 > 0) {
 			st = c0_stack_mean(sc, f, &own, frames, seconds);
 		} else {
-			struct c0_cov cov = { 0 };
-			st = c0_stack_covariance(sc, f, &cov, seconds);
-			if (!st) {
-				*frames = cov.frames;
-				st = c0_support_noise(sc, &cov, mask, &s2);
-				own = cov.mean, cov.mean = NULL;
-			}
-			c0_cov_free(&cov);
+			st = c0_stack_noise(sc, f, mask, &own, frames, &s2, seconds);
 		}
 		mean = own;
 	}
@@ -380,6 +373,8 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 			"above: even the largest mu leaves a residual below the target, so the intensity is as smooth as allowed (lower nu or give mu for more detail)",
 			"not converged: mu is the last one tried (give mu to fix it)" };
 		cJSON_AddStringToObject(j, "discrepancy", s->dp_status < 0 ? "fixed mu" : dp[s->dp_status]);
+		cJSON_AddNumberToObject(j, "tiles", s->tiles);
+		cJSON_AddNumberToObject(j, "tiles_discrepancy_met", s->tiles_met);
 		cJSON_AddNumberToObject(j, "solves", s->solves);
 		cJSON_AddNumberToObject(j, "cg_iterations", s->cg_iters);
 		cJSON_AddNumberToObject(j, "seconds", s->seconds + tc[i]);

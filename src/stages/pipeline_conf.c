@@ -47,7 +47,7 @@ static const struct param params[] = {
 	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
 	{ "drift", P_ENUM, F(drift), 0, 0, "off|on", "estimate lateral drift from block means and undo it before the covariance and the means (on)" },
 	NUM(frc, P_FLAG, "1: also solve each half of the frames for the FRC resolution and the localisation precision (1)"),
-	NUM(tile, P_INT, "support tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
+	NUM(tile, P_INT, "support and intensity tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
 	{ "background", P_ENUM, F(background), 0, 0, "none|constant|smooth", "background model (smooth)" },
 	NUM(beta, P_DOUBLE, "background smoothness weight (20)"),
 	NUM(nu, P_DOUBLE, "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (1; 0: sqrt(T))"),
@@ -233,7 +233,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
-						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE };
+						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE,
+						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE };
 	c0_run_conf_matirf(c, &s->matirf);
 	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
 	if ((unsigned)c->discrepancy > C0_DISCREPANCY_PLAIN || (unsigned)c->bleach > C0_BLEACHING_OFF ||

@@ -445,6 +445,89 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double 
 	return st;
 }
 
+int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const uint8_t *mask, double **mean,
+		   int64_t *frames, double *sigma2, double *seconds)
+{
+	*mean = NULL, *frames = in->count, *sigma2 = 0, *seconds = 0;
+	const int W = in->width, H = in->height, r = c->srf, d = c0_support_lag(c);
+	int st = c0_support_check(c, W, H, in->count, in->name);
+	if (st)
+		return st;
+	double t0 = c0_now();
+	struct c0_tiling tl;
+	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
+		return st;
+	struct c0_cov_acc *acc = NULL;
+	st = c0_cov_acc_new(W, H, d, &acc);
+	float *frame = st ? NULL : c0_alloc((size_t)W * H, sizeof *frame);
+	if (!st && !frame)
+		st = C0_ENOMEM;
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
+		if (!st && c->frame_fn)
+			st = c->frame_fn(c->frame_ctx, t, frame, H, W);
+		if (!st)
+			st = c0_cov_acc_add(acc, frame);
+	}
+	free(frame);
+	if (!st && in->count < 3)
+		st = c0_fail(C0_EINVAL, "%s: the covariance needs at least 3 frames", in->name);
+	if (!st)
+		(void)c0_cov_acc_variance(acc, 0, 0);   /* adds the last block: the windows below only read */
+	*seconds = c0_now() - t0;
+	double *s2 = c0_alloc((size_t)tl.n, sizeof *s2);
+	*mean = c0_alloc((size_t)W * H, sizeof **mean);
+	if (!st && (!s2 || !*mean))
+		st = C0_ENOMEM;
+	struct c0_support_conf cc = *c;
+	cc.penalty = C0_PENALTY_L1;
+	cc.fista.maxit = 100;   /* as c0_support_noise */
+	int fail = st;
+	char msg[512] = "";
+#pragma omp parallel for schedule(dynamic, 1) if (tl.n > 1)
+	for (int k = 0; k < (fail ? 0 : tl.n); k++) {
+		const struct c0_tile *t = &tl.t[k];
+		struct c0_cov cov = { 0 };
+		struct c0_support_result tr;
+		memset(&tr, 0, sizeof tr);
+		const size_t Lw = (size_t)t->w * r;
+		uint8_t *m = malloc(Lw * t->h * r);
+		int ts = m ? c0_cov_acc_window(acc, t->y0, t->x0, t->h, t->w, &cov) : C0_ENOMEM;
+		for (int a = 0; !ts && a < t->h * r; a++)
+			memcpy(m + a * Lw, mask + (size_t)(t->y0 * r + a) * W * r + (size_t)t->x0 * r, Lw);
+		if (!ts)
+			ts = solve(&cc, &cov, m, NULL, NULL, &tr);
+		if (!ts) {
+			s2[k] = tr.sigma2;
+			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+			for (int a = 0; a < t->ih; a++)
+				memcpy(*mean + (size_t)(t->iy0 + a) * W + t->ix0, cov.mean + (size_t)(oy + a) * t->w + ox,
+				       (size_t)t->iw * sizeof **mean);
+		}
+		if (ts) {
+#pragma omp critical(c0_noise_fail)
+			if (!fail)
+				fail = ts, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+		c0_cov_free(&cov);
+		c0_support_result_free(&tr);
+		free(m);
+	}
+	if (!st && fail)
+		st = c0_fail(fail, "%s", msg);
+	double area = 0;
+	for (int k = 0; !st && k < tl.n; k++)   /* in tile order: the same sum on any schedule */
+		*sigma2 += s2[k] * tl.t[k].ih * tl.t[k].iw, area += (double)tl.t[k].ih * tl.t[k].iw;
+	if (!st)
+		*sigma2 /= area;
+	c0_cov_acc_free(acc);
+	free(s2);
+	c0_tiling_free(&tl);
+	if (st)
+		free(*mean), *mean = NULL;
+	return st;
+}
+
 /* Each half solved on its own (a warm start from the full solution would
  * make them agree) at the same relative lambda, with at most FRC_MAXIT
  * iterations; the FRC of their emitter variances, and the localisation
