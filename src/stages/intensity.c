@@ -160,7 +160,12 @@ static double residual2(struct prob *p, const double *sol)
 	return s;
 }
 
-struct dp { struct prob *p; double *sol, target, tprev, tmin; int fail; };
+/* mu is wanted to 1 %: the residual, from CG to a tolerance and an active
+ * set, is not smooth enough in mu for the root finder's residual test when
+ * the floor is large, and it would try mu after mu */
+#define DP_LOGMU_TOL 0.01
+
+struct dp { struct prob *p; double *sol, target, tprev, tmin, lo, hi; int fail; };
 
 static double discrepancy(void *ctx, double t)
 {
@@ -174,7 +179,12 @@ static double discrepancy(void *ctx, double t)
 	d->tprev = t;
 	if (solve(d->p, d->sol))
 		d->fail = 1;
-	return residual2(d->p, d->sol) - d->target;
+	const double f = residual2(d->p, d->sol) - d->target;
+	if (f < 0)
+		d->lo = fmax(d->lo, t);
+	else
+		d->hi = fmin(d->hi, t);
+	return d->hi - d->lo <= DP_LOGMU_TOL ? 0 : f;   /* the crossing is known to 1 % in mu: done */
 }
 
 /* No support pixel (a tile off the sample): x = 0 and the background alone,
@@ -381,7 +391,7 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 			if (st)
 				goto out;
 		}
-		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, 0 };
+		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0 };
 		double t;
 		int evals;
 		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
