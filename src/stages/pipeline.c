@@ -249,8 +249,9 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 			free(fq);
 			c0_report_add_array(fr, "correlation", s->frc.corr, s->frc.n);
 			cJSON_AddNumberToObject(fr, "seconds", s->t_frc);
-			cJSON_AddNumberToObject(o, "precision_nm", s->precision_nm);
 		}
+		if (c->frc)    /* tiles: the precision without the FRC (stages/support.c) */
+			cJSON_AddNumberToObject(o, "precision_nm", s->precision_nm);
 		cJSON_AddItemToArray(arr, o);
 	}
 	cJSON *p = cJSON_AddObjectToObject(r->rep, "support_parameters");

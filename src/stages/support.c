@@ -661,6 +661,72 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
 }
 
+/* The localisation precision on tiles: each subset tile's halves solved on
+ * their own (at most FRC_MAXIT iterations, the image's scale and lambda),
+ * their interiors' matched distances added in tile order (half_frc on one
+ * tile). No FRC: its ring sums added over Hann-windowed tiles disagreed
+ * with the one-tile value (docs/parameters.md). */
+static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
+			   int k0, int k1, struct c0_cov_acc **odd, const struct scale *g, struct c0_support_result *res)
+{
+	double t0 = c0_now();
+	const int r = c->srf;
+	const double fine = c->pixel_nm / r;
+	const int rad = (int)ceil(0.5 * c->fwhm_nm / fine);
+	double *sums = c0_alloc(2 * (size_t)tl->n, sizeof *sums);   /* distance^2, matches */
+	struct c0_support_conf cc = *c;
+	if (cc.fista.maxit > FRC_MAXIT)
+		cc.fista.maxit = FRC_MAXIT;
+	int fail = sums ? C0_OK : C0_ENOMEM;
+	char msg[512] = "";
+#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
+	for (int k = k0; k < k1; k++) {
+		struct c0_cov_acc *o = odd[k - k0];
+		if (!o || !sums)
+			continue;
+		const struct c0_tile *t = &tl->t[k];
+		struct c0_cov h;
+		struct c0_support_result hr[2];
+		memset(hr, 0, sizeof hr);
+		const int ih = t->ih * r, iw = t->iw * r, oy = (t->iy0 - t->y0) * r, ox = (t->ix0 - t->x0) * r;
+		uint8_t *m = c0_alloc(2 * (size_t)ih * iw, 1);
+		int st = !m ? C0_ENOMEM : C0_OK;
+		for (int j = 0; j < 2 && !st; j++) {      /* one window at a time */
+			st = j ? c0_cov_acc_window(o, 0, 0, t->h, t->w, &h) : c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &h);
+			if (!st) {
+				st = solve(&cc, &h, NULL, NULL, g, &hr[j]);
+				c0_cov_free(&h);
+			}
+		}
+		if (!st) {
+			for (int j = 0; j < 2; j++)
+				for (int y = 0; y < ih; y++)
+					memcpy(m + ((size_t)j * ih + y) * iw, hr[j].mask + (size_t)(oy + y) * hr[j].Lx + ox, (size_t)iw);
+			c0_pair_sums(m, m + (size_t)ih * iw, ih, iw, rad, &sums[2 * k], &sums[2 * k + 1]);
+		}
+		free(m);
+		c0_support_result_free(&hr[0]), c0_support_result_free(&hr[1]);
+		if (st) {
+#pragma omp critical(c0_support_fail)
+			if (!fail)
+				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+	}
+	if (fail) {
+		free(sums);
+		return c0_fail(fail, "%s", msg);
+	}
+	/* over ranks, then over tiles in tile order: the same sums for any split */
+	c0_comm_sum(sums, 2 * tl->n);
+	double s = 0, n = 0;
+	for (int k = 0; k < tl->n; k++)
+		s += sums[2 * k], n += sums[2 * k + 1];
+	res->precision_nm = n > 0 ? sqrt(s / n / 4) * fine / sqrt(2) : -1;
+	free(sums);
+	res->t_frc = c0_now() - t0;
+	return C0_OK;
+}
+
 int c0_support_tile_size(const struct c0_support_conf *c, int W, int H)
 {
 	int big = W > H ? W : H;
@@ -686,8 +752,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	}
 	/* several tiles or processes: the band of all frames, and for the
 	 * automatic lambda that of the odd frames on a subset of the tiles */
-	const int automatic = !(c->lambda_rel > 0);
-	if (automatic && in->count < 6) {
+	const int automatic = !(c->lambda_rel > 0), halves = automatic || c->frc;
+	if (halves && in->count < 6) {
 		c0_tiling_free(&tl);
 		return c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
 			       "give lambda)", in->name, (long long)in->count);
@@ -701,7 +767,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	float *frame = NULL, *win = NULL;
 	if (!odd || !sub)
 		st = C0_ENOMEM;
-	else if (automatic)
+	else if (halves)
 		noise_subset(&tl, sub);
 	if (!st && rows > 0) {
 		st = c0_cov_acc_new(W, rows, d, &acc);
@@ -777,7 +843,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	if (!st && automatic) {
 		double tn = c0_now();
 		st = c0_comm_status(each_tile_noise(c, acc, ya, &tl, k0, k1, odd, norm, lm, hist));
-		for (int k = 0; k < k1 - k0; k++)
+		for (int k = 0; k < k1 - k0 && !c->frc; k++)
 			c0_cov_acc_free(odd[k]), odd[k] = NULL;
 		if (!st) {
 			c0_comm_max(lm, 2 * tl.n);
@@ -807,6 +873,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		g.lam = res->lambda, g.lmax_only = 0;
 		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
 	}
+	if (!st && c->frc)
+		st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, &g, res));
 	c0_cov_acc_free(acc);
 	for (int k = 0; odd && k < k1 - k0; k++)
 		c0_cov_acc_free(odd[k]);
@@ -839,7 +907,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		for (size_t i = 0; i < L; i++)
 			res->support_pixels += res->mask[i];
 		res->tiles = tl.n, res->tile = c0_support_tile_size(c, W, H);
-		res->precision_nm = -1;
+		if (!c->frc)
+			res->precision_nm = -1;
 	}
 	free(lmax), free(s2), free(stats);
 	c0_tiling_free(&tl);

@@ -6,7 +6,8 @@
   its window inflate: 40-pixel tiles here are 60 % border); the tiles see
   the same covariance but solve separately, so iterates stopped at the same
   count differ a little near tile edges);
-- the automatic lambda on tiles: the same noise sigma_C as on one tile (within 1 %);
+- the automatic lambda on tiles: the same noise sigma_C as on one tile (within 1 %),
+  and the localisation precision within 10 % (no FRC on tiles);
 - results do not depend on the thread count (bit-identical files);
 - the program sets the passive OpenMP wait policy itself and counts threads
   from the affinity mask (the report records both, and the MPI rank count);
@@ -91,6 +92,10 @@ with tempfile.TemporaryDirectory() as tmp:
     sig = [r["lambda_auto"]["noise_relative"] * r["lambda_max"] * r["normalisation"] for r in (s1, st) if "lambda_auto" in r]
     print("automatic lambda: relative %.4g (tiles) vs %.4g (one tile), sigma_C %s" % (st["lambda_relative"], s1["lambda_relative"], sig))
     check(len(sig) == 2 and abs(sig[1] / sig[0] - 1) <= 0.01, "sigma_C on tiles vs one tile: %r" % sig)
+    # the localisation precision from the halves of the subset tiles (no FRC on tiles)
+    p1, pt = s1.get("precision_nm", -1), st.get("precision_nm", -1)
+    print("localisation precision: %.2f nm (tiles) vs %.2f nm (one tile)" % (pt, p1))
+    check(p1 > 0 and abs(pt / p1 - 1) <= 0.1 and "frc" not in st, "precision on tiles %g vs %g" % (pt, p1))
     check(same_files(tiled, tiled1, ("support.tif", "rx.tif")), "1 and 2 threads give different files")
     check("duality_gap" in st and st["duality_gap"] >= 0, "the report gives the duality gap")
 
