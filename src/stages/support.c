@@ -664,8 +664,10 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 /* The localisation precision on tiles: each subset tile's halves solved on
  * their own (at most FRC_MAXIT iterations, the image's scale and lambda),
  * their interiors' matched distances added in tile order (half_frc on one
- * tile). No FRC: its ring sums added over Hann-windowed tiles disagreed
- * with the one-tile value (docs/parameters.md). */
+ * tile). One tile at a time: the odd bands are still held, and a second
+ * thread's solve on top of them would raise the peak memory. No FRC: its
+ * ring sums added over Hann-windowed tiles disagreed with the one-tile
+ * value (docs/parameters.md). */
 static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
 			   int k0, int k1, struct c0_cov_acc **odd, const struct scale *g, struct c0_support_result *res)
 {
@@ -678,11 +680,11 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 	if (cc.fista.maxit > FRC_MAXIT)
 		cc.fista.maxit = FRC_MAXIT;
 	int fail = sums ? C0_OK : C0_ENOMEM;
-	char msg[512] = "";
-#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
+	/* a team of one: the solver's own loops then run serially, as in each_tile */
+#pragma omp parallel for num_threads(1)
 	for (int k = k0; k < k1; k++) {
 		struct c0_cov_acc *o = odd[k - k0];
-		if (!o || !sums)
+		if (!o || fail)
 			continue;
 		const struct c0_tile *t = &tl->t[k];
 		struct c0_cov h;
@@ -706,15 +708,11 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 		}
 		free(m);
 		c0_support_result_free(&hr[0]), c0_support_result_free(&hr[1]);
-		if (st) {
-#pragma omp critical(c0_support_fail)
-			if (!fail)
-				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
-		}
+		fail = st;
 	}
 	if (fail) {
 		free(sums);
-		return c0_fail(fail, "%s", msg);
+		return fail;
 	}
 	/* over ranks, then over tiles in tile order: the same sums for any split */
 	c0_comm_sum(sums, 2 * tl->n);
@@ -843,8 +841,6 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	if (!st && automatic) {
 		double tn = c0_now();
 		st = c0_comm_status(each_tile_noise(c, acc, ya, &tl, k0, k1, odd, norm, lm, hist));
-		for (int k = 0; k < k1 - k0 && !c->frc; k++)
-			c0_cov_acc_free(odd[k]), odd[k] = NULL;
 		if (!st) {
 			c0_comm_max(lm, 2 * tl.n);
 			c0_comm_sum(hist, 2 * C0_LAMBDA_BINS);
@@ -871,10 +867,14 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		res->lambda = rel * res->lambda_max;
 		res->norm = norm;
 		g.lam = res->lambda, g.lmax_only = 0;
-		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+		/* the halves first, then their bands are freed before the tiles' solves */
+		if (c->frc)
+			st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, &g, res));
+		for (int k = 0; k < k1 - k0; k++)
+			c0_cov_acc_free(odd[k]), odd[k] = NULL;
+		if (!st)
+			st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
 	}
-	if (!st && c->frc)
-		st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, &g, res));
 	c0_cov_acc_free(acc);
 	for (int k = 0; odd && k < k1 - k0; k++)
 		c0_cov_acc_free(odd[k]);
