@@ -35,7 +35,7 @@ enum c0_status {
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
-enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO }; /* "exact", "diag", "auto" */
+enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO, C0_MATIRF_APG }; /* "exact", "diag", "auto", "apg" */
 enum c0_discrepancy { C0_DISCREPANCY_RELATIVE, C0_DISCREPANCY_PLAIN };  /* "relative", "plain" */
 enum c0_bleaching { C0_BLEACHING_ESTIMATE, C0_BLEACHING_OFF };       /* "estimate", "off" */
 enum c0_acquisition { C0_ACQ_SEQUENTIAL, C0_ACQ_INTERLEAVED };       /* "sequential", "interleaved" */
@@ -93,8 +93,8 @@ struct c0_run_conf {
 	double sparsity;       /* 3e-2: weight of the l1 term that keeps few depths per pixel */
 	double axial_weight;   /* 0: axial weight of the regulariser relative to lateral */
 	int matirf_iterations; /* 3000: maximum primal-dual iterations */
-	double matirf_tol;     /* 0: primal-dual stopping tolerance; 0: the solver's, 1e-3 exact, 1e-4 diag */
-	enum c0_matirf_solver matirf_solver; /* (auto: exact with hessian, diag with tv) exact: per-pixel exact data steps; diag: diagonal steps */
+	double matirf_tol;     /* 0: primal-dual stopping tolerance; 0: the solver's, 1e-3 exact, 1e-4 diag, apg 5e-4 (TV) 1e-3 (Hessian) */
+	enum c0_matirf_solver matirf_solver; /* (auto: apg) exact: per-pixel exact data steps; diag: diagonal steps; apg: exact's steps, the per-pixel prox by projected gradient */
 	/* the standard MA-TIRF path on raw images (c0_run_matirf, `col0rme matirf`) */
 	double offset;         /* 0: camera offset subtracted from every image */
 	double matirf_background; /* 0: constant background subtracted after the offset */

@@ -50,6 +50,43 @@ static void test_cov_pool(void)
 	c0_cov_free(&c), c0_cov_free(&a), c0_cov_free(&b), c0_cov_free(&p);
 }
 
+/* the even frames' window from all frames and a window of the odd ones,
+ * against an accumulator of the even frames (odd T: one more even frame) */
+static void test_cov_even(void)
+{
+	enum { W = 9, H = 7, T = 301, N = W * H, X0 = 2, Y0 = 1, w = 6, h = 5 };
+	struct c0_cov_acc *all, *even, *odd;
+	c0_cov_acc_new(W, H, 2, &all), c0_cov_acc_new(W, H, 2, &even), c0_cov_acc_new(w, h, 2, &odd);
+	c0_cov_acc_set_block(odd, 5);   /* any block: the sums round once per pass */
+	float f[N], g[w * h];
+	for (int t = 0; t < T; t++) {
+		double s = c0_rng_normal(&rng);
+		for (int i = 0; i < N; i++)
+			f[i] = (float)(300 - 0.2 * t + 10 * s * (1 + i % 3) + 5 * c0_rng_normal(&rng));
+		c0_cov_acc_add(all, f);
+		if (t % 2) {
+			for (int y = 0; y < h; y++)
+				memcpy(g + y * w, f + (Y0 + y) * W + X0, sizeof(float) * w);
+			c0_cov_acc_add(odd, g);
+		} else {
+			c0_cov_acc_add(even, f);
+		}
+	}
+	struct c0_cov a, b;
+	CHECK(c0_cov_acc_window_even(all, odd, Y0, X0, &a) == C0_OK);
+	CHECK(c0_cov_acc_window(even, Y0, X0, h, w, &b) == C0_OK);
+	double err = 0, mx = 0;
+	for (size_t i = 0; i < (size_t)a.nlag * w * h; i++)
+		err = fmax(err, fabs(a.r[i] - b.r[i])), mx = fmax(mx, fabs(b.r[i]));
+	for (int i = 0; i < w * h; i++)
+		err = fmax(err, fabs(a.mean[i] - b.mean[i]));
+	CHECK_MSG(err <= 1e-4 * mx && a.frames == 151, "even frames from all and odd: %g of %g", err, mx);
+	c0_cov_free(&a), c0_cov_free(&b);
+	/* not the odd half of this stack: refused */
+	CHECK(c0_cov_acc_window_even(all, all, 0, 0, &a) == C0_EINVAL);
+	c0_cov_acc_free(all), c0_cov_acc_free(even), c0_cov_acc_free(odd);
+}
+
 static void test_fshift(void)
 {
 	enum { S = 40 };
@@ -162,6 +199,9 @@ static void simulate(const char *sub, int size, int frames, double drift_x, doub
 	c0_sim_result_free(&r);
 }
 
+static int tile_px;                    /* 0: one tile */
+static double sigma_abs, lambda_abs;   /* of the last support_ji: sigma_C and lambda in camera units */
+
 static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel, double *chosen)
 {
 	char p[512];
@@ -169,7 +209,7 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 	struct c0_frames rd;
 	CHECK(c0_frames_open(&rd, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229, c.frc = 0, c.lambda_rel = lambda_rel;
+	c.pixel_nm = 100, c.fwhm_nm = 229, c.frc = 0, c.lambda_rel = lambda_rel, c.tile = tile_px;
 	if (d)
 		c.frame_fn = c0_drift_frame_fn, c.frame_ctx = c0_drift_hook(d, 0);
 	struct c0_support_result res;
@@ -177,6 +217,7 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 	c0_frames_close(&rd);
 	if (chosen)
 		*chosen = res.lambda / res.lambda_max;
+	sigma_abs = res.cv.noise_rel * res.lambda_max * res.norm, lambda_abs = res.lambda * res.norm;
 	snprintf(p, sizeof p, "%s/%s/truth_support.tif", dir, sub);
 	struct c0_tiff_info in;
 	float *t;
@@ -257,6 +298,30 @@ static void test_auto_lambda(void)
 	CHECK(j >= 0.55);
 }
 
+/* tiles (4 or 16) choose lambda by the same rule: sigma_C from the halves
+ * of every tile's interior (these small images fit the subset whole) equals
+ * the one-tile path's up to the pooled vs all-frames covariance and the
+ * histogram's bins; the two paths' solves (pooled covariance on one tile,
+ * all frames' on tiles, tiles cut at the iteration cap) differ a little */
+static void test_auto_lambda_tiles(void)
+{
+	const int n = quick ? 32 : 48;
+	double c1, ct;
+	tile_px = 0;
+	double j1 = support_ji("still", NULL, 0, &c1), s1 = sigma_abs, l1 = lambda_abs;
+	for (int tile = n / 2; tile >= n / 4 && tile >= 13; tile /= 2) {
+		tile_px = tile;
+		double jt = support_ji("still", NULL, 0, &ct);
+		fprintf(stderr, "auto lambda, tile %d: sigma_C %.5g vs %.5g one tile, lambda %.5g vs %.5g (rel %.4g vs %.4g), "
+			"JI %.3f vs %.3f\n", tile, sigma_abs, s1, lambda_abs, l1, ct, c1, jt, j1);
+		CHECK_MSG(fabs(sigma_abs / s1 - 1) <= 0.01, "sigma_C, tile %d: %g vs %g", tile, sigma_abs, s1);
+		CHECK_MSG(fabs(lambda_abs / l1 - 1) <= 0.02, "lambda, tile %d: %g vs %g", tile, lambda_abs, l1);
+		if (!quick)
+			CHECK_MSG(fabs(jt - j1) <= 0.03, "Jaccard, tile %d: %.3f vs %.3f", tile, jt, j1);
+	}
+	tile_px = 0;
+}
+
 static void test_bad_input(void)
 {
 	simulate("far", 32, 400, 1600, 0);   /* 14 pixels in a 32-pixel field */
@@ -285,12 +350,14 @@ int main(void)
 	c0_rng_init(&rng, 7, 0);
 	quick = getenv("C0_QUICK") != NULL;
 	RUN(test_cov_pool);
+	RUN(test_cov_even);
 	RUN(test_fshift);
 	RUN(test_frc);
 	RUN(test_sim_drift);
 	CHECK(mkdtemp(dir) != NULL);
 	RUN(test_drift);
 	RUN(test_auto_lambda);
+	RUN(test_auto_lambda_tiles);
 	RUN(test_bad_input);
 	char cmd[600];
 	snprintf(cmd, sizeof cmd, "rm -rf %s", dir);

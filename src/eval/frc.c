@@ -96,10 +96,10 @@ out:
 	return st;
 }
 
-double c0_pair_precision(const unsigned char *a, const unsigned char *b, int H, int W, int radius_px)
+void c0_pair_sums(const unsigned char *a, const unsigned char *b, int H, int W, int radius_px, double *s2, double *n)
 {
 	double s = 0;
-	long n = 0;
+	long m = 0;
 	for (int y = 0; y < H; y++)
 		for (int x = 0; x < W; x++) {
 			if (!a[(size_t)y * W + x])
@@ -114,7 +114,14 @@ double c0_pair_precision(const unsigned char *a, const unsigned char *b, int H, 
 						best = d2;
 				}
 			if (best >= 0)
-				s += best, n++;
+				s += best, m++;
 		}
-	return n ? sqrt(s / n / 4) : -1;
+	*s2 = s, *n = (double)m;
+}
+
+double c0_pair_precision(const unsigned char *a, const unsigned char *b, int H, int W, int radius_px)
+{
+	double s, n;
+	c0_pair_sums(a, b, H, W, radius_px, &s, &n);
+	return n > 0 ? sqrt(s / n / 4) : -1;
 }

@@ -19,4 +19,6 @@ void c0_frc_free(struct c0_frc *f);
  * independent ones on the same grid: every pixel of a is matched to the
  * nearest pixel of b within radius_px; the difference of two estimates has
  * twice the variance of one, so sd = sqrt(mean d^2 / 4). -1 if nothing matches. */
+/* Its sums, for images cut in tiles: squared distances (pixels^2) and matches. */
+void c0_pair_sums(const unsigned char *a, const unsigned char *b, int H, int W, int radius_px, double *s2, double *n);
 double c0_pair_precision(const unsigned char *a, const unsigned char *b, int H, int W, int radius_px);

@@ -227,6 +227,66 @@ double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x)
 
 int64_t c0_cov_acc_frames(const struct c0_cov_acc *a) { return a->frames; }
 
+int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y0, int x0, struct c0_cov *out)
+{
+	memset(out, 0, sizeof *out);
+	const int h = odd->H, w = odd->W;
+	const int64_t To = odd->frames, Te = all->frames - To;
+	if (Te < 3 || To < 3 || Te - To < 0 || Te - To > 1 || odd->d != all->d)
+		return c0_fail(C0_EINVAL, "covariance: %lld and %lld frames are not the even and odd halves of a stack",
+			       (long long)all->frames, (long long)To);
+	if (y0 < 0 || x0 < 0 || y0 + h > all->H || x0 + w > all->W)
+		return c0_fail(C0_EINVAL, "covariance: window %dx%d at (%d, %d) outside %dx%d", w, h, x0, y0, all->W, all->H);
+	flush(all), flush(odd);
+	struct c0_cov *c = out;
+	c->W = w, c->H = h, c->d = all->d, c->nlag = all->nlag, c->frames = Te;
+	const size_t n = (size_t)w * h, N = (size_t)all->W * all->H;
+	c->dy = c0_alloc((size_t)c->nlag, sizeof(int));
+	c->dx = c0_alloc((size_t)c->nlag, sizeof(int));
+	c->r = c0_alloc((size_t)c->nlag * n, sizeof(double));
+	c->mean = c0_alloc(n, sizeof(double));
+	double *s1 = c0_alloc(n, sizeof *s1), *dl = c0_alloc(n, sizeof *dl), *tr = c0_alloc(n, sizeof *tr);
+	if (!c->dy || !c->dx || !c->r || !c->mean || !s1 || !dl || !tr) {
+		free(s1), free(dl), free(tr);
+		c0_cov_free(c);
+		return c0_fail(C0_ENOMEM, "covariance: out of memory for a %dx%d window x %d lags", w, h, all->nlag);
+	}
+	memcpy(c->dy, all->dy, sizeof(int) * (size_t)c->nlag);
+	memcpy(c->dx, all->dx, sizeof(int) * (size_t)c->nlag);
+	/* all's sums are of y - a (a: frame 0), odd's of y - b (b: frame 1, its
+	 * frame j is frame 2j + 1); with delta = b - a the odd frames' sums in
+	 * all's shift are S1 + To delta, sum t (y - a) = 2 St + S1 + To^2 delta,
+	 * and the products SB + delta' S1 + delta S1' + To delta delta'. The rest
+	 * are the even frames, whose own index is t / 2: the same sums as an
+	 * accumulator of the even frames alone would hold. */
+	const double T = (double)Te, tbar = (T - 1) / 2, Stt = T * (T * T - 1) / 12, to = (double)To;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			const size_t k = (size_t)(y0 + y) * all->W + x0 + x, i = (size_t)y * w + x;
+			dl[i] = odd->shift[i] - all->shift[k];
+			s1[i] = odd->s1[i];
+			const double S1 = all->s1[k] - (odd->s1[i] + to * dl[i]);
+			const double St = (all->st[k] - (2 * odd->st[i] + odd->s1[i] + to * to * dl[i])) / 2;
+			c->mean[i] = S1 / T;
+			tr[i] = (St - tbar * S1) / sqrt(Stt);
+		}
+	for (int l = 0; l < c->nlag; l++) {
+		const int dy = c->dy[l], dx = c->dx[l];
+		for (int y = 0; y + dy < h; y++)
+			for (int x = dx < 0 ? -dx : 0; x < (dx > 0 ? w - dx : w); x++) {
+				size_t i = (size_t)y * w + x, j = (size_t)(y + dy) * w + x + dx;
+				double so = odd->sum[(size_t)l * n + i] + dl[j] * s1[i] + dl[i] * s1[j] + to * dl[i] * dl[j];
+				double s = all->sum[(size_t)l * N + (size_t)(y0 + y) * all->W + x0 + x] - so;
+				c->r[(size_t)l * n + i] = (s - T * c->mean[i] * c->mean[j] - tr[i] * tr[j]) / (T - 2);
+			}
+	}
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++)
+			c->mean[(size_t)y * w + x] += all->shift[(size_t)(y0 + y) * all->W + x0 + x];
+	free(s1), free(dl), free(tr);
+	return C0_OK;
+}
+
 int c0_cov_acc_finish(struct c0_cov_acc *a, struct c0_cov *out)
 {
 	int st = c0_cov_acc_window(a, 0, 0, a->H, a->W, out);

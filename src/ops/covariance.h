@@ -29,6 +29,11 @@ int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame);
  * the stack had only those pixels (pairs leaving the window are 0). The
  * accumulator is kept: windows of one image are cut from one pass. */
 int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct c0_cov *out);
+/* The window's covariance over the even frames only, from an accumulator
+ * of all frames and one of the odd frames (frames 1, 3, ...) of that window
+ * alone (odd's size): the same sums as an accumulator of the even frames,
+ * up to the float sums' rounding. Both are kept. */
+int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y0, int x0, struct c0_cov *out);
 /* Temporal variance of one pixel so far. */
 double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x);
 int64_t c0_cov_acc_frames(const struct c0_cov_acc *a);

@@ -47,6 +47,20 @@ static void correlate(struct c0_covop *op, const struct c0_cov *cov, double norm
 	c0_covop_adjoint(op, cov, R, C);
 }
 
+/* The rule, from sigma_C, lambda_max on the l1 and the l0 scale and the
+ * median column norm. */
+static void choose(const struct c0_support_conf *c, double sig, double lmax, double lmax0, double nm,
+		   struct c0_lambda_result *out)
+{
+	out->noise_rel = sig / lmax, out->floor_rel = REL0, out->kappa = KAPPA;
+	out->noise_bound = KAPPA * sig > REL0 * lmax;
+	const double t = fmax(REL0 * lmax, KAPPA * sig);
+	if (c->penalty == C0_PENALTY_L1)
+		out->chosen_rel = t / lmax;
+	else
+		out->chosen_rel = fmin(CEL0_GAMMA * t * t / (2 * nm * nm) / lmax0, 0.5);
+}
+
 int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		   struct c0_lambda_result *out)
 {
@@ -90,19 +104,103 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 		goto out;
 	}
 	const double sig = 1.4826 * median(d, L);
-	out->noise_rel = sig / lmax, out->floor_rel = REL0, out->kappa = KAPPA;
-	out->noise_bound = KAPPA * sig > REL0 * lmax;
-	const double t = fmax(REL0 * lmax, KAPPA * sig);
-	if (c->penalty == C0_PENALTY_L1) {
-		out->chosen_rel = t / lmax;
-	} else {
-		memcpy(d, op.n, L * sizeof *d);
-		double nm = median(d, L);
-		out->chosen_rel = fmin(CEL0_GAMMA * t * t / (2 * nm * nm) / lmax0, 0.5);
-	}
+	memcpy(d, op.n, L * sizeof *d);
+	choose(c, sig, lmax, lmax0, median(d, L), out);
 out:
 	free(R), free(ca), free(cb), free(d);
 	c0_covop_free(&op);
 	out->seconds = c0_now() - t0;
 	return st;
+}
+
+/* Histogram bins: HB_PER per decade from 10^HB_LO (normalised units, in
+ * which lambda_max is of order 1e-2 to 1); a median read from them is
+ * within 0.1 % of the exact one. */
+#define HB_LO (-12)
+#define HB_PER (C0_LAMBDA_BINS / 14)
+
+static void bin(double *h, double v)
+{
+	const double u = v > 0 ? (log10(v) - HB_LO) * HB_PER : -1;
+	h[u < 0 ? 0 : u >= C0_LAMBDA_BINS ? C0_LAMBDA_BINS - 1 : (int)u]++;
+}
+
+static double hmedian(const double *h)
+{
+	double all = 0, cum = 0;
+	for (int k = 0; k < C0_LAMBDA_BINS; k++)
+		all += h[k];
+	for (int k = 0; k < C0_LAMBDA_BINS; k++) {
+		if (h[k] > 0 && cum + h[k] >= 0.5 * all)
+			return pow(10, HB_LO + (k + (0.5 * all - cum) / h[k]) / HB_PER);
+		cum += h[k];
+	}
+	return 0;
+}
+
+int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, double lmax[2])
+{
+	const int W = all->W, H = all->H, r = c->srf;
+	const size_t n = (size_t)W * H, L = n * r * r;
+	struct c0_covop op;
+	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), all->d);
+	if (st)
+		return st;
+	double *C = c0_alloc(L, sizeof *C);
+	if (!C) {
+		c0_covop_free(&op);
+		return C0_ENOMEM;
+	}
+	/* as the tile's solve finds it (stages/support.c) */
+	double trR = 0;
+	for (size_t i = 0; i < n; i++)
+		trR += all->r[i] / norm;
+	c0_covop_adjoint(&op, all, all->r, C);
+	const double s0 = fmax(0, trR / (double)n);
+	lmax[0] = lmax[1] = 0;
+	for (size_t i = 0; i < L; i++) {
+		const double g = C[i] / norm - s0 * op.n[i];
+		lmax[0] = fmax(lmax[0], g);
+		if (g > 0)
+			lmax[1] = fmax(lmax[1], g * g / (2 * op.n[i] * op.n[i]));
+	}
+	free(C);
+	c0_covop_free(&op);
+	return C0_OK;
+}
+
+int c0_lambda_tile_noise(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b, double norm,
+			 int iy, int ix, int ih, int iw, double *hist)
+{
+	if (a->W != b->W || a->H != b->H || a->nlag != b->nlag)
+		return c0_fail(C0_EINVAL, "lambda: the two halves differ in size");
+	const int W = a->W, H = a->H, r = c->srf, Lx = W * r;
+	const size_t L = (size_t)W * H * r * r;
+	struct c0_covop op;
+	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), a->d);
+	if (st)
+		return st;
+	double *ca = c0_alloc(L, sizeof *ca), *cb = c0_alloc(L, sizeof *cb);
+	if (ca && cb) {
+		c0_covop_adjoint(&op, a, a->r, ca);
+		c0_covop_adjoint(&op, b, b->r, cb);
+		for (int y = iy * r; y < (iy + ih) * r; y++)
+			for (int x = ix * r; x < (ix + iw) * r; x++) {
+				const size_t i = (size_t)y * Lx + x;
+				bin(hist, fabs(ca[i] - cb[i]) / (2 * norm));
+				bin(hist + C0_LAMBDA_BINS, op.n[i]);
+			}
+	} else {
+		st = C0_ENOMEM;
+	}
+	free(ca), free(cb);
+	c0_covop_free(&op);
+	return st;
+}
+
+void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist, double lmax, double lmax0,
+			    struct c0_lambda_result *out)
+{
+	memset(out, 0, sizeof *out);
+	choose(c, 1.4826 * hmedian(hist), lmax, lmax0, hmedian(hist + C0_LAMBDA_BINS), out);
 }

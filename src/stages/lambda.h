@@ -22,6 +22,7 @@ struct c0_lambda_result {
 	double floor_rel;     /* rel0 */
 	double kappa;
 	int noise_bound;      /* 1 when kappa sigma_C set the threshold */
+	int noise_tiles;      /* tiles whose interiors gave sigma_C (0: the whole image, one tile) */
 	double seconds;
 };
 
@@ -29,3 +30,20 @@ struct c0_support_conf;
 /* Uses c's optics, lag and penalty. */
 int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		   struct c0_lambda_result *out);
+
+/* The tiled path (stages/support.c), where the band of the whole image is
+ * kept for all frames, and the halves only for some tiles' windows.
+ * A tile's lambda_max on the l1 and the l0 scale (lmax[0], lmax[1]) as its
+ * solve finds it (normalisation norm). */
+int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, double lmax[2]);
+/* A tile's halves (even, odd frames): |C_a - C_b| / 2 and the column norms
+ * over its interior (camera pixels iy, ix, ih, iw inside the window) added
+ * to hist (2 x C0_LAMBDA_BINS counts in fixed log bins, so that sums over
+ * tiles and ranks are exact and their medians do not depend on who
+ * computed what). */
+#define C0_LAMBDA_BINS 14000
+int c0_lambda_tile_noise(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b, double norm,
+			 int iy, int ix, int ih, int iw, double *hist);
+/* The rule from the summed histograms and the image's lambda_max (l1, l0 scale). */
+void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist, double lmax, double lmax0,
+			    struct c0_lambda_result *out);

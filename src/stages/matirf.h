@@ -16,7 +16,9 @@
 
 /* enum c0_matirf_solver (col0rme.h): exact, PDHG whose primal step solves
  * the data + l1 + positivity prox exactly per pixel (a small NNQP); diag,
- * the data rows in the dual with diagonal steps (the earlier solver) */
+ * the data rows in the dual with diagonal steps (the earlier solver); apg,
+ * exact's PDHG with that prox by a few accelerated projected gradient steps
+ * vectorised across pixels */
 
 struct c0_matirf_conf {
 	struct c0_tirf tirf;
@@ -25,9 +27,9 @@ struct c0_matirf_conf {
 	double kappa;                /* 3e-2: weight of R, for data scaled to max 1 */
 	double wz;                   /* 0: axial weight of R relative to lateral (0: lateral TV) */
 	double sparsity;             /* 3e-2: weight s of the l1 term, same scale */
-	struct c0_pdhg_conf pdhg;    /* 3000 iterations; tol 0: the solver's (1e-3 exact, 1e-4 diag); relax 1.8 */
+	struct c0_pdhg_conf pdhg;    /* 3000 iterations; tol 0: the solver's (1e-3 exact, 1e-4 diag, apg 5e-4 TV 1e-3 Hessian); relax 1.8 */
 	int fused;                   /* 1: TV's steps in one pass each; 0: the operator sequence (tests) */
-	enum c0_matirf_solver solver;/* diag (exact or diag; the run conf's auto is resolved before) */
+	enum c0_matirf_solver solver;/* diag (exact, diag or apg; the run conf's auto is resolved before) */
 	double gamma;                /* 3: exact solver's primal step relative to the diagonal one */
 	/* 0: the images are background-free; > 0: estimate a smooth background
 	 * common to all angles jointly with f, as (I + bg_smooth grad^T grad)^-1
@@ -45,7 +47,7 @@ struct c0_matirf_result {
 	double *z_nm;                /* bin centres */
 	float *depth;                /* ny x nx intensity-weighted mean depth (nm), 0 where empty */
 	float *total;                /* ny x nx sum over depth */
-	int iters, converged, exact;   /* exact: which solver ran */
+	int iters, converged, exact, apg;   /* exact, apg: which solver ran */
 	double seconds, scale;
 	double rel_change;           /* the last iteration's relative change (max of primal, dual) */
 	double objective;            /* at the result, data scaled to max 1 (compares solvers) */

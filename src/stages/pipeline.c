@@ -216,7 +216,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		c0_report_add_array(o, "objective", s->hist, s->nhist);
 		cJSON_AddStringToObject(o, "lambda_rule", s->lambda_auto ? "automatic"
 					: c->lambda_rel > 0 ? "given"
-					: "the penalty's fixed default (the automatic rule and the FRC need one tile and one process)");
+					: "the penalty's fixed default");
 		if (s->lambda_auto) {
 			const struct c0_lambda_result *v = &s->cv;
 			cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
@@ -227,6 +227,8 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 			cJSON_AddNumberToObject(l, "kappa", v->kappa);
 			cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
 			cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "floor");
+			/* tiles: sigma_C from a subset of the tiles' interiors (stages/support.c) */
+			cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 			cJSON_AddNumberToObject(l, "seconds", v->seconds);
 		}
 		if (s->frc.n) {
@@ -247,8 +249,9 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 			free(fq);
 			c0_report_add_array(fr, "correlation", s->frc.corr, s->frc.n);
 			cJSON_AddNumberToObject(fr, "seconds", s->t_frc);
-			cJSON_AddNumberToObject(o, "precision_nm", s->precision_nm);
 		}
+		if (c->frc)    /* tiles: the precision without the FRC (stages/support.c) */
+			cJSON_AddNumberToObject(o, "precision_nm", s->precision_nm);
 		cJSON_AddItemToArray(arr, o);
 	}
 	cJSON *p = cJSON_AddObjectToObject(r->rep, "support_parameters");
@@ -457,7 +460,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	cJSON_AddNumberToObject(j, "data_scale", res->scale);
 	cJSON_AddNumberToObject(j, "iterations", res->iters);
 	cJSON_AddBoolToObject(j, "converged", res->converged);
-	cJSON_AddStringToObject(j, "solver", res->exact ? "exact" : "diag");
+	cJSON_AddStringToObject(j, "solver", res->apg ? "apg" : res->exact ? "exact" : "diag");
 	cJSON_AddNumberToObject(j, "final_relative_change", res->rel_change);
 	cJSON_AddNumberToObject(j, "objective", res->objective);
 	cJSON_AddNumberToObject(j, "seconds", res->seconds);

@@ -71,7 +71,7 @@ static const struct param params[] = {
 	NUM(axial_weight, P_DOUBLE, "axial weight of the regulariser relative to lateral (0)"),
 	NUM(matirf_iterations, P_INT, "maximum primal-dual iterations (3000)"),
 	NUM(matirf_tol, P_DOUBLE, "primal-dual stopping tolerance (0: 1e-3 exact, 1e-4 diag)"),
-	{ "matirf_solver", P_ENUM, F(matirf_solver), 0, 0, "exact|diag|auto", "MA-TIRF solver: exact per-pixel data steps, or diagonal steps (auto: exact with the Hessian, diag with TV, docs/parameters.md)" },
+	{ "matirf_solver", P_ENUM, F(matirf_solver), 0, 0, "exact|diag|auto|apg", "MA-TIRF solver: exact per-pixel data steps, diagonal steps, or apg (the exact per-pixel steps by a few projected gradient steps; auto: apg, docs/parameters.md)" },
 	NUM(offset, P_DOUBLE, "camera offset subtracted from every image, standard MA-TIRF path (0)"),
 	NUM(matirf_background, P_DOUBLE, "constant background subtracted after the offset, standard MA-TIRF path (0)"),
 	NUM(estimate_background, P_FLAG, "1: estimate a smooth background common to all angles jointly, standard MA-TIRF path (0)"),
@@ -199,9 +199,9 @@ void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
 	m->z0_nm = c->z_range_nm[0], m->z1_nm = c->z_range_nm[1], m->dz_nm = c->z_range_nm[2];
 	m->reg = c->reg, m->kappa = c->kappa, m->wz = c->axial_weight, m->sparsity = c->sparsity;
 	m->pdhg.maxit = c->matirf_iterations, m->pdhg.tol = c->matirf_tol;
-	/* measured: diag is 4x faster in the pipeline and on the dense phantom, exact
-	 * makes the Hessian converge (docs/parameters.md) */
-	m->solver = c->matirf_solver != C0_MATIRF_AUTO ? c->matirf_solver : c->reg == C0_REG_HESSIAN ? C0_MATIRF_EXACT : C0_MATIRF_DIAG;
+	/* measured: apg takes half the CPU of exact and diag on the 350x350 phantom
+	 * and less in the pipeline, with the same depths (docs/parameters.md) */
+	m->solver = c->matirf_solver != C0_MATIRF_AUTO ? c->matirf_solver : C0_MATIRF_APG;
 }
 
 int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_stage_confs *s)
@@ -242,7 +242,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,
 			       (int)c->bleach, (int)c->acquisition);
 	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN ||
-	    (unsigned)c->matirf_solver > C0_MATIRF_AUTO)
+	    (unsigned)c->matirf_solver > C0_MATIRF_APG)
 		return c0_fail(C0_EINVAL, "penalty %d / background %d / reg %d: out of range", (int)c->penalty,
 			       (int)c->background, (int)c->reg);
 	if (c->nangles < 0 || c->nangles > C0_MAX_STACKS || c->ngains < 0 || c->ngains > C0_MAX_STACKS ||

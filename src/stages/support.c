@@ -678,6 +678,136 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
 }
 
+/* The automatic lambda on tiles needs the odd frames' covariance too; it is
+ * kept for a subset of the tiles only, spread evenly over the grid in tile
+ * order, whose interiors hold at most SUBSET_PX camera pixels (every tile up
+ * to 512x512 images; its band costs about a quarter of a 1024x1024 frame's).
+ * The subset depends on the tile grid only. */
+#define SUBSET_PX (512 * 512)
+static void noise_subset(const struct c0_tiling *tl, uint8_t *in)
+{
+	for (int m = tl->n; m >= 1; m--) {
+		double px = 0;
+		memset(in, 0, (size_t)tl->n);
+		for (int j = 0; j < m; j++) {
+			const struct c0_tile *t = &tl->t[(int)(((2LL * j + 1) * tl->n) / (2 * m))];
+			in[t - tl->t] = 1, px += (double)t->ih * t->iw;
+		}
+		if (px <= SUBSET_PX || m == 1)
+			return;
+	}
+}
+
+/* Every tile's lambda_max on both scales (lm: 2 per tile); the subset's
+ * halves (the even frames from all and the odd ones) add the noise of the
+ * correlation image to hist (stages/lambda.h). */
+static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
+			   int k0, int k1, struct c0_cov_acc **odd, double norm, double *lm, double *hist)
+{
+	int fail = C0_OK;
+	char msg[512] = "";
+	struct c0_progress pr;
+	int done = 0;
+	c0_progress_begin(&pr, "support (lambda)", k1 - k0);
+#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
+	for (int k = k0; k < k1; k++) {
+		const struct c0_tile *t = &tl->t[k];
+		struct c0_cov all, ev, od;
+		struct c0_cov_acc *o = odd[k - k0];
+		double *h = o ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *h) : NULL;
+		int st = o && !h ? C0_ENOMEM : c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &all);
+		if (!st) {
+			st = c0_lambda_tile_max(c, &all, norm, lm + 2 * (size_t)k);
+			c0_cov_free(&all);
+		}
+		if (!st && o && !(st = c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &ev))) {
+			if (!(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od)))
+				st = c0_lambda_tile_noise(c, &ev, &od, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
+			c0_cov_free(&ev), c0_cov_free(&od);
+		}
+		if (!st && h) {
+			/* counts: the sum is exact in any order */
+#pragma omp critical(c0_support_noise)
+			for (int i = 0; i < 2 * C0_LAMBDA_BINS; i++)
+				hist[i] += h[i];
+		}
+		free(h);
+		if (st) {
+#pragma omp critical(c0_support_fail)
+			if (!fail)
+				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+#pragma omp critical(c0_support_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	c0_progress_end(&pr);
+	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
+}
+
+/* The localisation precision on tiles: each subset tile's halves solved on
+ * their own (at most FRC_MAXIT iterations, the image's scale and lambda),
+ * their interiors' matched distances added in tile order (half_frc on one
+ * tile). One tile at a time: the odd bands are still held, and a second
+ * thread's solve on top of them would raise the peak memory. No FRC: its
+ * ring sums added over Hann-windowed tiles disagreed with the one-tile
+ * value (docs/parameters.md). */
+static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
+			   int k0, int k1, struct c0_cov_acc **odd, const struct scale *g, struct c0_support_result *res)
+{
+	double t0 = c0_now();
+	const int r = c->srf;
+	const double fine = c->pixel_nm / r;
+	const int rad = (int)ceil(0.5 * c->fwhm_nm / fine);
+	double *sums = c0_alloc(2 * (size_t)tl->n, sizeof *sums);   /* distance^2, matches */
+	struct c0_support_conf cc = *c;
+	if (cc.fista.maxit > FRC_MAXIT)
+		cc.fista.maxit = FRC_MAXIT;
+	int fail = sums ? C0_OK : C0_ENOMEM;
+	/* a team of one: the solver's own loops then run serially, as in each_tile */
+#pragma omp parallel for num_threads(1)
+	for (int k = k0; k < k1; k++) {
+		struct c0_cov_acc *o = odd[k - k0];
+		if (!o || fail)
+			continue;
+		const struct c0_tile *t = &tl->t[k];
+		struct c0_cov h;
+		struct c0_support_result hr[2];
+		memset(hr, 0, sizeof hr);
+		const int ih = t->ih * r, iw = t->iw * r, oy = (t->iy0 - t->y0) * r, ox = (t->ix0 - t->x0) * r;
+		uint8_t *m = c0_alloc(2 * (size_t)ih * iw, 1);
+		int st = !m ? C0_ENOMEM : C0_OK;
+		for (int j = 0; j < 2 && !st; j++) {      /* one window at a time */
+			st = j ? c0_cov_acc_window(o, 0, 0, t->h, t->w, &h) : c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &h);
+			if (!st) {
+				st = solve(&cc, &h, NULL, NULL, g, &hr[j]);
+				c0_cov_free(&h);
+			}
+		}
+		if (!st) {
+			for (int j = 0; j < 2; j++)
+				for (int y = 0; y < ih; y++)
+					memcpy(m + ((size_t)j * ih + y) * iw, hr[j].mask + (size_t)(oy + y) * hr[j].Lx + ox, (size_t)iw);
+			c0_pair_sums(m, m + (size_t)ih * iw, ih, iw, rad, &sums[2 * k], &sums[2 * k + 1]);
+		}
+		free(m);
+		c0_support_result_free(&hr[0]), c0_support_result_free(&hr[1]);
+		fail = st;
+	}
+	if (fail) {
+		free(sums);
+		return fail;
+	}
+	/* over ranks, then over tiles in tile order: the same sums for any split */
+	c0_comm_sum(sums, 2 * tl->n);
+	double s = 0, n = 0;
+	for (int k = 0; k < tl->n; k++)
+		s += sums[2 * k], n += sums[2 * k + 1];
+	res->precision_nm = n > 0 ? sqrt(s / n / 4) * fine / sqrt(2) : -1;
+	free(sums);
+	res->t_frc = c0_now() - t0;
+	return C0_OK;
+}
+
 int c0_support_tile_size(const struct c0_support_conf *c, int W, int H)
 {
 	int big = W > H ? W : H;
@@ -701,39 +831,68 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		c0_tiling_free(&tl);
 		return stack_whole(c, in, res);
 	}
-	/* several tiles or processes: the frame halves are not kept, so lambda is
-	 * the penalty's fixed default unless given, and there is no FRC */
+	/* several tiles or processes: the band of all frames, and for the
+	 * automatic lambda that of the odd frames on a subset of the tiles */
+	const int automatic = !(c->lambda_rel > 0), halves = automatic || c->frc;
+	if (halves && in->count < 6) {
+		c0_tiling_free(&tl);
+		return c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
+			       "give lambda)", in->name, (long long)in->count);
+	}
 	int k0, k1, ya, yb, ia, ib;
 	c0_tiling_share(&tl, rank, size, &k0, &k1, &ya, &yb, &ia, &ib);
-	const int rows = yb - ya;
+	const int rows = yb - ya, block = c0_cov_block_frames((size_t)W * H);
 	/* one pass over the frames, each reading only this process's rows */
-	struct c0_cov_acc *acc = NULL;
-	float *frame = NULL;
-	if (rows > 0) {
+	struct c0_cov_acc *acc = NULL, **odd = c0_alloc((size_t)(k1 - k0) + 1, sizeof *odd);
+	uint8_t *sub = c0_alloc((size_t)tl.n, 1);
+	float *frame = NULL, *win = NULL;
+	if (!odd || !sub)
+		st = C0_ENOMEM;
+	else if (halves)
+		noise_subset(&tl, sub);
+	if (!st && rows > 0) {
 		st = c0_cov_acc_new(W, rows, d, &acc);
 		if (!st)
-			st = c0_cov_acc_set_block(acc, c0_cov_block_frames((size_t)W * H));
+			st = c0_cov_acc_set_block(acc, block);
+		size_t wmax = 0;
+		for (int k = k0; k < k1 && !st; k++) {
+			const struct c0_tile *t = &tl.t[k];
+			if (sub[k] && !(st = c0_cov_acc_new(t->w, t->h, d, &odd[k - k0])))
+				st = c0_cov_acc_set_block(odd[k - k0], block);
+			wmax = sub[k] && (size_t)t->w * t->h > wmax ? (size_t)t->w * t->h : wmax;
+		}
 		/* a frame hook (drift) needs whole frames */
 		if (!st && !(frame = c0_alloc((size_t)W * (c->frame_fn ? H : rows), sizeof *frame)))
+			st = C0_ENOMEM;
+		if (!st && wmax && !(win = c0_alloc(wmax, sizeof *win)))
 			st = C0_ENOMEM;
 		struct c0_progress pr;
 		c0_progress_begin(&pr, "covariance", (double)in->count);
 		for (int64_t t = 0; t < in->count && !st; t++) {
+			const float *mine = frame;     /* this process's rows */
 			if (c->frame_fn) {
 				st = c0_frames_read(in, t, frame);
 				if (!st)
 					st = c->frame_fn(c->frame_ctx, t, frame, H, W);
-				if (!st)
-					st = c0_cov_acc_add(acc, frame + (size_t)ya * W);
+				mine = frame + (size_t)ya * W;
 			} else {
 				st = c0_frames_read_rows(in, t, ya, rows, frame);
-				if (!st)
-					st = c0_cov_acc_add(acc, frame);
+			}
+			if (!st)
+				st = c0_cov_acc_add(acc, mine);
+			for (int k = k0; k < k1 && !st && t % 2; k++) {
+				const struct c0_tile *w = &tl.t[k];
+				if (!odd[k - k0])
+					continue;
+				for (int y = 0; y < w->h; y++)
+					memcpy(win + (size_t)y * w->w, mine + (size_t)(w->y0 - ya + y) * W + w->x0,
+					       (size_t)w->w * sizeof *win);
+				st = c0_cov_acc_add(odd[k - k0], win);
 			}
 			c0_progress_update(&pr, (double)t + 1);
 		}
 		c0_progress_end(&pr);
-		free(frame);
+		free(frame), free(win);
 	}
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
@@ -744,32 +903,65 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 			norm = fmax(norm, c0_cov_acc_variance(acc, y - ya, x));
 	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
 	double *lmax = c0_alloc(nt, sizeof *lmax), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
+	double *lm = automatic ? c0_alloc(2 * nt, sizeof *lm) : NULL;
+	double *hist = automatic ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *hist) : NULL;
 	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->mask = c0_alloc(L, 1);
 	res->rx = c0_alloc(L, sizeof *res->rx);
 	res->mean = c0_alloc((size_t)W * H, sizeof *res->mean);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!st && (!lmax || !s2 || !stats || !res->mask || !res->rx || !res->mean || !res->hist))
+	if (!st && (!lmax || !s2 || !stats || (automatic && (!lm || !hist)) || !res->mask || !res->rx || !res->mean || !res->hist))
 		st = C0_ENOMEM;
 	if (!(st = c0_comm_status(st))) {
 		c0_comm_max(&norm, 1);
 		st = check_norm(in->name, norm);
 	}
-	/* lambda relative to the image's lambda_max: the largest of the tiles' */
+	/* lambda relative to the image's lambda_max: the largest of the tiles';
+	 * automatic: chosen from the noise of the subset's correlation images */
 	struct scale g = { norm, 0, 1 };
-	if (!st)
+	double rel = lambda_rel(c);
+	if (!st && automatic) {
+		double tn = c0_now();
+		st = c0_comm_status(each_tile_noise(c, acc, ya, &tl, k0, k1, odd, norm, lm, hist));
+		if (!st) {
+			c0_comm_max(lm, 2 * tl.n);
+			c0_comm_sum(hist, 2 * C0_LAMBDA_BINS);
+			double l1 = 0, l0 = 0;
+			for (int k = 0; k < tl.n; k++)
+				l1 = fmax(l1, lm[2 * k]), l0 = fmax(l0, lm[2 * k + 1]), lmax[k] = lm[2 * k + (c->penalty != C0_PENALTY_L1)];
+			if (!(l1 > 0))
+				st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
+			else
+				c0_lambda_tiles_choose(c, hist, l1, l0, &res->cv), rel = res->cv.chosen_rel, res->lambda_auto = 1;
+			for (int k = 0; k < tl.n; k++)
+				res->cv.noise_tiles += sub[k];
+		}
+		res->cv.seconds = c0_now() - tn;
+	} else if (!st) {
 		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+		if (!st)
+			c0_comm_max(lmax, tl.n);
+	}
+	free(lm), free(hist);
 	if (!st) {
-		c0_comm_max(lmax, tl.n);
 		for (int k = 0; k < tl.n; k++)
 			res->lambda_max = fmax(res->lambda_max, lmax[k]);
-		res->lambda = lambda_rel(c) * res->lambda_max;
+		res->lambda = rel * res->lambda_max;
 		res->norm = norm;
 		g.lam = res->lambda, g.lmax_only = 0;
-		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+		/* the halves first, then their bands are freed before the tiles' solves */
+		if (c->frc)
+			st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, &g, res));
+		for (int k = 0; k < k1 - k0; k++)
+			c0_cov_acc_free(odd[k]), odd[k] = NULL;
+		if (!st)
+			st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
 	}
 	c0_cov_acc_free(acc);
+	for (int k = 0; odd && k < k1 - k0; k++)
+		c0_cov_acc_free(odd[k]);
+	free(odd), free(sub);
 	/* rank 0 gathers the interiors (each tile's numbers come from one rank,
 	 * so sums over tiles are made in tile order, whatever the ranks) */
 	if (!st) {
@@ -798,7 +990,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		for (size_t i = 0; i < L; i++)
 			res->support_pixels += res->mask[i];
 		res->tiles = tl.n, res->tile = c0_support_tile_size(c, W, H);
-		res->precision_nm = -1;
+		if (!c->frc)
+			res->precision_nm = -1;
 	}
 	free(lmax), free(s2), free(stats);
 	c0_tiling_free(&tl);

@@ -6,12 +6,14 @@
   its window inflate: 40-pixel tiles here are 60 % border); the tiles see
   the same covariance but solve separately, so iterates stopped at the same
   count differ a little near tile edges);
+- the automatic lambda on tiles: the same noise sigma_C as on one tile (within 1 %),
+  and the localisation precision within 10 % (no FRC on tiles);
 - results do not depend on the thread count (bit-identical files);
 - the program sets the passive OpenMP wait policy itself and counts threads
   from the affinity mask (the report records both, and the MPI rank count);
 - a tile smaller than the PSF band or larger than the image is refused with
   one line, leaving nothing behind;
-- with MPI: 'run' on 1 and 2 ranks writes identical files.
+- with MPI: 'run' on 1 and 2 ranks writes identical files (automatic lambda, the same).
 
 usage: test_tiles.py COL0RME [MPIRUN]
 """
@@ -83,6 +85,17 @@ with tempfile.TemporaryDirectory() as tmp:
     check(abs(st["noise_variance"] / s1["noise_variance"] - 1) <= 0.05, "noise variance %g vs %g"
           % (st["noise_variance"], s1["noise_variance"]))
     check(abs(st["lambda_max"] / s1["lambda_max"] - 1) <= 0.02, "lambda_max %g vs %g" % (st["lambda_max"], s1["lambda_max"]))
+    # the automatic lambda on tiles (every tile's halves at this size): the same rule and noise as on one tile
+    la1, lat = s1.get("lambda_auto", {}), st.get("lambda_auto", {})
+    check(st["lambda_rule"] == "automatic" and lat.get("noise_tiles") == 9, "tiles: lambda_rule %r, noise_tiles %r"
+          % (st["lambda_rule"], lat.get("noise_tiles")))
+    sig = [r["lambda_auto"]["noise_relative"] * r["lambda_max"] * r["normalisation"] for r in (s1, st) if "lambda_auto" in r]
+    print("automatic lambda: relative %.4g (tiles) vs %.4g (one tile), sigma_C %s" % (st["lambda_relative"], s1["lambda_relative"], sig))
+    check(len(sig) == 2 and abs(sig[1] / sig[0] - 1) <= 0.01, "sigma_C on tiles vs one tile: %r" % sig)
+    # the localisation precision from the halves of the subset tiles (no FRC on tiles)
+    p1, pt = s1.get("precision_nm", -1), st.get("precision_nm", -1)
+    print("localisation precision: %.2f nm (tiles) vs %.2f nm (one tile)" % (pt, p1))
+    check(p1 > 0 and abs(pt / p1 - 1) <= 0.1 and "frc" not in st, "precision on tiles %g vs %g" % (pt, p1))
     check(same_files(tiled, tiled1, ("support.tif", "rx.tif")), "1 and 2 threads give different files")
     check("duality_gap" in st and st["duality_gap"] >= 0, "the report gives the duality gap")
 
@@ -126,5 +139,8 @@ with tempfile.TemporaryDirectory() as tmp:
             check(names == sorted(f for f in os.listdir(outs[2]) if f.endswith(".tif")), "the same files")
             check(len(names) >= 6 and same_files(outs[1], outs[2], names), "1 and 2 ranks give different files")
             check(json.load(open(os.path.join(outs[2], "report.json")))["mpi_ranks"] == 2, "mpi_ranks 2")
+            sup = [json.load(open(os.path.join(outs[n], "report.json")))["support"] for n in (1, 2)]
+            check(all(s["lambda_rule"] == "automatic" for s in sup[0] + sup[1]) and
+                  [s["lambda"] for s in sup[0]] == [s["lambda"] for s in sup[1]], "automatic lambda on 1 and 2 ranks")
             print("mpi: %d files identical on 1 and 2 ranks" % len(names))
 done()
