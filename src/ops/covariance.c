@@ -15,7 +15,7 @@ struct c0_cov_acc {
 	int *dy, *dx;
 	int64_t frames;
 	float *sum;         /* nlag * H * W sums of products of shifted values */
-	double *shift;      /* first frame: sums are of y - shift, which keeps them small */
+	float *shift;       /* first frame: sums are of y - shift, which keeps them small */
 	double *s1;
 	double *st;         /* sum over frames of t (y - shift): the linear trend */
 	float *blk;         /* up to `block` frames, shifted */
@@ -37,7 +37,7 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 	a->dy = c0_alloc((size_t)a->nlag, sizeof(int));
 	a->dx = c0_alloc((size_t)a->nlag, sizeof(int));
 	a->sum = c0_alloc((size_t)a->nlag * n, sizeof(float));
-	a->shift = c0_alloc(n, sizeof(double));
+	a->shift = c0_alloc(n, sizeof(float));
 	a->s1 = c0_alloc(n, sizeof(double));
 	a->st = c0_alloc(n, sizeof(double));
 	a->blk = c0_alloc(n * (size_t)a->block, sizeof(float));
@@ -138,6 +138,8 @@ static void flush(struct c0_cov_acc *a)
 int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
 {
 	const size_t n = (size_t)a->W * a->H;
+	if (!a->blk && !(a->blk = c0_alloc(n * (size_t)a->block, sizeof(float))))
+		return C0_ENOMEM;
 	if (a->frames == 0)
 		for (size_t i = 0; i < n; i++)
 			a->shift[i] = frame[i];
@@ -226,6 +228,12 @@ double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x)
 }
 
 int64_t c0_cov_acc_frames(const struct c0_cov_acc *a) { return a->frames; }
+
+void c0_cov_acc_seal(struct c0_cov_acc *a)
+{
+	flush(a);
+	free(a->blk), a->blk = NULL;
+}
 
 int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y0, int x0, struct c0_cov *out)
 {

@@ -473,7 +473,7 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 	if (!st && in->count < 3)
 		st = c0_fail(C0_EINVAL, "%s: the covariance needs at least 3 frames", in->name);
 	if (!st)
-		(void)c0_cov_acc_variance(acc, 0, 0);   /* adds the last block: the windows below only read */
+		c0_cov_acc_seal(acc);   /* the windows below only read */
 	*seconds = c0_now() - t0;
 	double *s2 = c0_alloc((size_t)tl.n, sizeof *s2);
 	*mean = c0_alloc((size_t)W * H, sizeof **mean);
@@ -896,6 +896,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	}
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
+	if (!st && acc)
+		c0_cov_acc_seal(acc);   /* the tiles below only read it */
 	/* the image's normalisation: its largest pixel variance */
 	double norm = 0;
 	for (int y = ia; !st && y < ib; y++)
