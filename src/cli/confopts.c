@@ -127,9 +127,12 @@ int c0_conf_cli_finish(struct c0_conf_cli *m)
 	return st;
 }
 
-/* The flag of parameter name[0..l), or NULL. */
-static const char *flag_of(const char *name, size_t l, char *buf, size_t n)
+/* The flag of parameter name[0..l) (in extra first, if given), or NULL. */
+static const char *flag_of(const char *name, size_t l, const struct c0_cli_name *extra, char *buf, size_t n)
 {
+	for (; extra && extra->param; extra++)
+		if (strlen(extra->param) == l && !strncmp(extra->param, name, l))
+			return extra->flag;
 	if (l == 6 && !strncmp(name, "outdir", 6))
 		return "-o";
 	if (l == 5 && !strncmp(name, "force", 5))
@@ -153,7 +156,7 @@ static int word(int ch)
 /* A parameter name in a message is the first word, or has an underscore, or
  * is followed by its value, a colon or a closing parenthesis: "3 angles for"
  * stays prose. */
-void c0_cli_flags(const char *msg, char *buf, size_t n)
+void c0_cli_flags(const char *msg, const struct c0_cli_name *extra, char *buf, size_t n)
 {
 	size_t k = 0;
 	for (const char *p = msg; *p && k + 1 < n;) {
@@ -165,7 +168,7 @@ void c0_cli_flags(const char *msg, char *buf, size_t n)
 		while (word(*e))
 			e++;
 		char fb[64];
-		const char *f = flag_of(p, (size_t)(e - p), fb, sizeof fb);
+		const char *f = flag_of(p, (size_t)(e - p), extra, fb, sizeof fb);
 		int cited = (p == msg && (!*e || *e == ' ' || *e == ':')) || memchr(p, '_', (size_t)(e - p)) ||
 			    *e == ':' || *e == ')' || (*e == ' ' && (isdigit((unsigned char)e[1]) || e[1] == '-'));
 		if (*e == '.' || *e == '/')
