@@ -42,8 +42,9 @@ static void dadj(const struct c0_diff3 *d, int a, const float *in, float *out)
 		for (int k = 0; k < n; k++) {
 			const float *p = in + b0 + k * s;
 			float *o = out + b0 + k * s;
+			/* (p - s)[i], not p[i - s]: i - s would wrap as an unsigned offset */
 			for (size_t i = 0; i < s; i++)
-				o[i] = (k < n - 1 ? -p[i] : 0) + (k > 0 ? p[i - s] : 0);
+				o[i] = (k < n - 1 ? -p[i] : 0) + (k > 0 ? (p - s)[i] : 0);
 		}
 }
 

@@ -94,7 +94,7 @@ void c0_grad3m_adjoint(const struct c0_grad3m *g, const float *d, float *v)
 			if (g->nc == 3) {
 				const float *dz = d + 2 * N + j * M;
 				for (k = k0; k < k1; k++)
-					o[k] += wz * ((j + 1 < g->nz ? -dz[k] : 0) + (j > 0 ? dz[k - M] : 0));
+					o[k] += wz * ((j + 1 < g->nz ? -dz[k] : 0) + (j > 0 ? (dz - M)[k] : 0));
 			}
 		}
 	}
