@@ -220,7 +220,7 @@ with tempfile.TemporaryDirectory() as tmp:
         # the l1 solvers on the same problem: the default (fista, capped) is the baseline
         for what, extra in (("fista (default, baseline)", ["--support-solver", "fista"]),
                             ("pruned, to convergence", ["--support-solver", "pruned", "--iterations", "8000"])):
-            dts, mem, _ = timed([CLI, "support", *base, "--lambda", "1e-2", *extra, "-o", o + "s",
+            dts, mem, _ = timed([CLI, "support", *base, "--lambda", "1e-2", *extra, "--force", "-o", o + "s",
                                  os.path.join(d, "stack_q01.tif")])
             ls = json.load(open(os.path.join(o + "s", "report.json")))["support"][0]
             cpu = LAST_CPU[0]
