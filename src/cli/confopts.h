@@ -9,7 +9,7 @@
 
 struct c0_conf_cli {
 	struct c0_run_conf c;
-	const char *penalty, *background, *reg, *solver;  /* the named choices, set by name at the end */
+	const char *penalty, *background, *reg, *solver, *support_solver;  /* the named choices, set by name at the end */
 	const char *discrepancy, *bleach, *acquisition;
 	const char *drift;                       /* on|off */
 	int no_drift;                            /* --no-drift: drift off */

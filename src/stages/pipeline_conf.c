@@ -43,6 +43,8 @@ static const struct param params[] = {
 	NUM(lambda, P_DOUBLE, "support regularisation relative to lambda_max (0: automatic, from the noise of the frame halves)"),
 	NUM(lag, P_INT, "covariance lag radius in pixels (0: ceil(6 sigma / pixel))"),
 	NUM(iterations, P_INT, "maximum FISTA iterations, per reweighting for cel0 (2000)"),
+	{ "support_solver", P_ENUM, F(support_solver), 0, 0, "fista|pruned",
+	  "l1 support solver: FISTA on a working set fixed until it converges (fista), or re-made every 100 iterations (pruned)" },
 	NUM(tol, P_DOUBLE, "FISTA stops when the iterate's relative change falls below this (1e-5)"),
 	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
 	{ "drift", P_ENUM, F(drift), 0, 0, "off|on", "estimate lateral drift from block means and undo it before the covariance and the means (on)" },
@@ -229,6 +231,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
 					       .fista = { c->iterations, c->tol }, .cel0_outer = c->reweightings,
+					       .solver = c->support_solver,
 					       .frc = c->frc, .tile = c->tile };
 	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
@@ -241,10 +244,10 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	    (unsigned)c->acquisition > C0_ACQ_INTERLEAVED)
 		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,
 			       (int)c->bleach, (int)c->acquisition);
-	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN ||
-	    (unsigned)c->matirf_solver > C0_MATIRF_APG)
-		return c0_fail(C0_EINVAL, "penalty %d / background %d / reg %d: out of range", (int)c->penalty,
-			       (int)c->background, (int)c->reg);
+	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->support_solver > C0_SUPPORT_PRUNED ||
+	    (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN || (unsigned)c->matirf_solver > C0_MATIRF_APG)
+		return c0_fail(C0_EINVAL, "penalty %d / support_solver %d / background %d / reg %d / matirf_solver %d: out of range",
+			       (int)c->penalty, (int)c->support_solver, (int)c->background, (int)c->reg, (int)c->matirf_solver);
 	if (c->nangles < 0 || c->nangles > C0_MAX_STACKS || c->ngains < 0 || c->ngains > C0_MAX_STACKS ||
 	    c->nsupport_stacks < 0 || c->nsupport_stacks > C0_MAX_STACKS || c->nnoise_variance < 0 ||
 	    c->nnoise_variance > C0_MAX_STACKS)

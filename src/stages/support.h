@@ -27,13 +27,14 @@ struct c0_support_conf {
 	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
 	struct c0_fista_conf fista;/* 2000 iterations, tol 1e-5 */
 	int cel0_outer;            /* 10 reweightings */
+	enum c0_support_solver solver; /* l1: fista (a set fixed until FISTA converges on it) or pruned */
 	int frc;                   /* 1: also solve each half of the frames (on its own, at most 300
 				    * iterations) for the FRC resolution and the localisation precision */
 	int tile;                  /* tile side in camera pixels; 0: C0_SUPPORT_TILE (or the image when smaller) */
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, 1, 0, NULL, NULL }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL }
 /* Default tile side (docs/parameters.md): tiles are solved side by side and
  * overlap by two covariance lags on each side. */
 #define C0_SUPPORT_TILE 256
