@@ -346,19 +346,6 @@ int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, 
 	return solve(c, cov, NULL, NULL, NULL, res);
 }
 
-int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2)
-{
-	struct c0_support_conf cc = *c;
-	cc.penalty = C0_PENALTY_L1;
-	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
-	struct c0_support_result r;
-	memset(&r, 0, sizeof r);
-	int st = solve(&cc, cov, mask, NULL, NULL, &r);
-	*sigma2 = r.sigma2;
-	c0_support_result_free(&r);
-	return st;
-}
-
 /* x0 (or NULL): a start in camera units (rx of another solve) */
 static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
 		 const struct scale *g, struct c0_support_result *res)
@@ -575,7 +562,7 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 		st = C0_ENOMEM;
 	struct c0_support_conf cc = *c;
 	cc.penalty = C0_PENALTY_L1;
-	cc.fista.maxit = 100;   /* as c0_support_noise */
+	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
 	int fail = st;
 	char msg[512] = "";
 #pragma omp parallel for schedule(dynamic, 1) if (tl.n > 1)

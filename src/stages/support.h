@@ -90,11 +90,10 @@ int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames
 int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double **mean, int64_t *frames,
 		  double *seconds);
 /* Noise variance of a stack whose support is known: the same model with
- * r_x free on the mask only and no penalty (100 iterations). */
-int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2);
-/* The same from a stack in one pass, on the support's tile grid (memory:
- * the float band of the frame and one window's covariance per thread):
- * each tile's noise variance from its window, averaged over the interiors;
- * one tile gives c0_support_noise's number. Also the temporal mean. */
+ * r_x free on the mask only and no penalty (100 iterations), in one pass on
+ * the support's tile grid (memory: the float band of the frame and one
+ * window's covariance per thread): each tile's noise variance from its
+ * window, averaged over the interiors (one tile: the whole image's fit).
+ * Also the temporal mean (allocated). */
 int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *f, const uint8_t *mask, double **mean,
 		   int64_t *frames, double *sigma2, double *seconds);
