@@ -33,6 +33,7 @@ def ji(sim, out):
     return json.loads(r.stdout)["support"]["jaccard"]
 
 
+os.makedirs(WORK, exist_ok=True)
 rows = []
 for name, extra in PANEL.items():
     sim = os.path.join(WORK, name.replace(" ", "_"))
