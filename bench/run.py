@@ -53,6 +53,7 @@ def load():
 
 def row(what, size, secs, thr, mem, ratio=""):
     rows.append((what, size, "%.3g" % secs, thr, "%.0f" % mem, ratio))
+    print(" | ".join(rows[-1]), file=sys.stderr, flush=True)   # as it comes: the table waits for the end
 
 
 def matirf350(tmp):
