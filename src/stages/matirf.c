@@ -710,7 +710,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 /* The warm start from a coarser grid: the images binned 2x2 (mean), the same
  * problem in physical units there (per area, lateral TV weighs kappa / 2 and
  * its axial weight doubles; the data scale is the fine level's), solved, and
- * its volume and TV dual brought back by nearest neighbour (the dual doubled,
+ * its volume and TV dual brought back bilinearly (the dual doubled,
  * the dual's bound being kappa there). u0, y0: nz np and 2 nz np floats. */
 static int coarse_start(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 			const float *const *x, int ny, int nx, int nz, double mx, int levels, const double *col,
@@ -747,9 +747,20 @@ static int coarse_start(const struct c0_matirf_conf *c, int nq, const double *an
 		for (int y = 0; y < ny; y++)
 			for (int xx = 0; xx < nx; xx++) {
 				const size_t p = (size_t)y * nx + xx, pc = (size_t)(y / 2) * cx + xx / 2;
-				u0[j * np + p] = (float)(r.f[j * cp + pc] * col[j] / mx);
-				for (int e = 0; e < 2; e++)
-					y0[(e * nz + j) * np + p] = 2 * yc[(e * nz + j) * cp + pc];
+				/* bilinear, the fine pixel's centre between its block and the nearer
+				 * neighbour block (nearest neighbour: 83 full-grid iterations
+				 * instead of 71 on the 350x350 phantom) */
+				const int y1 = y % 2 ? (y / 2 + 1 < cy ? y / 2 + 1 : y / 2) : (y > 0 ? y / 2 - 1 : 0);
+				const int x1 = xx % 2 ? (xx / 2 + 1 < cx ? xx / 2 + 1 : xx / 2) : (xx > 0 ? xx / 2 - 1 : 0);
+				const size_t q[4] = { pc, (size_t)(y / 2) * cx + x1, (size_t)y1 * cx + xx / 2, (size_t)y1 * cx + x1 };
+				const float w[4] = { 0.5625f, 0.1875f, 0.1875f, 0.0625f };
+				const float *fj = r.f + j * cp;
+				const float v = w[0] * fj[q[0]] + w[1] * fj[q[1]] + w[2] * fj[q[2]] + w[3] * fj[q[3]];
+				u0[j * np + p] = (float)(v * col[j] / mx);
+				for (int e = 0; e < 2; e++) {
+					const float *ye = yc + (e * nz + j) * cp;
+					y0[(e * nz + j) * np + p] = 2 * (w[0] * ye[q[0]] + w[1] * ye[q[1]] + w[2] * ye[q[2]] + w[3] * ye[q[3]]);
+				}
 			}
 	c0_matirf_result_free(&r);
 out:
