@@ -142,7 +142,9 @@ def large(tmp):
         d = os.path.join(tmp, "L%d" % w)
         sim(d, w, T)
         base = support_row("support, one tile (baseline)", d, w, T, ("--tile", str(w))) if with_base else 0
-        support_row("support, tiles (default)", d, w, T, base=base)
+        tdef = support_row("support, tiles (default)", d, w, T, base=base)
+        support_row("support, tiles, --support-solver pruned", d, w, T, ("--support-solver", "pruned", "--iterations", "8000"),
+                    base=tdef)
         if w == 1024:
             # thread scaling and a busy neighbour (the passive wait policy vs spinning threads)
             t1 = support_row("support, tiles, 1 thread", d, w, T, ("--threads", "1"))
@@ -161,13 +163,14 @@ def large(tmp):
     sim(d, 512, 500, angles="62,63.5,65,66.5,68")
     stacks = [os.path.join(d, "stack_q%02d.tif" % q) for q in range(1, 6)]
     base = None
-    for what, extra in (("run, one support tile (baseline)", ("--tile", "512")), ("run, tiles (default)", ())):
+    # --tile 512: one tile for the support and the intensity (the whole-frame paths)
+    for what, extra in (("run, one tile (baseline)", ("--tile", "512")), ("run, tiles (default)", ())):
         o = os.path.join(tmp, "run_" + what.split(",")[1].split()[0])
         l0 = load()
         dt, mem, _ = timed([CLI, "run", "--fwhm", "229", "--angles", "62,63.5,65,66.5,68", "-o", o, *extra] + stacks)
         ts = json.load(open(os.path.join(o, "report.json")))["timings_s"]
-        row(what, "5 x 512x512x500 r4", dt, "support %.0f s, intensity %.0f s, matirf %.0f s; %s"
-            % (ts["support"], ts["intensity"], ts["matirf"], l0), mem,
+        row(what, "5 x 512x512x500 r4", dt, "drift %.0f s, support %.0f s, intensity %.0f s, bleaching %.1f s, matirf %.0f s; %s"
+            % (ts.get("drift", 0), ts["support"], ts["intensity"], ts["bleaching"], ts["matirf"], l0), mem,
             "%.2fx the baseline" % (base / dt) if base else "baseline")
         base = base or dt
 
@@ -231,6 +234,19 @@ with tempfile.TemporaryDirectory() as tmp:
         base = ["--fwhm", "229", "--pixel-size", "100", "--no-drift", "--frc", "0"]
         dt_fix, mem, _ = timed([CLI, "support", *base, "--lambda", "1e-2", "-o", o + "f", os.path.join(d, "stack_q01.tif")])
         row("support, lambda 1e-2 given", "%dx%dx%d r4" % (w, w, T), dt_fix, "", mem)
+        # the l1 solvers on the same problem: the default (fista, capped) is the baseline
+        for what, extra in (("fista (default, baseline)", ["--support-solver", "fista"]),
+                            ("pruned, to convergence", ["--support-solver", "pruned", "--iterations", "8000"])):
+            dts, mem, _ = timed([CLI, "support", *base, "--lambda", "1e-2", *extra, "--force", "-o", o + "s",
+                                 os.path.join(d, "stack_q01.tif")])
+            ls = json.load(open(os.path.join(o + "s", "report.json")))["support"][0]
+            cpu = LAST_CPU[0]
+            if what.startswith("fista"):
+                cpu_f = cpu
+            row("support solver " + what, "%dx%dx%d r4" % (w, w, T), dts,
+                "%.1f CPU-s, %d its, %s, gap %.2g, %d pixels" % (cpu, ls["iterations"], "converged" if ls["converged"]
+                                                                  else "cap", ls["duality_gap"], ls["support_pixels"]),
+                mem, "%.2fx fista's CPU-s" % (cpu / cpu_f))
         dt_auto, mem, _ = timed([CLI, "support", *base, "-o", o + "a", os.path.join(d, "stack_q01.tif")])
         la = json.load(open(os.path.join(o + "a", "report.json")))["support"][0]
         row("support, lambda automatic", "%dx%dx%d r4" % (w, w, T), dt_auto,

@@ -33,6 +33,7 @@ enum c0_status {
 };
 
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
+enum c0_support_solver { C0_SUPPORT_FISTA, C0_SUPPORT_PRUNED };    /* "fista", "pruned" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
 enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO, C0_MATIRF_APG }; /* "exact", "diag", "auto", "apg" */
@@ -60,6 +61,9 @@ struct c0_run_conf {
 			        * interleaved frame halves (max(1e-2 lambda_max, 4 noise sds) for l1) */
 	int lag;               /* 0: covariance lag radius in pixels; 0: ceil(6 sigma / pixel) */
 	int iterations;        /* 2000: maximum FISTA iterations (per reweighting for cel0) */
+	enum c0_support_solver support_solver; /* fista: l1 by FISTA on a working set that changes when FISTA
+				* has converged on it, the whole grid's step; pruned: the set re-made every 100
+				* iterations, its own step, the momentum kept (converges; see docs/parameters.md) */
 	double tol;            /* 1e-5: FISTA stops when the iterate's relative change is below this */
 	int reweightings;      /* 10: CEL0 reweighting steps */
 	int drift;             /* 1: estimate lateral drift from block means of all stacks (in order) and undo

@@ -189,7 +189,7 @@ static void test_bad_params(void)
 	struct c0_sim_conf c;
 	c0_sim_defaults(&c);
 	c.tau_on_ms = -1;
-	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--tau-on"));
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "tau_on_ms"));
 	c0_sim_defaults(&c);
 	c.angles[2] = 55;                 /* below critical: an epi stack */
 	CHECK(c0_sim_check(&c) == C0_OK);
@@ -197,15 +197,15 @@ static void test_bad_params(void)
 	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "incidence angle"));
 	c0_sim_defaults(&c);
 	c.ngaps = 2;
-	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--gaps"));
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "gaps_s"));
 	c.ngaps = 1, c.order = C0_ORDER_INTERLEAVED;
-	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--gaps"));
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "gaps_s"));
 	c0_sim_defaults(&c);
 	c.filaments = 0;
 	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "empty structure"));
 	c0_sim_defaults(&c);
 	c.z_min_nm = 300, c.z_max_nm = 100;
-	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "--z-range"));
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "z_min_nm"));
 }
 
 int main(void)

@@ -1,6 +1,7 @@
 /* col0rme simulate: MA-TIRF blinking stacks with ground truth. */
 #include "cli/commands.h"
 #include "cli/opts.h"
+#include "cli/confopts.h"
 #include "sim/sim.h"
 #include "io/outdir.h"
 #include "io/report.h"
@@ -89,6 +90,24 @@ static void report(const struct c0_sim_conf *c, const struct c0_sim_result *r, c
 	cJSON_AddNumberToObject(t, "simulate", r->seconds);
 }
 
+/* The simulator's parameter names (as in sim.json) that its messages cite,
+ * and their flags here. */
+static const struct c0_cli_name NAMES[] = {
+	{ "width", "--width" }, { "height", "--height" }, { "frames", "--frames" }, { "angles", "--angles" },
+	{ "bleach_order", "--bleach-order" }, { "gaps_s", "--gaps" }, { "pair_sep_nm", "--pair-sep" },
+	{ "pair_dz_nm", "--pair-dz" }, { "tau_on_ms", "--tau-on" }, { "tau_off_ms", "--tau-off" }, { "fps", "--fps" },
+	{ "tau_bleach_s", "--tau-bleach" }, { "brightness", "--brightness" }, { "brightness_cv", "--brightness-cv" },
+	{ "background", "--background" }, { "gain", "--gain" }, { "read_noise", "--read-noise" }, { "offset", "--offset" },
+	{ "z_min_nm", "--z-range min" }, { "z_max_nm", "--z-range max" }, { "filaments", "--filaments" },
+	{ "density_per_um", "--density" }, { "persistence_nm", "--persistence" }, { "emitters_csv", "--emitters" },
+	{ "drift_nm", "--drift-nm" }, { "srf", "--srf" }, { NULL, NULL },
+};
+
+static int fail(void)
+{
+	return c0_cli_error_names("simulate", NAMES);
+}
+
 int cmd_simulate(int argc, char **argv)
 {
 	struct c0_sim_conf c;
@@ -157,7 +176,7 @@ int cmd_simulate(int argc, char **argv)
 	c.z_max_nm = nz > 1 ? zr[1] : zr[0];
 	c.nangles = nangles;
 	if (ndrift == 1)
-		return c0_fail(C0_EINVAL, "--drift-nm: expected X,Y in nm"), c0_cli_error("simulate");
+		return c0_fail(C0_EINVAL, "--drift-nm: expected X,Y in nm"), fail();
 	static const char *orders[] = { "sequential", "interleaved", "restart" };
 	c.order = -1;
 	for (int k = 0; k < 3; k++)
@@ -165,11 +184,11 @@ int cmd_simulate(int argc, char **argv)
 			c.order = k;
 	if (c.order < 0) {
 		c0_fail(C0_EINVAL, "--bleach-order %s: expected sequential, interleaved or restart", order);
-		return c0_cli_error("simulate");
+		return fail();
 	}
 	struct c0_outdir out;
 	if (c0_sim_check(&c) || c0_outdir_open(&out, outdir, force))
-		return c0_cli_error("simulate");
+		return fail();
 	struct c0_sim_result res;
 	cJSON *rep = c0_report_new("simulate", argc, argv);
 	int st = c0_simulate(&c, &out, &res);
@@ -180,7 +199,7 @@ int cmd_simulate(int argc, char **argv)
 	cJSON_Delete(rep);
 	if ((st = c0_outdir_finish(&out, st))) {
 		c0_sim_result_free(&res);
-		return c0_cli_error("simulate");
+		return fail();
 	}
 	fprintf(stderr, "simulate: %d emitters, %d angles x %d frames of %dx%d in %.2fs -> %s\n", res.nemitters,
 		c.nangles, c.frames, c.width, c.height, res.seconds, outdir);

@@ -8,8 +8,13 @@
 
 int c0_cli_error(const char *cmd)
 {
+	return c0_cli_error_names(cmd, NULL);
+}
+
+int c0_cli_error_names(const char *cmd, const struct c0_cli_name *names)
+{
 	char msg[2048];
-	c0_cli_flags(c0_errmsg(), msg, sizeof msg);   /* the library names parameters; we show flags */
+	c0_cli_flags(c0_errmsg(), names, msg, sizeof msg);   /* the library names parameters; we show flags */
 	if (c0_comm_rank() == 0)      /* under MPI every rank has the message */
 		fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
 	return 1;

@@ -11,3 +11,6 @@ int cmd_run(int argc, char **argv);
 
 /* Shared by subcommands: print "col0rme CMD: error: MSG" and return 1. */
 int c0_cli_error(const char *cmd);
+/* The same with a command's own parameter names mapped to its flags. */
+struct c0_cli_name;
+int c0_cli_error_names(const char *cmd, const struct c0_cli_name *names);

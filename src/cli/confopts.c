@@ -29,6 +29,7 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "drift", { "drift", 0, C0_OPT_STRING, &m->drift, "on|off", "estimate lateral drift from block means and undo it before the covariance and the means", NULL, 0, NULL } },
 		{ "no_drift", { "no-drift", 0, C0_OPT_FLAG, &m->no_drift, NULL, "the same as --drift off", NULL, 0, NULL } },
 		{ "frc", { "frc", 0, C0_OPT_INT, &c->frc, "0|1", "solve each half of the frames too, for the FRC resolution and the localisation precision", NULL, 0, NULL } },
+		{ "support_solver", { "support-solver", 0, C0_OPT_STRING, &m->support_solver, "fista|pruned", "l1 support solver: FISTA on a working set fixed until it converges (whole grid's step), or re-made every 100 iterations (its own step, momentum kept; converges, see the guide)", NULL, 0, NULL } },
 		{ "iterations", { "iterations", 0, C0_OPT_INT, &c->iterations, "N", "maximum FISTA iterations (per reweighting for cel0)", NULL, 0, NULL } },
 		{ "tol", { "tol", 0, C0_OPT_DOUBLE, &c->tol, "F", "stop when the relative change of the iterate falls below this", NULL, 0, NULL } },
 		{ "reweightings", { "reweightings", 0, C0_OPT_INT, &c->reweightings, "N", "CEL0 reweighting steps", NULL, 0, NULL } },
@@ -78,7 +79,7 @@ enum { MAXROWS = 64 };
 void c0_conf_cli_init(struct c0_conf_cli *m)
 {
 	c0_run_conf_init(&m->c);
-	m->penalty = "l1", m->background = "smooth", m->reg = "tv", m->solver = "auto", m->nz = 0, m->pixel_given = 0, m->channel = 0;
+	m->penalty = "l1", m->support_solver = "fista", m->background = "smooth", m->reg = "tv", m->solver = "auto", m->nz = 0, m->pixel_given = 0, m->channel = 0;
 	m->discrepancy = "relative", m->bleach = "estimate", m->acquisition = "sequential";
 	m->drift = "on", m->no_drift = 0;
 }
@@ -108,6 +109,8 @@ int c0_conf_cli_finish(struct c0_conf_cli *m)
 {
 	int st = c0_run_conf_set(&m->c, "penalty", m->penalty);
 	if (!st)
+		st = c0_run_conf_set(&m->c, "support_solver", m->support_solver);
+	if (!st)
 		st = c0_run_conf_set(&m->c, "background", m->background);
 	if (!st)
 		st = c0_run_conf_set(&m->c, "reg", m->reg);
@@ -128,9 +131,12 @@ int c0_conf_cli_finish(struct c0_conf_cli *m)
 	return st;
 }
 
-/* The flag of parameter name[0..l), or NULL. */
-static const char *flag_of(const char *name, size_t l, char *buf, size_t n)
+/* The flag of parameter name[0..l) (in extra first, if given), or NULL. */
+static const char *flag_of(const char *name, size_t l, const struct c0_cli_name *extra, char *buf, size_t n)
 {
+	for (; extra && extra->param; extra++)
+		if (strlen(extra->param) == l && !strncmp(extra->param, name, l))
+			return extra->flag;
 	if (l == 6 && !strncmp(name, "outdir", 6))
 		return "-o";
 	if (l == 5 && !strncmp(name, "force", 5))
@@ -154,7 +160,7 @@ static int word(int ch)
 /* A parameter name in a message is the first word, or has an underscore, or
  * is followed by its value, a colon or a closing parenthesis: "3 angles for"
  * stays prose. */
-void c0_cli_flags(const char *msg, char *buf, size_t n)
+void c0_cli_flags(const char *msg, const struct c0_cli_name *extra, char *buf, size_t n)
 {
 	size_t k = 0;
 	for (const char *p = msg; *p && k + 1 < n;) {
@@ -166,7 +172,7 @@ void c0_cli_flags(const char *msg, char *buf, size_t n)
 		while (word(*e))
 			e++;
 		char fb[64];
-		const char *f = flag_of(p, (size_t)(e - p), fb, sizeof fb);
+		const char *f = flag_of(p, (size_t)(e - p), extra, fb, sizeof fb);
 		int cited = (p == msg && (!*e || *e == ' ' || *e == ':')) || memchr(p, '_', (size_t)(e - p)) ||
 			    *e == ':' || *e == ')' || (*e == ' ' && (isdigit((unsigned char)e[1]) || e[1] == '-'));
 		if (*e == '.' || *e == '/')

@@ -9,7 +9,7 @@
 
 struct c0_conf_cli {
 	struct c0_run_conf c;
-	const char *penalty, *background, *reg, *solver;  /* the named choices, set by name at the end */
+	const char *penalty, *background, *reg, *solver, *support_solver;  /* the named choices, set by name at the end */
 	const char *discrepancy, *bleach, *acquisition;
 	const char *drift;                       /* on|off */
 	int no_drift;                            /* --no-drift: drift off */
@@ -32,6 +32,9 @@ int c0_conf_cli_table(struct c0_conf_cli *m, const char *const *params, const ch
 		      struct c0_opt *o);
 /* After parsing: the named choices into m->c, --z-range's length. */
 int c0_conf_cli_finish(struct c0_conf_cli *m);
+/* A command's own parameter name and its flag. */
+struct c0_cli_name { const char *param, *flag; };
 /* msg with the parameter names it cites as flags ("fwhm_nm 0: ..." ->
- * "--fwhm 0: ..."). */
-void c0_cli_flags(const char *msg, char *buf, size_t n);
+ * "--fwhm 0: ..."): extra's (ended by a NULL param; may be NULL), then the
+ * run parameters'. */
+void c0_cli_flags(const char *msg, const struct c0_cli_name *extra, char *buf, size_t n);

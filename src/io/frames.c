@@ -1,10 +1,31 @@
 #include "io/frames.h"
 #include "core/err.h"
+#include "core/mem.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+static int sums_new(struct c0_frames *f)
+{
+	if (!(f->sum = c0_alloc((size_t)f->count, sizeof *f->sum))) {
+		c0_frames_close(f);
+		return C0_ENOMEM;
+	}
+	for (int64_t t = 0; t < f->count; t++)
+		f->sum[t] = NAN;
+	return C0_OK;
+}
+
+static void note_sum(struct c0_frames *f, int64_t t, const float *v)
+{
+	const size_t n = (size_t)f->height * f->width;
+	double s = 0;
+	for (size_t i = 0; i < n; i++)
+		s += v[i];
+	f->sum[t] = s;
+}
 
 int c0_frames_open(struct c0_frames *f, const char *path)
 {
@@ -21,7 +42,7 @@ int c0_frames_open(struct c0_frames *f, const char *path)
 	f->count = in->pages, f->height = (int)in->height, f->width = (int)in->width;
 	f->pixel_nm = in->pixel_size_nm;
 	snprintf(f->name, sizeof f->name, "%s", path);
-	return C0_OK;
+	return sums_new(f);
 }
 
 int c0_frames_wrap(struct c0_frames *f, const float *data, int64_t count, int height, int width, double pixel_nm,
@@ -33,13 +54,17 @@ int c0_frames_wrap(struct c0_frames *f, const float *data, int64_t count, int he
 		return c0_fail(C0_EINVAL, "%s: %lld frames of %dx%d pixels at %p: need data and positive sizes", name,
 			       (long long)count, width, height, (const void *)data);
 	f->data = data, f->count = count, f->height = height, f->width = width, f->pixel_nm = pixel_nm;
-	return C0_OK;
+	return sums_new(f);
 }
 
 int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
 {
-	if (f->tiff)
-		return c0_tiff_read_f32(f->tiff, t, dst);
+	if (f->tiff) {
+		int st = c0_tiff_read_f32(f->tiff, t, dst);
+		if (!st)
+			note_sum(f, t, dst);
+		return st;
+	}
 	if (t < 0 || t >= f->count)
 		return c0_fail(C0_EINVAL, "%s: frame %lld out of 0..%lld", f->name, (long long)t, (long long)f->count - 1);
 	const size_t n = (size_t)f->height * f->width;
@@ -49,25 +74,52 @@ int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
 			return c0_fail(C0_EINVAL, "%s: frame %lld, pixel (x %zu, y %zu) is %s; non-finite pixels are not supported",
 				       f->name, (long long)t + 1, i % (size_t)f->width, i / (size_t)f->width,
 				       isnan(dst[i]) ? "NaN" : "infinite");
+	note_sum(f, t, dst);
 	return C0_OK;
 }
 
 int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *dst)
 {
+	int st;
 	if (f->tiff)
-		return c0_tiff_read_rows_f32(f->tiff, t, y0, ny, dst);
-	if (t < 0 || t >= f->count || y0 < 0 || ny < 1 || y0 + ny > f->height)
+		st = c0_tiff_read_rows_f32(f->tiff, t, y0, ny, dst);
+	else if (t < 0 || t >= f->count || y0 < 0 || ny < 1 || y0 + ny > f->height)
 		return c0_fail(C0_EINVAL, "%s: frame %lld rows %d..%d out of range", f->name, (long long)t, y0, y0 + ny - 1);
-	const size_t n = (size_t)f->height * f->width;
-	memcpy(dst, f->data + (size_t)t * n + (size_t)y0 * f->width, (size_t)ny * f->width * sizeof *dst);
-	return C0_OK;
+	else {
+		const size_t n = (size_t)f->height * f->width;
+		memcpy(dst, f->data + (size_t)t * n + (size_t)y0 * f->width, (size_t)ny * f->width * sizeof *dst);
+		st = C0_OK;
+	}
+	if (!st && y0 == 0 && ny == f->height)
+		note_sum(f, t, dst);
+	return st;
+}
+
+int c0_frames_sums(struct c0_frames *f, const double **sums)
+{
+	*sums = NULL;
+	float *v = NULL;
+	int st = C0_OK;
+	for (int64_t t = 0; t < f->count && !st; t++) {
+		if (!isnan(f->sum[t]))
+			continue;
+		if (!v && !(v = malloc((size_t)f->width * f->height * sizeof *v)))
+			st = C0_ENOMEM;
+		else
+			st = c0_frames_read(f, t, v);
+	}
+	free(v);
+	if (!st)
+		*sums = f->sum;
+	return st;
 }
 
 void c0_frames_close(struct c0_frames *f)
 {
 	if (f->tiff)
 		c0_tiff_close(f->tiff);
-	f->tiff = NULL, f->data = NULL;
+	free(f->sum);
+	f->tiff = NULL, f->data = NULL, f->sum = NULL;
 }
 
 void c0_frames_expand_free(char **names, int n)

@@ -12,17 +12,23 @@ struct c0_frames {
 	char name[256];                /* the path, or what the caller named the array (messages) */
 	struct c0_tiff_reader *tiff;   /* a file, or */
 	const float *data;             /* an array the caller owns */
+	double *sum;                   /* count sums of the raw frames, NaN until one is read whole */
 };
 
 int c0_frames_open(struct c0_frames *f, const char *path);
 /* Wraps data without copying; it must outlive f. */
 int c0_frames_wrap(struct c0_frames *f, const float *data, int64_t count, int height, int width, double pixel_nm,
 		   const char *name);
-/* Frame t (0-based) into dst (height x width values). */
+/* Frame t (0-based) into dst (height x width values). Every whole-frame
+ * read also notes the frame's sum, so that a later pass that only needs
+ * the sums (bleaching) does not read the stack again. */
 int c0_frames_read(struct c0_frames *f, int64_t t, float *dst);
 /* Rows y0..y0+ny-1 of frame t into dst (ny x width): a file reads only the
  * strips that hold them (each MPI rank reads its own rows). */
 int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *dst);
+/* The raw sum of every frame (the sum of its values, as floats, in double,
+ * in pixel order), reading only the frames that no pass has read whole. */
+int c0_frames_sums(struct c0_frames *f, const double **sums);
 void c0_frames_close(struct c0_frames *f);
 /* Multi-channel files (ImageJ channels=, OME SizeC or series) as one stack
  * per channel: a path whose file has C > 1 channels of several planes each

@@ -1,5 +1,10 @@
 /* ImageJ-hyperstack TIFF writer (uint8, uint16, float32), one strip per
- * plane where it fits, BigTIFF past 4 GiB, temporary name until commit. */
+ * plane where it fits, BigTIFF past 4 GiB, temporary name until commit.
+ * ImageJ lays a hyperstack out as every directory, then the planes' data
+ * back to back, and its readers (ImageJ, tifffile) read the planes from the
+ * first one's offset. libtiff appends each plane's directory after its data,
+ * so the directories are written first with their strip arrays deferred,
+ * and the planes are appended in order after them. */
 #define _POSIX_C_SOURCE 200809L
 #include "io/tiff.h"
 #include "io/imagej.h"
@@ -37,6 +42,37 @@ int c0_tiff_needs_bigtiff(int64_t data_bytes)
 {
 	/* keep ~1 % headroom for directories and tags under the 4 GiB offset limit */
 	return data_bytes > (int64_t)(4294967296.0 * 0.99);
+}
+
+/* The tags of plane p (the description and software on the first). */
+static void set_tags(struct c0_tiff_writer *w, int64_t p)
+{
+	const struct c0_tiff_wopts *o = &w->o;
+	TIFF *t = w->tif;
+	const uint16_t bps = (uint16_t)(8 * c0_dtype_size(o->dtype));
+	TIFFSetField(t, TIFFTAG_SUBFILETYPE, 0);
+	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)o->width);
+	TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)o->height);
+	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, bps);
+	TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, o->dtype == C0_F32 ? SAMPLEFORMAT_IEEEFP : SAMPLEFORMAT_UINT);
+	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+	TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
+	size_t plane_bytes = (size_t)o->width * o->height * (bps / 8);
+	uint32_t rps = plane_bytes <= (64u << 20) ? (uint32_t)o->height : TIFFDefaultStripSize(t, 0);
+	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
+	if (o->pixel_size_nm > 0) {
+		float res = (float)(1000.0 / o->pixel_size_nm);   /* pixels per µm */
+		TIFFSetField(t, TIFFTAG_XRESOLUTION, res);
+		TIFFSetField(t, TIFFTAG_YRESOLUTION, res);
+		TIFFSetField(t, TIFFTAG_RESOLUTIONUNIT, RESUNIT_NONE);
+	}
+	if (p == 0) {
+		TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, w->desc);
+		if (o->software)
+			TIFFSetField(t, TIFFTAG_SOFTWARE, o->software);
+	}
 }
 
 int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_tiff_writer **out)
@@ -79,10 +115,23 @@ int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_ti
 	TIFFOpenOptionsSetWarningHandlerExtR(oo, on_error, w);
 	errno = 0;
 	w->tif = TIFFOpenExt(w->tmp, big ? "w8" : "w", oo);
-	int err = errno;
+	int err = errno, ok = w->tif != NULL;
+	for (int64_t p = 0; ok && p < w->planes; p++) {
+		set_tags(w, p);
+		ok = TIFFDeferStrileArrayWriting(w->tif) && TIFFWriteCheck(w->tif, 0, "c0_tiff_create") && TIFFWriteDirectory(w->tif);
+	}
+	if (ok) {
+		TIFFClose(w->tif);
+		w->tif = TIFFOpenExt(w->tmp, "r+", oo);
+		ok = w->tif != NULL;
+	}
+	err = ok ? 0 : err ? err : errno;
 	TIFFOpenOptionsFree(oo);
-	if (!w->tif) {
+	if (!ok) {
 		int st = c0_fail(C0_EIO, "%s: cannot create (%s%s%s)", path, w->tiffmsg, err ? ": " : "", err ? strerror(err) : "");
+		if (w->tif)
+			TIFFClose(w->tif);
+		remove(w->tmp);
 		free(w->buf);
 		free(w);
 		return st;
@@ -145,30 +194,10 @@ int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
 	if (st)
 		return st;
 	TIFF *t = w->tif;
-	uint16_t bps = (uint16_t)(8 * c0_dtype_size(o->dtype));
-	TIFFSetField(t, TIFFTAG_SUBFILETYPE, 0);
-	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)o->width);
-	TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)o->height);
-	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, bps);
-	TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
-	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, o->dtype == C0_F32 ? SAMPLEFORMAT_IEEEFP : SAMPLEFORMAT_UINT);
-	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
-	TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
-	size_t plane_bytes = (size_t)o->width * o->height * (bps / 8);
-	uint32_t rps = plane_bytes <= (64u << 20) ? (uint32_t)o->height : TIFFDefaultStripSize(t, 0);
-	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
-	if (o->pixel_size_nm > 0) {
-		float res = (float)(1000.0 / o->pixel_size_nm);   /* pixels per µm */
-		TIFFSetField(t, TIFFTAG_XRESOLUTION, res);
-		TIFFSetField(t, TIFFTAG_YRESOLUTION, res);
-		TIFFSetField(t, TIFFTAG_RESOLUTIONUNIT, RESUNIT_NONE);
-	}
-	if (w->written == 0) {
-		TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, w->desc);
-		if (o->software)
-			TIFFSetField(t, TIFFTAG_SOFTWARE, o->software);
-	}
+	const uint16_t bps = (uint16_t)(8 * c0_dtype_size(o->dtype));
+	uint32_t rps = 0;
+	if (!TIFFSetDirectory(t, (tdir_t)w->written) || !TIFFGetField(t, TIFFTAG_ROWSPERSTRIP, &rps) || !rps)
+		return write_error(w, errno);
 	convert_plane(o, plane, w->buf);
 	size_t row = (size_t)o->width * (bps / 8);
 	errno = 0;
@@ -178,7 +207,9 @@ int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
 		if (TIFFWriteEncodedStrip(t, s, w->buf + (size_t)y0 * row, (tmsize_t)(ny * row)) < 0)
 			return write_error(w, errno);
 	}
-	if (!TIFFWriteDirectory(t))
+	/* the strip offsets into the directory written at creation; the planes
+	 * land one after another at the end of the file */
+	if (!TIFFForceStrileArrayWriting(t))
 		return write_error(w, errno);
 	w->written++;
 	return C0_OK;

@@ -37,6 +37,10 @@ int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y
 /* Temporal variance of one pixel so far. */
 double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x);
 int64_t c0_cov_acc_frames(const struct c0_cov_acc *a);
+/* Adds the frames still in the block and gives the block's memory back (up
+ * to 64 MB, next to the tiles' solves); call it before cutting windows from
+ * several threads (they then only read). A later frame allocates it again. */
+void c0_cov_acc_seal(struct c0_cov_acc *a);
 /* Frames added per pass over the sums for an image of this many pixels (the
  * sums round once per pass). An accumulator over some rows of an image sets
  * the whole image's value, so that it gives the same numbers bit for bit. */

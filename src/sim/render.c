@@ -117,7 +117,7 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 	s->sig = sig, s->em = em;
 	if ((c->drift_nm[0] != 0 || c->drift_nm[1] != 0) && s->K > 64) {
 		c0_sim_scene_free(s);
-		return c0_fail(C0_EINVAL, "--drift-nm: the PSF spans %d pixels; drift is simulated up to 64", s->K);
+		return c0_fail(C0_EINVAL, "drift_nm: the PSF spans %d pixels; drift is simulated up to 64", s->K);
 	}
 	if (c->drift_nm[0] != 0 || c->drift_nm[1] != 0) {
 		s->ddx = c0_alloc((size_t)c->frames, sizeof(double));

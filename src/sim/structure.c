@@ -39,55 +39,55 @@ void c0_sim_defaults(struct c0_sim_conf *c)
 int c0_sim_check(const struct c0_sim_conf *c)
 {
 	if (c->width < 8 || c->height < 8)
-		return c0_fail(C0_EINVAL, "--size %dx%d: at least 8x8 pixels", c->width, c->height);
+		return c0_fail(C0_EINVAL, "width %d / height %d: at least 8x8 pixels", c->width, c->height);
 	if (c->frames < 1)
-		return c0_fail(C0_EINVAL, "--frames %d: must be at least 1", c->frames);
+		return c0_fail(C0_EINVAL, "frames %d: must be at least 1", c->frames);
 	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
 	if (st)
 		return st;
 	if (c->nangles < 1 || c->nangles > C0_MAX_ANGLES)
-		return c0_fail(C0_EINVAL, "--angles: need 1..%d angles", C0_MAX_ANGLES);
+		return c0_fail(C0_EINVAL, "angles: need 1..%d angles", C0_MAX_ANGLES);
 	if ((st = c0_tirf_check(&c->tirf)))
 		return st;
 	for (int q = 0; q < c->nangles; q++)   /* below the critical angle: an epi stack */
 		if (!(c->angles[q] >= 0 && c->angles[q] < 90))
-			return c0_fail(C0_EINVAL, "--angles: %g is not an incidence angle in [0, 90) degrees", c->angles[q]);
+			return c0_fail(C0_EINVAL, "angles: %g is not an incidence angle in [0, 90) degrees", c->angles[q]);
 	if (c->order < C0_ORDER_SEQUENTIAL || c->order > C0_ORDER_RESTART)
-		return c0_fail(C0_EINVAL, "--bleach-order: unknown order %d", c->order);
+		return c0_fail(C0_EINVAL, "bleach_order: unknown order %d", c->order);
 	if (c->ngaps && c->order != C0_ORDER_SEQUENTIAL)
-		return c0_fail(C0_EINVAL, "--gaps: only with the sequential acquisition order");
+		return c0_fail(C0_EINVAL, "gaps_s: only with the sequential acquisition order");
 	if (c->ngaps > 1 && c->ngaps != c->nangles - 1)
-		return c0_fail(C0_EINVAL, "--gaps: %d gaps for %d stacks (give one, or one per pair of consecutive stacks: %d)",
+		return c0_fail(C0_EINVAL, "gaps_s: %d gaps for %d stacks (give one, or one per pair of consecutive stacks: %d)",
 			       c->ngaps, c->nangles, c->nangles - 1);
 	for (int k = 0; k < c->ngaps; k++)
 		if (!(c->gap_s[k] >= 0))
-			return c0_fail(C0_EINVAL, "--gaps: gap %d is %g s, must be >= 0", k + 1, c->gap_s[k]);
+			return c0_fail(C0_EINVAL, "gaps_s: gap %d is %g s, must be >= 0", k + 1, c->gap_s[k]);
 	if (c->pairs && (!(c->pair_sep_nm > 0) || !(c->pair_dz_nm >= 0) || c->pair_dz_nm > c->z_max_nm - c->z_min_nm))
-		return c0_fail(C0_EINVAL, "--pair-sep %g / --pair-dz %g: need sep > 0 and 0 <= dz <= the depth range", c->pair_sep_nm,
+		return c0_fail(C0_EINVAL, "pair_sep_nm %g / pair_dz_nm %g: need sep > 0 and 0 <= dz <= the depth range", c->pair_sep_nm,
 			       c->pair_dz_nm);
 	if (!(c->tau_on_ms > 0) || !(c->tau_off_ms > 0))
-		return c0_fail(C0_EINVAL, "--tau-on %g / --tau-off %g: lifetimes must be positive (ms)", c->tau_on_ms, c->tau_off_ms);
+		return c0_fail(C0_EINVAL, "tau_on_ms %g / tau_off_ms %g: lifetimes must be positive (ms)", c->tau_on_ms, c->tau_off_ms);
 	if (!(c->fps > 0))
-		return c0_fail(C0_EINVAL, "--fps %g: must be positive", c->fps);
+		return c0_fail(C0_EINVAL, "fps %g: must be positive", c->fps);
 	if (c->tau_bleach_s < 0)
-		return c0_fail(C0_EINVAL, "--tau-bleach %g: must be >= 0 (0: no bleaching)", c->tau_bleach_s);
+		return c0_fail(C0_EINVAL, "tau_bleach_s %g: must be >= 0 (0: no bleaching)", c->tau_bleach_s);
 	if (!(c->brightness >= 0) || !(c->brightness_cv >= 0) || !(c->background >= 0))
-		return c0_fail(C0_EINVAL, "--brightness / --brightness-cv / --background must be >= 0");
+		return c0_fail(C0_EINVAL, "brightness, brightness_cv and background: must be >= 0");
 	if (!(c->gain > 0) || !(c->read_noise >= 0) || !(c->offset >= 0))
-		return c0_fail(C0_EINVAL, "--gain must be positive, --read-noise and --offset >= 0");
+		return c0_fail(C0_EINVAL, "gain: must be positive; read_noise and offset: >= 0");
 	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
-		return c0_fail(C0_EINVAL, "--z-range %g,%g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
+		return c0_fail(C0_EINVAL, "z_min_nm %g / z_max_nm %g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
 	/* every real parameter finite: infinity passes the >= 0 tests above */
 	const double all[] = { c->tau_on_ms, c->tau_off_ms, c->tau_bleach_s, c->fps, c->brightness, c->brightness_cv,
 			       c->background, c->offset, c->gain, c->read_noise, c->snr_db, c->z_min_nm, c->z_max_nm,
 			       c->persistence_nm, c->density_per_um };
 	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
 		if (!isfinite(all[i]))
-			return c0_fail(C0_EINVAL, "simulation parameter %g: must be finite (see col0rme simulate --help)", all[i]);
+			return c0_fail(C0_EINVAL, "simulation parameter %g: must be finite", all[i]);
 	if ((double)c->width * c->height * c->frames > 1e10)
-		return c0_fail(C0_EINVAL, "--size %dx%d with --frames %d: more than 1e10 pixels per angle", c->width, c->height, c->frames);
+		return c0_fail(C0_EINVAL, "width %d / height %d with frames %d: more than 1e10 pixels per angle", c->width, c->height, c->frames);
 	if (!c->emitters_csv && (c->filaments < 1 || !(c->density_per_um > 0) || !(c->persistence_nm > 0)))
-		return c0_fail(C0_EINVAL, "empty structure: --filaments %d, --density %g, --persistence %g must be positive (or give --emitters CSV)",
+		return c0_fail(C0_EINVAL, "empty structure: filaments %d, density_per_um %g, persistence_nm %g must be positive (or give emitters_csv)",
 			       c->filaments, c->density_per_um, c->persistence_nm);
 	return C0_OK;
 }
@@ -159,7 +159,7 @@ int c0_sim_read_csv(const char *path, double default_brightness, struct c0_emitt
 {
 	FILE *f = fopen(path, "r");
 	if (!f)
-		return c0_fail(C0_EIO, "--emitters %s: %s", path, strerror(errno));
+		return c0_fail(C0_EIO, "emitters_csv %s: %s", path, strerror(errno));
 	struct elist l = { 0 };
 	char line[1024];
 	int lineno = 0, st = C0_OK;
@@ -175,18 +175,18 @@ int c0_sim_read_csv(const char *path, double default_brightness, struct c0_emitt
 		if (k < 3) {
 			if (lineno == 1 && !l.n)
 				continue;   /* header */
-			st = c0_fail(C0_EFORMAT, "--emitters %s: line %d: expected x_nm,y_nm,z_nm[,brightness]", path, lineno);
+			st = c0_fail(C0_EFORMAT, "emitters_csv %s: line %d: expected x_nm,y_nm,z_nm[,brightness]", path, lineno);
 			break;
 		}
 		if (v[2] < 0 || v[3] < 0 || v[0] != v[0] || v[1] != v[1]) {
-			st = c0_fail(C0_EFORMAT, "--emitters %s: line %d: negative depth or brightness", path, lineno);
+			st = c0_fail(C0_EFORMAT, "emitters_csv %s: line %d: negative depth or brightness", path, lineno);
 			break;
 		}
 		st = push(&l, v[0], v[1], v[2], v[3]);
 	}
 	fclose(f);
 	if (!st && !l.n)
-		st = c0_fail(C0_EINVAL, "--emitters %s: empty structure (no emitters)", path);
+		st = c0_fail(C0_EINVAL, "emitters_csv %s: empty structure (no emitters)", path);
 	if (st) {
 		free(l.e);
 		return st;
@@ -212,7 +212,7 @@ int c0_sim_structure(const struct c0_sim_conf *c, struct c0_emitter **out, int *
 		if (!k) {
 			free(*out);
 			*out = NULL;
-			return c0_fail(C0_EINVAL, "--emitters %s: empty structure (no emitter inside the %gx%g nm field)",
+			return c0_fail(C0_EINVAL, "emitters_csv %s: empty structure (no emitter inside the %gx%g nm field)",
 				       c->emitters_csv, c->width * c->pixel_nm, c->height * c->pixel_nm);
 		}
 		*n = k;

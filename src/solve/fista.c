@@ -25,8 +25,15 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 		free(z), free(g), free(xn);
 		return C0_ENOMEM;
 	}
-	memcpy(z, x, n * sizeof *x);
-	double theta = 1, step = 1 / lip;
+	double theta = info->prev && info->theta > 1 ? info->theta : 1, step = 1 / lip;
+	if (theta > 1) {
+		/* resume: z = x + beta (x - prev) as if the run had not stopped */
+		const double tp = (1 + sqrt(1 + 4 * theta * theta)) / 2, beta = (theta - 1) / tp;
+		for (size_t i = 0; i < n; i++)
+			z[i] = fmax(0, x[i] + beta * (x[i] - info->prev[i]));
+		theta = tp;
+	} else
+		memcpy(z, x, n * sizeof *x);
 	int nh = info->nhist, restarts = 0;
 	info->iters = info->converged = 0;
 	for (int it = 0; it < conf->maxit; it++) {
@@ -55,6 +62,8 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 #pragma omp parallel for if (n > 100000)
 		for (size_t i = 0; i < n; i++) {
 			z[i] = xn[i] + beta * (xn[i] - x[i]);
+			if (info->prev)
+				info->prev[i] = x[i];
 			x[i] = xn[i];
 		}
 		theta = tp;
@@ -64,6 +73,7 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 		}
 	}
 	info->restarts = restarts;
+	info->theta = theta;
 	free(z), free(g), free(xn);
 	return C0_OK;
 }

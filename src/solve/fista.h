@@ -18,6 +18,11 @@ struct c0_fista_info {
 	double obj;        /* F at the last extrapolated point (f + penalty) */
 	double *hist;      /* optional: F per iteration, capacity nhist */
 	int nhist;
+	/* optional momentum carried from one call to the next (a solve cut into
+	 * pieces): prev holds the iterate before x and theta its step; both are
+	 * read on entry (theta <= 1: none) and written on return */
+	double *prev;
+	double theta;
 };
 
 /* x holds the start and receives the result. w may be NULL (all ones). */

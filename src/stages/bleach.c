@@ -95,26 +95,17 @@ void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, 
 	}
 }
 
+/* the sums come from the passes that read the frames before (drift,
+ * covariance): only frames none of them read whole are read here */
 static int frame_sums(struct c0_frames *f, double **S, int64_t *T)
 {
-	const size_t np = (size_t)f->width * f->height;
-	float *v = c0_alloc(np, sizeof *v);
-	int st = C0_OK;
+	const double *s;
 	*T = f->count;
-	*S = c0_alloc((size_t)f->count, sizeof **S);
-	if (!v || !*S)
+	int st = c0_frames_sums(f, &s);
+	if (!st && !(*S = c0_alloc((size_t)f->count, sizeof **S)))
 		st = C0_ENOMEM;
-	for (int64_t t = 0; !st && t < f->count; t++) {
-		if ((st = c0_frames_read(f, t, v)))
-			break;
-		double s = 0;
-		for (size_t i = 0; i < np; i++)
-			s += v[i];
-		(*S)[t] = s;
-	}
-	free(v);
-	if (st)
-		free(*S), *S = NULL;
+	if (!st)
+		memcpy(*S, s, (size_t)f->count * sizeof **S);
 	return st;
 }
 

@@ -175,19 +175,43 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float 
 	return st;
 }
 
-static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
+static int refine(struct c0_drift *d)
 {
-	int st = C0_OK, k0 = 0;
 	/* each stack against the mean of its own blocks: an angle changes the
 	 * image (depth-dependent excitation), which a correlation across angles
-	 * would read as a shift */
-	for (int q = 0; q < d->nq && !st; q++) {
-		int k1 = k0;
+	 * would read as a shift. The stacks' blocks are apart: side by side. */
+	int k0[MAXQ + 1], fail = C0_OK;
+	char msg[256] = "";
+	k0[0] = 0;
+	for (int q = 0; q < d->nq; q++) {
+		int k1 = k0[q];
 		while (k1 < d->nb && d->bt[k1] < (double)(d->start[q] + d->frames[q]))
 			k1++;
-		st = refine_range(d, x, ref, tmp, k0, k1);
-		k0 = k1;
+		k0[q + 1] = k1;
 	}
+	const size_t n = (size_t)d->H * d->W;
+#pragma omp parallel if (d->nq > 1)
+	{
+		struct xcorr x;
+		double *ref = c0_alloc(n, sizeof *ref);
+		float *tmp = c0_alloc(n, sizeof *tmp);
+		int st = xcorr_init(&x, d->H, d->W);
+		if (!st && (!ref || !tmp))
+			st = C0_ENOMEM;
+#pragma omp for schedule(dynamic, 1)
+		for (int q = 0; q < d->nq; q++)
+			if (!st)
+				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1]);
+		if (st) {
+#pragma omp critical(c0_drift_fail)
+			if (!fail)
+				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+		xcorr_free(&x);
+		free(ref), free(tmp);
+	}
+	if (fail)
+		return c0_fail(fail, "%s", msg);
 	for (int k = d->nb - 1; k >= 0; k--)
 		d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
 	/* an axis whose shifts stay within SIGNIF noise sds of zero has no
@@ -207,7 +231,73 @@ static int refine(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp)
 	d->max_px = 0;
 	for (int k = 0; k < d->nb; k++)
 		d->max_px = fmax(d->max_px, hypot(d->bx[k], d->by[k]));
+	return C0_OK;
+}
+
+/* One stack's block means, and each block's shift against the block before
+ * (chained, so that a large total drift is followed in small steps). */
+struct stack_blocks {
+	int64_t B, nb;         /* block length, blocks */
+	float **bm;            /* nb block means */
+	double *sx, *sy;       /* shift of block k against block k - 1 (k >= 1) */
+	char msg[256];
+};
+
+static int stack_pass(struct c0_frames *r, int64_t B, struct stack_blocks *o)
+{
+	const int H = r->height, W = r->width;
+	const size_t n = (size_t)H * W;
+	const int64_t T = r->count, nb = T / B;
+	struct xcorr x;
+	int st = xcorr_init(&x, H, W);
+	double *sum = c0_alloc(n, sizeof *sum);
+	float *frame = c0_alloc(n, sizeof *frame);
+	o->B = B, o->nb = nb;
+	o->bm = c0_alloc((size_t)nb, sizeof *o->bm);
+	o->sx = c0_alloc((size_t)nb, sizeof *o->sx);
+	o->sy = c0_alloc((size_t)nb, sizeof *o->sy);
+	if (!st && (!sum || !frame || !o->bm || !o->sx || !o->sy))
+		st = c0_fail(C0_ENOMEM, "drift: out of memory");
+	struct c0_progress pr;
+	c0_progress_begin(&pr, "drift", (double)T);
+	for (int64_t k = 0; k < nb && !st; k++) {
+		/* the last block takes the remainder */
+		int64_t t1 = k * B, t2 = k == nb - 1 ? T : t1 + B;
+		memset(sum, 0, n * sizeof *sum);
+		for (int64_t t = t1; t < t2 && !st; t++) {
+			if (!(st = c0_frames_read(r, t, frame)))
+				for (size_t i = 0; i < n; i++)
+					sum[i] += frame[i];
+			c0_progress_update(&pr, (double)t + 1);
+		}
+		if (st)
+			break;
+		for (size_t i = 0; i < n; i++)
+			sum[i] /= (double)(t2 - t1);
+		if (!(o->bm[k] = malloc(n * sizeof(float)))) {
+			st = c0_fail(C0_ENOMEM, "drift: out of memory for the block means");
+			break;
+		}
+		for (size_t i = 0; i < n; i++)
+			o->bm[k][i] = (float)sum[i];
+		if (k > 0)
+			shift_of(&x, sum, &o->sx[k], &o->sy[k]);
+		spectrum(&x, sum);
+		memcpy(x.ref, x.sp, x.ns * sizeof *x.ref);
+	}
+	c0_progress_end(&pr);
+	xcorr_free(&x);
+	free(sum), free(frame);
+	if (st)
+		snprintf(o->msg, sizeof o->msg, "%s", c0_errmsg());
 	return st;
+}
+
+static void stack_blocks_free(struct stack_blocks *o)
+{
+	for (int64_t k = 0; o->bm && k < o->nb; k++)
+		free(o->bm[k]);
+	free(o->bm), free(o->sx), free(o->sy);
 }
 
 int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct c0_drift **out)
@@ -218,78 +308,56 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 		return c0_fail(C0_EINVAL, "drift: %d stacks (1..%d)", n, MAXQ);
 	if (c->block < 1)
 		return c0_fail(C0_EINVAL, "drift block %d: must be >= 1 frame", c->block);
+	int st = C0_OK;
+	for (int q = 0; q < n && !st; q++) {
+		const int64_t T = f[q].count;
+		if (f[q].height != f[0].height || f[q].width != f[0].width)
+			st = c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s", f[q].name, f[q].width, f[q].height, f[0].name);
+		/* blocks: c->block frames, fewer when the stack has < 2 blocks */
+		else if ((T >= 2 * c->block ? c->block : T / 2) < 5)
+			st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to estimate drift (needs >= 10; switch "
+				     "drift correction off)", f[q].name, (long long)T);
+	}
+	if (st)
+		return st;
 	struct c0_drift *d = c0_alloc(1, sizeof *d);
-	if (!d)
+	struct stack_blocks *sb = c0_alloc((size_t)n, sizeof *sb);
+	if (!d || !sb) {
+		free(d), free(sb);
 		return C0_ENOMEM;
-	d->nq = n;
-	struct xcorr x = { 0 };
-	double *sum = NULL;
-	float *frame = NULL;
-	int st = C0_OK, cap = 0, prev0 = 0;
+	}
+	d->nq = n, d->H = f[0].height, d->W = f[0].width;
+	const int H = d->H, W = d->W;
+	/* the stacks side by side: each reads its own file */
+	int fail = -1;
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
+	for (int q = 0; q < n; q++) {
+		const int64_t T = f[q].count;
+		if (stack_pass(&f[q], T >= 2 * c->block ? c->block : T / 2, &sb[q]))
+#pragma omp critical(c0_drift_fail)
+			if (fail < 0 || q < fail)
+				fail = q;
+	}
+	if (fail >= 0)
+		st = c0_fail(C0_EIO, "%s", sb[fail].msg);
+	int64_t nball = 0;
+	for (int q = 0; q < n; q++)
+		nball += sb[q].nb;
+	d->block = (int)sb[0].B;
+	if (!st && (!(d->bt = c0_alloc((size_t)nball, sizeof *d->bt)) || !(d->bx = c0_alloc((size_t)nball, sizeof *d->bx)) ||
+		    !(d->by = c0_alloc((size_t)nball, sizeof *d->by)) || !(d->bm = c0_alloc((size_t)nball, sizeof *d->bm))))
+		st = c0_fail(C0_ENOMEM, "drift: out of memory");
+	/* the trajectory, stack after stack */
+	int prev0 = 0;
 	int64_t g = 0;
 	for (int q = 0; q < n && !st; q++) {
-		struct c0_frames *r = &f[q];
-		const int H = r->height, W = r->width;
-		const int64_t T = r->count;
-		if (q == 0) {
-			d->H = H, d->W = W;
-			sum = c0_alloc((size_t)H * W, sizeof *sum);
-			frame = c0_alloc((size_t)H * W, sizeof *frame);
-			if (!sum || !frame)
-				st = C0_ENOMEM;
-			else if (!(st = xcorr_init(&x, H, W)))
-				st = c0_fshift_new(H, W, &d->sh);
-		} else if (H != d->H || W != d->W) {
-			st = c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s", r->name, W, H, f[0].name);
-		}
-		/* blocks: c->block frames, fewer when the stack has < 2 blocks */
-		int64_t B = T >= 2 * c->block ? c->block : T / 2;
-		if (q == 0)
-			d->block = (int)B;
-		if (!st && B < 5)
-			st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to estimate drift (needs >= 10; switch "
-				     "drift correction off)", r->name, (long long)T);
-		int64_t nb = st ? 0 : T / B;
-		if (!st && d->nb + nb > cap) {
-			cap = 2 * (d->nb + (int)nb);
-			double *a = realloc(d->bt, cap * sizeof *a), *b2 = a ? realloc(d->bx, cap * sizeof *a) : NULL,
-			       *c2 = b2 ? realloc(d->by, cap * sizeof *a) : NULL;
-			float **m2 = c2 ? realloc(d->bm, cap * sizeof *m2) : NULL;
-			if (a) d->bt = a;
-			if (b2) d->bx = b2;
-			if (c2) d->by = c2;
-			if (m2) d->bm = m2;
-			if (!a || !b2 || !c2 || !m2)
-				st = c0_fail(C0_ENOMEM, "drift: out of memory");
-		}
 		const int this0 = d->nb;   /* this stack's first block */
-		struct c0_progress pr;
-		c0_progress_begin(&pr, "drift", (double)T);
-		for (int64_t k = 0; k < nb && !st; k++) {
-			/* the last block takes the remainder */
-			int64_t t1 = k * B, t2 = k == nb - 1 ? T : t1 + B;
-			memset(sum, 0, (size_t)H * W * sizeof *sum);
-			for (int64_t t = t1; t < t2 && !st; t++) {
-				if (!(st = c0_frames_read(r, t, frame)))
-					for (size_t i = 0; i < (size_t)H * W; i++)
-						sum[i] += frame[i];
-				c0_progress_update(&pr, (double)t + 1);
-			}
-			if (st)
-				break;
-			for (size_t i = 0; i < (size_t)H * W; i++)
-				sum[i] /= (double)(t2 - t1);
-			if (!(d->bm[d->nb] = malloc((size_t)H * W * sizeof(float)))) {
-				st = c0_fail(C0_ENOMEM, "drift: out of memory for the block means");
-				break;
-			}
-			for (size_t i = 0; i < (size_t)H * W; i++)
-				d->bm[d->nb][i] = (float)sum[i];
-			/* chained: each block against the one before, so that a large
-			 * total drift is followed in small steps */
+		const int64_t T = f[q].count, B = sb[q].B;
+		for (int64_t k = 0; k < sb[q].nb && !st; k++) {
+			int64_t t1 = k * B, t2 = k == sb[q].nb - 1 ? T : t1 + B;
 			double bx = 0, by = 0;
 			if (d->nb > 0 && k > 0) {
-				shift_of(&x, sum, &bx, &by);
+				bx = sb[q].sx[k], by = sb[q].sy[k];
 				bx += d->bx[d->nb - 1], by += d->by[d->nb - 1];
 			} else if (d->nb > 0) {
 				/* a new stack (another angle): continue the trajectory at
@@ -300,30 +368,30 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 				bx = d->bx[j] + u * (d->bx[j] - d->bx[i]);
 				by = d->by[j] + u * (d->by[j] - d->by[i]);
 			}
-			spectrum(&x, sum);
-			memcpy(x.ref, x.sp, x.ns * sizeof *x.ref);
 			if (fabs(bx) > W / 4.0 || fabs(by) > H / 4.0) {
 				st = c0_fail(C0_EINVAL, "%s: the drift at frames %lld-%lld (%.1f, %.1f pixels) exceeds a quarter "
 					     "of the field; correct it beforehand or switch drift correction off",
-					     r->name, (long long)t1 + 1, (long long)t2, bx, by);
-				free(d->bm[d->nb]);   /* not yet counted in d->nb */
+					     f[q].name, (long long)t1 + 1, (long long)t2, bx, by);
 				break;
 			}
+			d->bm[d->nb] = sb[q].bm[k], sb[q].bm[k] = NULL;
 			d->bt[d->nb] = (double)g + 0.5 * (double)(t1 + t2 - 1);
 			d->bx[d->nb] = bx, d->by[d->nb] = by;
 			d->max_px = fmax(d->max_px, hypot(bx, by));
 			d->nb++;
 		}
-		c0_progress_end(&pr);
 		prev0 = this0;
 		d->frames[q] = T, d->start[q] = g;
 		d->hooks[q].d = d, d->hooks[q].q = q;
 		g += T;
 	}
+	for (int q = 0; q < n; q++)
+		stack_blocks_free(&sb[q]);
+	free(sb);
 	if (!st)
-		st = refine(d, &x, sum, frame);
-	xcorr_free(&x);
-	free(sum), free(frame);
+		st = c0_fshift_new(H, W, &d->sh);
+	if (!st)
+		st = refine(d);
 	for (int k = 0; d->bm && k < d->nb; k++)
 		free(d->bm[k]);
 	free(d->bm), d->bm = NULL;

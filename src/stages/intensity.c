@@ -1,4 +1,5 @@
 #include "stages/intensity.h"
+#include "stages/tiles.h"
 #include "ops/psi_omega.h"
 #include "optics/psf.h"
 #include "solve/root.h"
@@ -7,6 +8,7 @@
 #include "core/mem.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -21,6 +23,8 @@ int c0_intensity_check(const struct c0_intensity_conf *c)
 		return c0_fail(C0_EINVAL, "cg_tol %g / cg_iterations %d: need a tolerance in (0, 1) and at least one step", c->tol, c->maxit);
 	if (!(c->graph_radius >= 1 && c->graph_radius <= 4))
 		return c0_fail(C0_EINVAL, "graph_radius %g: must be in [1, 4] fine pixels", c->graph_radius);
+	if (c->tile < 0)
+		return c0_fail(C0_EINVAL, "tile %d: must be >= 0 camera pixels (0: the whole image)", c->tile);
 	return C0_OK;
 }
 
@@ -156,7 +160,12 @@ static double residual2(struct prob *p, const double *sol)
 	return s;
 }
 
-struct dp { struct prob *p; double *sol, target, tprev, tmin; int fail; };
+/* mu is wanted to 1 %: the residual, from CG to a tolerance and an active
+ * set, is not smooth enough in mu for the root finder's residual test when
+ * the floor is large, and it would try mu after mu */
+#define DP_LOGMU_TOL 0.01
+
+struct dp { struct prob *p; double *sol, target, tprev, tmin, lo, hi; int fail; };
 
 static double discrepancy(void *ctx, double t)
 {
@@ -170,8 +179,63 @@ static double discrepancy(void *ctx, double t)
 	d->tprev = t;
 	if (solve(d->p, d->sol))
 		d->fail = 1;
-	return residual2(d->p, d->sol) - d->target;
+	const double f = residual2(d->p, d->sol) - d->target;
+	if (f < 0)
+		d->lo = fmax(d->lo, t);
+	else
+		d->hi = fmin(d->hi, t);
+	return d->hi - d->lo <= DP_LOGMU_TOL ? 0 : f;   /* the crossing is known to 1 % in mu: done */
 }
+
+/* No support pixel (a tile off the sample): x = 0 and the background alone,
+ * min 1/2 ||b - ybar||^2 + beta/2 ||grad b||^2 (b >= 0 holds: ybar >= 0
+ * smoothed stays so, and a negative b is clipped). */
+struct bgonly { int Ny, Nx; double beta; };
+
+static void bg_normal(void *ctx, const double *in, double *out)
+{
+	const struct bgonly *g = ctx;
+	struct prob p = { .P = { .Ny = g->Ny, .Nx = g->Nx } };
+	lap_b(&p, in, out);
+	for (int i = 0; i < g->Ny * g->Nx; i++)
+		out[i] = in[i] + g->beta * out[i];
+}
+
+static int background_only(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx,
+			   struct c0_intensity_result *res)
+{
+	const int NN = Ny * Nx, r = c->srf;
+	res->Ly = Ny * r, res->Lx = Nx * r, res->Ny = Ny, res->Nx = Nx, res->dp_status = -1;
+	res->x = c0_alloc((size_t)NN * r * r, sizeof *res->x);
+	res->b = c0_alloc((size_t)NN, sizeof *res->b);
+	double *b = c0_alloc((size_t)NN, sizeof *b), *dinv = c0_alloc((size_t)NN, sizeof *dinv);
+	int st = !res->x || !res->b || !b || !dinv ? C0_ENOMEM : C0_OK;
+	double m = 0;
+	for (int i = 0; !st && i < NN; i++)
+		m += ybar[i];
+	m /= NN;
+	if (!st && c->background == C0_BG_SMOOTH) {
+		struct bgonly g = { Ny, Nx, c->beta };
+		for (int i = 0; i < NN; i++) {
+			int y = i / Nx, x = i % Nx, d = (y > 0) + (y < Ny - 1) + (x > 0) + (x < Nx - 1);
+			dinv[i] = 1 / (1 + c->beta * d), b[i] = m;
+		}
+		struct c0_cg_info info;
+		st = c0_cg(bg_normal, &g, (size_t)NN, ybar, dinv, b, c->tol, c->maxit, &info);
+		res->cg_iters = info.iters, res->solves = 1;
+	} else
+		for (int i = 0; !st && i < NN; i++)
+			b[i] = c->background == C0_BG_CONSTANT ? m : 0;
+	for (int i = 0; !st && i < NN; i++)
+		res->b[i] = (float)fmax(0, b[i]);
+	free(b), free(dinv);
+	return st;
+}
+
+static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
+static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
 
 int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
@@ -183,6 +247,104 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 		return st;
 	if (c->mu == 0 && !(sigma2 > 0))
 		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give mu)", sigma2);
+	st = c->tile > 0 && c->tile < (Ny > Nx ? Ny : Nx) ? solve_tiled(c, ybar, Ny, Nx, T, mask, sigma2, res)
+							    : solve_whole(c, ybar, Ny, Nx, T, mask, sigma2, res);
+	res->seconds = c0_now() - t0;
+	if (st)
+		c0_intensity_result_free(res);
+	return st;
+}
+
+/* The tiles' windows overlap by two PSF lags (6 sigma each): the PSF and
+ * the background's smoothing length (sqrt(beta) ~ 4.5 coarse pixels) fit. */
+static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
+{
+	const int r = c->srf, Lx = Nx * r, halo = 2 * (int)ceil(6 * c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm));
+	struct c0_tiling tl;
+	int st = c0_tiling_make(Ny, Nx, c->tile, halo, &tl);
+	if (st)
+		return st;
+	res->Ly = Ny * r, res->Lx = Lx, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2, res->tiles = tl.n;
+	res->x = c0_alloc((size_t)Ny * Nx * r * r, sizeof *res->x);
+	res->b = c0_alloc((size_t)Ny * Nx, sizeof *res->b);
+	double *ts = c0_alloc(8 * (size_t)tl.n, sizeof *ts);   /* per tile: weight, mu, residual2, target2, floor2, status, solves, cg */
+	if (!res->x || !res->b || !ts) {
+		free(ts);
+		c0_tiling_free(&tl);
+		return C0_ENOMEM;
+	}
+	struct c0_intensity_conf cc = *c;
+	cc.tile = 0;
+	int fail = C0_OK;
+	char msg[512] = "";
+	/* one tile per thread: each solve then runs serially, so a tile's
+	 * numbers do not depend on the thread count */
+#pragma omp parallel for schedule(dynamic, 1)
+	for (int k = 0; k < tl.n; k++) {
+		const struct c0_tile *t = &tl.t[k];
+		const size_t nw = (size_t)t->h * t->w, Lw = nw * r * r;
+		double *y = malloc(nw * sizeof *y);
+		uint8_t *m = malloc(Lw);
+		struct c0_intensity_result tr;
+		memset(&tr, 0, sizeof tr);
+		int tst = y && m ? C0_OK : C0_ENOMEM, any = 0;
+		for (int a = 0; !tst && a < t->h; a++)
+			memcpy(y + (size_t)a * t->w, ybar + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *y);
+		for (int a = 0; !tst && a < t->h * r; a++) {
+			memcpy(m + (size_t)a * t->w * r, mask + (size_t)(t->y0 * r + a) * Lx + (size_t)t->x0 * r, (size_t)t->w * r);
+			for (int b = 0; b < t->w * r && !any; b++)
+				any = m[(size_t)a * t->w * r + b];
+		}
+		if (!tst)
+			tst = any ? solve_whole(&cc, y, t->h, t->w, T, m, sigma2, &tr) : background_only(&cc, y, t->h, t->w, &tr);
+		if (!tst) {
+			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+			for (int a = 0; a < t->ih * r; a++)
+				memcpy(res->x + (size_t)(t->iy0 * r + a) * Lx + (size_t)t->ix0 * r,
+				       tr.x + (size_t)(oy * r + a) * tr.Lx + (size_t)ox * r, (size_t)t->iw * r * sizeof *res->x);
+			for (int a = 0; a < t->ih; a++)
+				memcpy(res->b + (size_t)(t->iy0 + a) * Nx + t->ix0, tr.b + (size_t)(oy + a) * t->w + ox,
+				       (size_t)t->iw * sizeof *res->b);
+			double *s = ts + 8 * (size_t)k;
+			s[0] = any ? (double)t->ih * t->iw / (double)nw : 0;   /* the interior's share of the window */
+			s[1] = tr.mu, s[2] = tr.residual2, s[3] = tr.target2, s[4] = tr.floor2;
+			s[5] = tr.dp_status, s[6] = tr.solves, s[7] = tr.cg_iters;
+		} else {
+#pragma omp critical(c0_intensity_tile_fail)
+			if (!fail)
+				fail = tst, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+		c0_intensity_result_free(&tr);
+		free(y), free(m);
+	}
+	if (fail)
+		st = c0_fail(fail, "%s", msg);
+	/* in tile order: the same sums whatever the schedule */
+	double lmu = 0, wmu = 0;
+	res->dp_status = c->mu > 0 ? -1 : 0;
+	for (int k = 0; !st && k < tl.n; k++) {
+		const double *s = ts + 8 * (size_t)k;
+		const struct c0_tile *t = &tl.t[k];
+		res->solves += (int)s[6], res->cg_iters += (int)s[7];
+		if (!(s[0] > 0))
+			continue;   /* background only: no mu */
+		lmu += t->ih * t->iw * log(s[1]), wmu += t->ih * t->iw;
+		res->residual2 += s[0] * s[2], res->target2 += s[0] * s[3], res->floor2 += s[0] * s[4];
+		res->tiles_met += s[5] <= 0;
+		if (res->dp_status == 0 && s[5] > 0)
+			res->dp_status = (int)s[5];   /* the first tile whose principle failed says how */
+	}
+	res->mu = wmu > 0 ? exp(lmu / wmu) : 0;
+	free(ts);
+	c0_tiling_free(&tl);
+	return st;
+}
+
+static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
+{
+	int st;
 	struct prob p = { .c = c, .ybar = ybar, .NN = Ny * Nx };
 	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), mask, c->graph_radius)))
 		return st;
@@ -229,7 +391,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 			if (st)
 				goto out;
 		}
-		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, 0 };
+		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0 };
 		double t;
 		int evals;
 		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
@@ -248,9 +410,9 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 	for (int i = 0; i < p.NN; i++)
 		res->b[i] = (float)(p.nb == p.NN ? sol[p.n + i] : p.nb == 1 ? p.bscale * sol[p.n] : 0);
 	res->solves = p.solves, res->cg_iters = p.cg_iters, res->active_rounds = p.rounds;
+	res->tiles = 1, res->tiles_met = res->dp_status <= 0;
 out:
 	free(sol), free(p.fixed), free(p.dinv), free(p.psi2), free(p.deg), free(p.y), free(p.g), free(p.v), free(p.rhs);
 	c0_psi_omega_free(&p.P);
-	res->seconds = c0_now() - t0;
 	return st;
 }

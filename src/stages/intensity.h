@@ -26,8 +26,10 @@ struct c0_intensity_conf {
 	int maxit;                 /* 500 CG steps per active-set round */
 	double graph_radius;       /* 2.25 fine pixels: smoothness neighbourhood (docs/parameters.md) */
 	int relative;              /* 1: residual^2 = floor^2 + target^2, floor = the residual at the smallest mu */
+	int tile;                  /* 0: one solve on the whole image; else tiles of this side (camera
+				    * pixels) with a halo of two PSF lags, each with its own mu */
 };
-#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1 }
+#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0 }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {
@@ -38,10 +40,16 @@ struct c0_intensity_result {
 	double floor2;             /* residual^2 at the smallest mu (relative principle), else 0 */
 	int dp_status;             /* enum c0_root_status; 0 = discrepancy met */
 	int solves, cg_iters, active_rounds;
+	int tiles, tiles_met;      /* tiles solved (1: the whole image), and those whose principle was met */
 	double seconds;
 };
 
 int c0_intensity_check(const struct c0_intensity_conf *c);
+/* With tiles (c->tile smaller than the image): the tile grid of
+ * stages/tiles.h, tiles solved side by side and their interiors kept; mu is
+ * then the interior-weighted geometric mean of the tiles' mu, and residual2,
+ * target2 and floor2 the tiles' values scaled to their interiors and summed.
+ * A window without support pixels solves only the background. */
 int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
 void c0_intensity_result_free(struct c0_intensity_result *r);

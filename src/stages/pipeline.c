@@ -277,40 +277,28 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	return C0_OK;
 }
 
-/* One stack: its mean from the support step when that ran on it, else one
- * streaming pass (the covariance when the noise variance has to be
- * estimated, else just the mean); then the solve. */
-static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_support_conf *sc0, void *hook,
-			 struct c0_frames *f, const uint8_t *mask, double s2, const struct c0_support_result *known,
-			 struct c0_intensity_result *res, float **corrected, int64_t *frames, double *seconds)
+/* One stack's mean and noise variance: from the support step when that ran
+ * on it, else one streaming pass (the covariance on the support's tiles
+ * when the noise variance has to be estimated, else just the mean). */
+static int intensity_read(const struct c0_support_conf *sc0, void *hook, struct c0_frames *f, const uint8_t *mask,
+			  double *s2, const struct c0_support_result *known, double **own, int64_t *frames, double *seconds)
 {
-	const double *mean;
-	double *own = NULL;          /* the mean when this function read it */
-	int H, W, st = C0_OK;
 	struct c0_support_conf scc = *sc0;
-	const struct c0_support_conf *sc = &scc;
 	scc.frame_fn = hook ? c0_drift_frame_fn : NULL, scc.frame_ctx = hook;
+	*own = NULL;
 	if (known) {
-		mean = known->mean, *frames = known->frames, s2 = known->sigma2, *seconds = 0;
-		H = known->Ly / sc->srf, W = known->Lx / sc->srf;
-	} else {
-		H = f->height, W = f->width;
-		if (s2 > 0) {
-			st = c0_stack_mean(sc, f, &own, frames, seconds);
-		} else {
-			struct c0_cov cov = { 0 };
-			st = c0_stack_covariance(sc, f, &cov, seconds);
-			if (!st) {
-				*frames = cov.frames;
-				st = c0_support_noise(sc, &cov, mask, &s2);
-				own = cov.mean, cov.mean = NULL;
-			}
-			c0_cov_free(&cov);
-		}
-		mean = own;
+		*frames = known->frames, *s2 = known->sigma2, *seconds = 0;
+		return C0_OK;
 	}
-	if (!st)
-		st = c0_intensity_solve(ic, mean, H, W, *frames, mask, s2, res);
+	if (*s2 > 0)
+		return c0_stack_mean(&scc, f, own, frames, seconds);
+	return c0_stack_noise(&scc, f, mask, own, frames, s2, seconds);
+}
+
+static int intensity_solve(const struct c0_intensity_conf *ic, const double *mean, int H, int W, int64_t frames,
+			   const uint8_t *mask, double s2, struct c0_intensity_result *res, float **corrected)
+{
+	int st = c0_intensity_solve(ic, mean, H, W, frames, mask, s2, res);
 	if (!st && corrected) {
 		size_t nc = (size_t)H * W;
 		if (!(*corrected = malloc(nc * sizeof **corrected)))
@@ -318,7 +306,6 @@ static int intensity_one(const struct c0_intensity_conf *ic, const struct c0_sup
 		for (size_t p = 0; !st && p < nc; p++)
 			(*corrected)[p] = (float)(mean[p] - res->b[p]);
 	}
-	free(own);
 	return st;
 }
 
@@ -344,19 +331,41 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		free(msg);
 		return C0_ENOMEM;
 	}
+	/* the stacks' means and noise variances side by side (each reads its own
+	 * file), then the solves: side by side when each is one tile, else one
+	 * stack after the other with its tiles side by side (5 stacks on 2
+	 * threads would leave one thread idle for the last) */
+	double *own[C0_MAX_STACKS] = { 0 }, s2[C0_MAX_STACKS];
+	const int H = f[0].height, W = f[0].width, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
 	struct c0_progress pr;
 	int done = 0;
-	c0_progress_begin(&pr, "intensity (stacks)", n);
-#pragma omp parallel for schedule(dynamic, 1) if (n > 1)   /* one stack: its own loops get the threads */
+	c0_progress_begin(&pr, "intensity (stacks)", 2 * n);
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int i = 0; i < n; i++) {
-		sts[i] = intensity_one(ic, sc, r->drift ? r->hooks[i] : NULL, &f[i], r->mask, sigma2 ? sigma2[i] : 0, known[i], &r->ires[i],
-				       corrected ? &r->corrected[i] : NULL, &frames[i], &tc[i]);
+		s2[i] = sigma2 ? sigma2[i] : 0;
+		sts[i] = intensity_read(sc, r->drift ? r->hooks[i] : NULL, &f[i], r->mask, &s2[i], known[i], &own[i], &frames[i], &tc[i]);
 		if (sts[i])   /* error messages are per thread */
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 #pragma omp critical(c0_intensity_progress)
 		c0_progress_update(&pr, ++done);
 	}
+	int bad = 0;
+	for (int i = 0; i < n; i++)
+		bad |= sts[i];
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile && !bad)
+	for (int i = 0; i < n; i++) {
+		if (bad)
+			continue;
+		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], &r->ires[i],
+					 corrected ? &r->corrected[i] : NULL);
+		if (sts[i])
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+#pragma omp critical(c0_intensity_progress)
+		c0_progress_update(&pr, ++done);
+	}
 	c0_progress_end(&pr);
+	for (int i = 0; i < n; i++)
+		free(own[i]);
 	for (int i = 0; i < n; i++)
 		if (sts[i]) {
 			int st = c0_fail(sts[i], "%s", msg[i]);
@@ -383,6 +392,8 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 			"above: even the largest mu leaves a residual below the target, so the intensity is as smooth as allowed (lower nu or give mu for more detail)",
 			"not converged: mu is the last one tried (give mu to fix it)" };
 		cJSON_AddStringToObject(j, "discrepancy", s->dp_status < 0 ? "fixed mu" : dp[s->dp_status]);
+		cJSON_AddNumberToObject(j, "tiles", s->tiles);
+		cJSON_AddNumberToObject(j, "tiles_discrepancy_met", s->tiles_met);
 		cJSON_AddNumberToObject(j, "solves", s->solves);
 		cJSON_AddNumberToObject(j, "cg_iterations", s->cg_iters);
 		cJSON_AddNumberToObject(j, "seconds", s->seconds + tc[i]);

@@ -43,11 +43,13 @@ static const struct param params[] = {
 	NUM(lambda, P_DOUBLE, "support regularisation relative to lambda_max (0: automatic, from the noise of the frame halves)"),
 	NUM(lag, P_INT, "covariance lag radius in pixels (0: ceil(6 sigma / pixel))"),
 	NUM(iterations, P_INT, "maximum FISTA iterations, per reweighting for cel0 (2000)"),
+	{ "support_solver", P_ENUM, F(support_solver), 0, 0, "fista|pruned",
+	  "l1 support solver: FISTA on a working set fixed until it converges (fista), or re-made every 100 iterations (pruned)" },
 	NUM(tol, P_DOUBLE, "FISTA stops when the iterate's relative change falls below this (1e-5)"),
 	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
 	{ "drift", P_ENUM, F(drift), 0, 0, "off|on", "estimate lateral drift from block means and undo it before the covariance and the means (on)" },
 	NUM(frc, P_FLAG, "1: also solve each half of the frames for the FRC resolution and the localisation precision (1)"),
-	NUM(tile, P_INT, "support tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
+	NUM(tile, P_INT, "support and intensity tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
 	{ "background", P_ENUM, F(background), 0, 0, "none|constant|smooth", "background model (smooth)" },
 	NUM(beta, P_DOUBLE, "background smoothness weight (20)"),
 	NUM(nu, P_DOUBLE, "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (1; 0: sqrt(T))"),
@@ -234,21 +236,23 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
 					       .fista = { c->iterations, c->tol }, .cel0_outer = c->reweightings,
+					       .solver = c->support_solver,
 					       .frc = c->frc, .tile = c->tile };
 	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
-						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE };
+						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE,
+						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE };
 	c0_run_conf_matirf(c, &s->matirf);
 	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
 	if ((unsigned)c->discrepancy > C0_DISCREPANCY_PLAIN || (unsigned)c->bleach > C0_BLEACHING_OFF ||
 	    (unsigned)c->acquisition > C0_ACQ_INTERLEAVED)
 		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,
 			       (int)c->bleach, (int)c->acquisition);
-	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN ||
-	    (unsigned)c->matirf_solver > C0_MATIRF_APG)
-		return c0_fail(C0_EINVAL, "penalty %d / background %d / reg %d: out of range", (int)c->penalty,
-			       (int)c->background, (int)c->reg);
+	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->support_solver > C0_SUPPORT_PRUNED ||
+	    (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN || (unsigned)c->matirf_solver > C0_MATIRF_APG)
+		return c0_fail(C0_EINVAL, "penalty %d / support_solver %d / background %d / reg %d / matirf_solver %d: out of range",
+			       (int)c->penalty, (int)c->support_solver, (int)c->background, (int)c->reg, (int)c->matirf_solver);
 	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
 		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
 	if (c->nangles < 0 || c->nangles > C0_MAX_STACKS || c->ngains < 0 || c->ngains > C0_MAX_STACKS ||

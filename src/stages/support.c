@@ -93,46 +93,94 @@ static double smooth(void *vctx, const double *x, double *g)
 
 /* The same on a working set: x and g hold only the pixels ws[0..nws), the
  * others are 0. A x = Hy X Hx costs 2 band products per stored pixel instead
- * of per grid pixel: the support is a few percent of the grid. */
+ * of per grid pixel: the support is a few percent of the grid. The set is in
+ * grid order, so each grid row's pixels are a run ws[rs[a]..rs[a+1]). */
 struct wctx {
 	struct ctx *c;
 	const size_t *ws;
 	size_t nws;
+	size_t *rs;          /* Ly + 1: row a's runs are run[rs[a]..rs[a+1]) */
+	size_t *run;         /* runs of adjacent columns: ws[run[j]..run[j+1]) */
+	int *col;            /* column of each ws pixel */
 	double *T;           /* Ly x Lx scratch, zero outside the rows in use */
 	uint8_t *row;        /* rows of T touched by the last call */
 };
+
+static void ws_index(struct wctx *w)
+{
+	const int Ly = w->c->op->Ly, Lx = w->c->op->Lx;
+	size_t k = 0, j = 0;
+	for (int a = 0; a < Ly; a++) {
+		w->rs[a] = j;
+		for (; k < w->nws && w->ws[k] < (size_t)(a + 1) * Lx; k++) {
+			w->col[k] = (int)(w->ws[k] - (size_t)a * Lx);
+			if (k == 0 || w->rs[a] == j || w->ws[k] != w->ws[k - 1] + 1)
+				w->run[j++] = k;
+		}
+	}
+	w->rs[Ly] = j, w->run[j] = k;
+}
+
+/* out = A^T A v on the working set. Row by row (each output and each row of
+ * T is one thread's, so the sums do not depend on the thread count), only
+ * through the rows of T that some pixel touched. */
+static void normal_ws(struct wctx *w, const double *v, double *out)
+{
+	const struct c0_covop *op = w->c->op;
+	const struct c0_band *Hy = &op->Hy, *Hx = &op->Hx;
+	const int Ly = op->Ly, Lx = op->Lx;
+	const int par = w->nws > 20000;
+	/* T = V Hx (Hx symmetric: row b of Hx is its column b) */
+#pragma omp parallel for schedule(dynamic, 16) if (par)
+	for (int a = 0; a < Ly; a++) {
+		double *t = w->T + (size_t)a * Lx;
+		if (w->row[a])
+			memset(t, 0, sizeof *t * (size_t)Lx), w->row[a] = 0;
+		for (size_t k = w->run[w->rs[a]]; k < w->run[w->rs[a + 1]]; k++) {
+			if (v[k] == 0)
+				continue;
+			const int b = w->col[k];
+			const double vk = v[k], *h = Hx->v + (size_t)b * Hx->w;
+			double *tb = t + Hx->start[b];
+			for (int u = 0; u < Hx->w; u++)
+				tb[u] += vk * h[u];
+			w->row[a] = 1;
+		}
+	}
+	/* out = Hy T at the set's pixels */
+#pragma omp parallel for schedule(dynamic, 16) if (par)
+	for (int a = 0; a < Ly; a++) {
+		const size_t j0 = w->rs[a], j1 = w->rs[a + 1];
+		if (j0 == j1)
+			continue;
+		for (size_t k = w->run[j0]; k < w->run[j1]; k++)
+			out[k] = 0;
+		const double *h = Hy->v + (size_t)a * Hy->w;
+		for (int u = 0; u < Hy->w; u++) {
+			const int y = Hy->start[a] + u;
+			if (!w->row[y] || h[u] == 0)
+				continue;
+			const double hu = h[u], *t = w->T + (size_t)y * Lx;
+			for (size_t j = j0; j < j1; j++) {
+				const size_t k0 = w->run[j], len = w->run[j + 1] - k0;
+				double *o = out + k0;
+				const double *tt = t + w->col[k0];
+				for (size_t e = 0; e < len; e++)
+					o[e] += hu * tt[e];
+			}
+		}
+	}
+}
 
 static double smooth_ws(void *vctx, const double *xw, double *gw)
 {
 	struct wctx *w = vctx;
 	const struct c0_covop *op = w->c->op;
-	const struct c0_band *Hy = &op->Hy, *Hx = &op->Hx;
-	const int Ly = op->Ly, Lx = op->Lx;
-	for (int a = 0; a < Ly; a++)
-		if (w->row[a])
-			memset(w->T + (size_t)a * Lx, 0, sizeof *w->T * (size_t)Lx), w->row[a] = 0;
-	/* T = X Hx (Hx symmetric: row b of Hx is its column b) */
-	for (size_t k = 0; k < w->nws; k++) {
-		if (xw[k] == 0)
-			continue;
-		const size_t i = w->ws[k];
-		const int a = (int)(i / (size_t)Lx), b = (int)(i % (size_t)Lx);
-		const double v = xw[k], *h = Hx->v + (size_t)b * Hx->w;
-		double *t = w->T + (size_t)a * Lx + Hx->start[b];
-		for (int u = 0; u < Hx->w; u++)
-			t[u] += v * h[u];
-		w->row[a] = 1;
-	}
+	normal_ws(w, xw, gw);
 	double xc = 0, xax = 0, xn = 0;
 	for (size_t k = 0; k < w->nws; k++) {
 		const size_t i = w->ws[k];
-		const int a = (int)(i / (size_t)Lx), b = (int)(i % (size_t)Lx);
-		const double *h = Hy->v + (size_t)a * Hy->w, *t = w->T + (size_t)Hy->start[a] * Lx + b;
-		double ax = 0;
-		for (int u = 0; u < Hy->w; u++)
-			ax += h[u] * t[(size_t)u * Lx];
-		gw[k] = ax;
-		xc += xw[k] * w->c->C[i], xax += xw[k] * ax, xn += xw[k] * op->n[i];
+		xc += xw[k] * w->c->C[i], xax += xw[k] * gw[k], xn += xw[k] * op->n[i];
 	}
 	const struct ctx *c = w->c;
 	const double s = fmax(0, (c->trR - xn) / c->HW);
@@ -145,68 +193,114 @@ static double smooth_ws(void *vctx, const double *xw, double *gw)
  * be; then FISTA on the working set (pixels that are non-zero or whose
  * gradient would make them so), whose optimality is checked on the whole
  * grid whenever it converges: pixels that would move join the set and the
- * solve goes on from where it was. */
+ * solve goes on from where it was.
+ * pruned (the default): the set is also re-made every PIECE iterations,
+ * dropping every pixel at 0 that is not pushed up, with FISTA's momentum
+ * carried across; each piece takes the longest step safe on its set. The
+ * set shrinks from the warm-up's blur (~4x the support at 256x256) towards
+ * the support, so the iterations get cheaper and the steps longer.
+ * Otherwise (fista): the set changes only when FISTA has converged on it, a
+ * pixel at 0 leaves only when held there by a margin, the whole grid's step. */
 #define WS_WARMUP 100
-static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, double *x, struct c0_fista_info *info)
+#define PRUNED_WARMUP 30
+#define PIECE 100
+static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, int pruned, double *x,
+		    struct c0_fista_info *info)
 {
 	const struct c0_covop *op = ctx->op;
 	const size_t L = (size_t)op->Ly * op->Lx;
 	struct c0_fista_conf f0 = *fc;
-	f0.maxit = fc->maxit < WS_WARMUP ? fc->maxit : WS_WARMUP;
+	const int warm = pruned ? PRUNED_WARMUP : WS_WARMUP;
+	f0.maxit = fc->maxit < warm ? fc->maxit : warm;
+	double *xp = pruned ? c0_alloc(L, sizeof *xp) : NULL, *pw = pruned ? c0_alloc(L, sizeof *pw) : NULL;
+	if (pruned && (!xp || !pw)) {
+		free(xp), free(pw);
+		return C0_ENOMEM;
+	}
+	info->prev = xp, info->theta = 1;
 	int st = c0_fista_nn(smooth, ctx, L, lip, NULL, ctx->lam, x, &f0, info);
+	info->prev = NULL;
 	int used = info->iters;
-	if (st || info->converged || used >= fc->maxit)
+	if (st || info->converged || used >= fc->maxit) {
+		free(xp), free(pw);
 		return st;
-	struct wctx w = { ctx, NULL, 0, c0_alloc(L, sizeof(double)), c0_alloc((size_t)op->Ly, 1) };
+	}
+	struct wctx w = { ctx, NULL, 0, c0_alloc((size_t)op->Ly + 1, sizeof(size_t)),
+			  c0_alloc(L + 1, sizeof(size_t)), c0_alloc(L, sizeof(int)),
+			  c0_alloc(L, sizeof(double)), c0_alloc((size_t)op->Ly, 1) };
 	size_t *ws = c0_alloc(L, sizeof *ws);
-	double *xw = c0_alloc(L, sizeof *xw), *g = ctx->Ax;
+	double *xw = c0_alloc(L, sizeof *xw), *one = c0_alloc(L, sizeof *one), *g = ctx->Ax;
 	uint8_t *in = c0_alloc(L, 1);
-	if (!w.T || !w.row || !ws || !xw || !in) {
+	if (!w.rs || !w.run || !w.col || !w.T || !w.row || !ws || !xw || !one || !in) {
 		st = C0_ENOMEM;
 		goto out;
 	}
 	w.ws = ws;
 	struct c0_fista_info part = *info;
+	const double leave = pruned ? 0 : 0.1;
 	for (;;) {
 		/* the gradient on the whole grid: who would move? */
 		smooth(ctx, x, g);
 		/* join: a gradient that would move the pixel by more than rounding
-		 * (1e-3 lambda); leave: at 0 and held there by a margin (0.1 lambda) */
+		 * (1e-3 lambda); leave: at 0 and held there (by 0.1 lambda for fista) */
 		int grew = 0;
 		for (size_t i = 0; i < L; i++) {
 			const double m = g[i] + ctx->lam;
 			if (!in[i] && (x[i] > 0 || m < -1e-3 * ctx->lam))
 				in[i] = 1, grew = 1;
-			else if (in[i] && x[i] == 0 && m > 0.1 * ctx->lam)
+			else if (in[i] && x[i] == 0 && m > leave * ctx->lam)
 				in[i] = 0;
 		}
 		if (!grew && part.converged)
 			break;
 		w.nws = 0;
 		for (size_t i = 0; i < L; i++)
-			if (in[i])
+			if (in[i]) {
+				if (pruned)
+					pw[w.nws] = xp[i];
 				xw[w.nws] = x[i], ws[w.nws++] = i;
+			}
+		ws_index(&w);
+		part.prev = pruned ? pw : NULL;
 		struct c0_fista_conf fw = *fc;
 		fw.maxit = fc->maxit - used;
+		if (pruned && fw.maxit > PIECE)
+			fw.maxit = PIECE;
 		part.hist = info->hist ? info->hist + used : NULL;
 		part.nhist = info->hist && info->nhist > used ? info->nhist - used : 0;
-		if ((st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, ctx->lam, xw, &fw, &part)))
+		double lw = lip;
+		if (pruned) {
+			/* A^T A >= 0 entrywise, so its largest row sum on the set bounds
+			 * its largest eigenvalue there (Gershgorin) */
+			for (size_t k = 0; k < w.nws; k++)
+				one[k] = 1;
+			normal_ws(&w, one, g);
+			double rs = 0;
+			for (size_t k = 0; k < w.nws; k++)
+				rs = fmax(rs, g[k]);
+			lw = fmin(lip, rs);
+		}
+		if ((st = c0_fista_nn(smooth_ws, &w, w.nws, lw, NULL, ctx->lam, xw, &fw, &part)))
 			break;
-
 		used += part.iters;
 		memset(x, 0, L * sizeof *x);
 		for (size_t k = 0; k < w.nws; k++)
 			x[ws[k]] = xw[k];
+		if (pruned) {
+			memset(xp, 0, L * sizeof *xp);
+			for (size_t k = 0; k < w.nws; k++)
+				xp[ws[k]] = pw[k];
+		}
 		if (used >= fc->maxit) {
 			part.converged = 0;
 			break;
 		}
 	}
 	info->iters = used, info->converged = part.converged, info->obj = part.obj;
-
 	info->restarts += part.restarts;
 out:
-	free(w.T), free(w.row), free(ws), free(xw), free(in);
+	free(w.rs), free(w.run), free(w.col), free(w.T), free(w.row), free(ws), free(xw), free(one), free(in);
+	free(xp), free(pw);
 	return st;
 }
 
@@ -250,19 +344,6 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
 {
 	return solve(c, cov, NULL, NULL, NULL, res);
-}
-
-int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2)
-{
-	struct c0_support_conf cc = *c;
-	cc.penalty = C0_PENALTY_L1;
-	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
-	struct c0_support_result r;
-	memset(&r, 0, sizeof r);
-	int st = solve(&cc, cov, mask, NULL, NULL, &r);
-	*sigma2 = r.sigma2;
-	c0_support_result_free(&r);
-	return st;
 }
 
 /* x0 (or NULL): a start in camera units (rx of another solve) */
@@ -334,7 +415,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 		if (mask)
 			st = c0_fista_nn(smooth, &ctx, L, op.lip, NULL, res->lambda, x, &c->fista, &info);
 		else if (c->penalty == C0_PENALTY_L1)
-			st = solve_l1(&ctx, &c->fista, op.lip, x, &info);
+			st = solve_l1(&ctx, &c->fista, op.lip, c->solver == C0_SUPPORT_PRUNED, x, &info);
 		else
 			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &c->fista, c->cel0_outer, c->fista.tol, &info);
 	}
@@ -442,6 +523,89 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double 
 		free(*mean), *mean = NULL;
 	*frames = in->count;
 	*seconds = c0_now() - t0;
+	return st;
+}
+
+int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const uint8_t *mask, double **mean,
+		   int64_t *frames, double *sigma2, double *seconds)
+{
+	*mean = NULL, *frames = in->count, *sigma2 = 0, *seconds = 0;
+	const int W = in->width, H = in->height, r = c->srf, d = c0_support_lag(c);
+	int st = c0_support_check(c, W, H, in->count, in->name);
+	if (st)
+		return st;
+	double t0 = c0_now();
+	struct c0_tiling tl;
+	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
+		return st;
+	struct c0_cov_acc *acc = NULL;
+	st = c0_cov_acc_new(W, H, d, &acc);
+	float *frame = st ? NULL : c0_alloc((size_t)W * H, sizeof *frame);
+	if (!st && !frame)
+		st = C0_ENOMEM;
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		st = c0_frames_read(in, t, frame);
+		if (!st && c->frame_fn)
+			st = c->frame_fn(c->frame_ctx, t, frame, H, W);
+		if (!st)
+			st = c0_cov_acc_add(acc, frame);
+	}
+	free(frame);
+	if (!st && in->count < 3)
+		st = c0_fail(C0_EINVAL, "%s: the covariance needs at least 3 frames", in->name);
+	if (!st)
+		c0_cov_acc_seal(acc);   /* the windows below only read */
+	*seconds = c0_now() - t0;
+	double *s2 = c0_alloc((size_t)tl.n, sizeof *s2);
+	*mean = c0_alloc((size_t)W * H, sizeof **mean);
+	if (!st && (!s2 || !*mean))
+		st = C0_ENOMEM;
+	struct c0_support_conf cc = *c;
+	cc.penalty = C0_PENALTY_L1;
+	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
+	int fail = st;
+	char msg[512] = "";
+#pragma omp parallel for schedule(dynamic, 1) if (tl.n > 1)
+	for (int k = 0; k < (fail ? 0 : tl.n); k++) {
+		const struct c0_tile *t = &tl.t[k];
+		struct c0_cov cov = { 0 };
+		struct c0_support_result tr;
+		memset(&tr, 0, sizeof tr);
+		const size_t Lw = (size_t)t->w * r;
+		uint8_t *m = malloc(Lw * t->h * r);
+		int ts = m ? c0_cov_acc_window(acc, t->y0, t->x0, t->h, t->w, &cov) : C0_ENOMEM;
+		for (int a = 0; !ts && a < t->h * r; a++)
+			memcpy(m + a * Lw, mask + (size_t)(t->y0 * r + a) * W * r + (size_t)t->x0 * r, Lw);
+		if (!ts)
+			ts = solve(&cc, &cov, m, NULL, NULL, &tr);
+		if (!ts) {
+			s2[k] = tr.sigma2;
+			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+			for (int a = 0; a < t->ih; a++)
+				memcpy(*mean + (size_t)(t->iy0 + a) * W + t->ix0, cov.mean + (size_t)(oy + a) * t->w + ox,
+				       (size_t)t->iw * sizeof **mean);
+		}
+		if (ts) {
+#pragma omp critical(c0_noise_fail)
+			if (!fail)
+				fail = ts, snprintf(msg, sizeof msg, "%s", c0_errmsg());
+		}
+		c0_cov_free(&cov);
+		c0_support_result_free(&tr);
+		free(m);
+	}
+	if (!st && fail)
+		st = c0_fail(fail, "%s", msg);
+	double area = 0;
+	for (int k = 0; !st && k < tl.n; k++)   /* in tile order: the same sum on any schedule */
+		*sigma2 += s2[k] * tl.t[k].ih * tl.t[k].iw, area += (double)tl.t[k].ih * tl.t[k].iw;
+	if (!st)
+		*sigma2 /= area;
+	c0_cov_acc_free(acc);
+	free(s2);
+	c0_tiling_free(&tl);
+	if (st)
+		free(*mean), *mean = NULL;
 	return st;
 }
 
@@ -813,6 +977,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	}
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
+	if (!st && acc)
+		c0_cov_acc_seal(acc);   /* the tiles below only read it */
 	/* the image's normalisation: its largest pixel variance */
 	double norm = 0;
 	for (int y = ia; !st && y < ib; y++)

@@ -27,13 +27,14 @@ struct c0_support_conf {
 	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
 	struct c0_fista_conf fista;/* 2000 iterations, tol 1e-5 */
 	int cel0_outer;            /* 10 reweightings */
+	enum c0_support_solver solver; /* l1: fista (a set fixed until FISTA converges on it) or pruned */
 	int frc;                   /* 1: also solve each half of the frames (on its own, at most 300
 				    * iterations) for the FRC resolution and the localisation precision */
 	int tile;                  /* tile side in camera pixels; 0: C0_SUPPORT_TILE (or the image when smaller) */
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, 1, 0, NULL, NULL }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL }
 /* Default tile side (docs/parameters.md): tiles are solved side by side and
  * overlap by two covariance lags on each side. */
 #define C0_SUPPORT_TILE 256
@@ -89,5 +90,10 @@ int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames
 int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double **mean, int64_t *frames,
 		  double *seconds);
 /* Noise variance of a stack whose support is known: the same model with
- * r_x free on the mask only and no penalty (100 iterations). */
-int c0_support_noise(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double *sigma2);
+ * r_x free on the mask only and no penalty (100 iterations), in one pass on
+ * the support's tile grid (memory: the float band of the frame and one
+ * window's covariance per thread): each tile's noise variance from its
+ * window, averaged over the interiors (one tile: the whole image's fit).
+ * Also the temporal mean (allocated). */
+int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *f, const uint8_t *mask, double **mean,
+		   int64_t *frames, double *sigma2, double *seconds);

@@ -1,13 +1,14 @@
 #!/usr/bin/python3
 """The automatic support lambda against a sweep on a panel of simulated
 single-angle stacks (docs/parameters.md):
-    lambda_panel.py COL0RME WORKDIR [cel0]
+    lambda_panel.py COL0RME WORKDIR [l1|cel0 [SUPPORT OPTIONS...]]
 Prints a markdown table: the Jaccard index (40 nm, 3 camera pixels of margin)
 for each fixed lambda and for the defaults (automatic lambda, drift correction)."""
 import json, os, subprocess, sys
 
 BIN, WORK = sys.argv[1], sys.argv[2]
 PEN = sys.argv[3] if len(sys.argv) > 3 else "l1"
+EXTRA = sys.argv[4:]
 COMMON = ["--width", "48", "--height", "48", "--angles", "65", "--z-range", "0,200", "--seed", "5"]
 PANEL = {
     "base": [],
@@ -40,7 +41,7 @@ for name, extra in PANEL.items():
     res = {}
     for lam in SWEEP + ["auto"]:
         out = sim + "_out"
-        run([BIN, "support", "-o", out, "--force", "--fwhm", "229", "--penalty", PEN, sim + "/stack_q01.tif"] +
+        run([BIN, "support", "-o", out, "--force", "--fwhm", "229", "--penalty", PEN, *EXTRA, sim + "/stack_q01.tif"] +
             ([] if lam == "auto" else ["--lambda", lam]))
         rep = json.load(open(out + "/report.json"))["support"][0]
         res[lam] = (ji(sim, out), rep["lambda_relative"])

@@ -85,7 +85,9 @@ with tempfile.TemporaryDirectory() as tmp:
     # bad parameters: one error line naming the parameter, non-zero exit, nothing written
     for args, needle in [(["--tau-on", "-5"], "--tau-on"), (["--angles", "95,62"], "incidence angle"),
                          (["--filaments", "0"], "empty structure"), (["--pixel-size", "0"], "--pixel-size"),
-                         (["--frames", "abc"], "--frames")]:
+                         (["--frames", "abc"], "--frames"), (["--frames", "0"], "--frames 0"),
+                         (["--gaps", "1", "--bleach-order", "interleaved"], "--gaps:"),
+                         (["--z-range", "300,100"], "--z-range")]:
         d = os.path.join(tmp, "bad")
         r = subprocess.run([CLI, "simulate", "-o", d, *args], capture_output=True, text=True)
         lines = r.stderr.strip().splitlines()

@@ -105,25 +105,37 @@ def read_calibration(tmp):
 
 
 def write_variants(tmp):
-    """Files we write are read by tifffile with the right shape, dtype, values, calibration."""
-    for dt, big in [("uint8", 0), ("uint16", 0), ("float32", 0), ("float32", 1)]:
-        W, H, C, Z, T = 7, 5, 1, 4, 3
-        p = os.path.join(tmp, "w_%s_%d.tif" % (dt, big))
+    """Files we write are read by tifffile with the right shape, dtype, values, calibration;
+    the planes' data lie back to back after the directories, as ImageJ writes them
+    (tifffile and ImageJ read a hyperstack from the first plane's offset: 2 planes
+    with a directory between them read wrong)."""
+    cases = [("uint8", 0, 1, 4, 3), ("uint16", 0, 1, 4, 3), ("float32", 0, 1, 4, 3), ("float32", 1, 1, 4, 3),
+             ("float32", 0, 1, 2, 1), ("float32", 0, 2, 1, 1), ("uint16", 0, 1, 1, 2), ("float32", 0, 1, 1, 1)]
+    for dt, big, C, Z, T in cases:
+        W, H = 7, 5
+        p = os.path.join(tmp, "w_%s_%d_%d%d%d.tif" % (dt, big, C, Z, T))
         subprocess.run([TOOL, "write", p, dt, str(W), str(H), str(C), str(Z), str(T), "25", "20", str(big)], check=True)
         with tifffile.TiffFile(p) as tf:
             a = tf.asarray()
             ij = tf.imagej_metadata
             page = tf.pages[0]
             check(tf.is_bigtiff == bool(big), "bigtiff flag %s" % p)
-            check(ij is not None and ij.get("slices") == Z and ij.get("frames") == T, "ij meta %s" % ij)
-            check(ij is not None and abs(ij.get("spacing", 0) - 0.02) < 1e-9 and ij.get("unit") == "um", "ij calib %s" % ij)
+            check(ij is not None and ij.get("slices", 1) == Z and ij.get("frames", 1) == T and ij.get("channels", 1) == C,
+                  "ij meta %s" % ij)
+            offs = [pg.dataoffsets[0] for pg in tf.pages]
+            nb = W * H * np.dtype(dt).itemsize
+            check(offs == [offs[0] + k * nb for k in range(len(offs))] and offs[0] > tf.pages[-1].offset,
+                  "planes contiguous after the directories %s: %s" % (p, offs))
+            check(ij is not None and (Z == 1 or abs(ij.get("spacing", 0) - 0.02) < 1e-9) and ij.get("unit") == "um",
+                  "ij calib %s" % ij)
             xr = page.tags["XResolution"].value
             check(abs(xr[0] / xr[1] - 40.0) < 1e-3, "XResolution %s" % (xr,))
             check(a.dtype == np.dtype(dt), "dtype %s" % a.dtype)
-            n = W * H * Z * T
+            n = W * H * C * Z * T
             i = np.arange(n, dtype=np.int64)
             exp = {"uint8": (i * 7) % 256, "uint16": (i * 7919) % 65536}.get(dt, i * 0.25 - 100.0)
-            check(a.shape == (T, Z, H, W), "shape %s" % (a.shape,))
+            shape = tuple(k for k in (T, Z, C) if k > 1) + (H, W)
+            check(a.shape == shape, "shape %s, expected %s (%s)" % (a.shape, shape, p))
             check(np.array_equal(a.reshape(-1).astype(np.float64), np.asarray(exp, dtype=np.float32).astype(np.float64)), "values %s" % p)
 
 
