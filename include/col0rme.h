@@ -99,6 +99,7 @@ struct c0_run_conf {
 	int matirf_iterations; /* 3000: maximum primal-dual iterations */
 	double matirf_tol;     /* 0: primal-dual stopping tolerance; 0: the solver's, 1e-3 exact, 1e-4 diag, apg 5e-4 (TV) 1e-3 (Hessian) */
 	enum c0_matirf_solver matirf_solver; /* (auto: apg) exact: per-pixel exact data steps; diag: diagonal steps; apg: exact's steps, the per-pixel prox by projected gradient */
+	int matirf_coarse;     /* -1: levels of the warm start from 2x2-binned images (apg and exact with TV); -1: 2 with apg, else 0 */
 	/* the standard MA-TIRF path on raw images (c0_run_matirf, `col0rme matirf`) */
 	double offset;         /* 0: camera offset subtracted from every image */
 	double matirf_background; /* 0: constant background subtracted after the offset */
@@ -122,7 +123,7 @@ struct c0_run_conf {
 	.reweightings = 10, .drift = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 20, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
 	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = 3e-2, .sparsity = 3e-2, \
-	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .background_smooth = 100, .depth_pool_nm = -1 }
+	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1 }
 
 void c0_run_conf_init(struct c0_run_conf *c);
 /* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),

@@ -360,6 +360,62 @@ static void test_solvers(void)
 		free(img[q]);
 }
 
+/* the warm start from 2x2-binned images (apg, TV): tightly converged it
+ * reaches the cold start's objective; at the default tolerance its depths
+ * stay close to the cold start's, in fewer iterations on the full grid
+ * (the coarse start in wrong units, or without its dual, takes more) */
+static void test_coarse(void)
+{
+	const int n = 80, nq = 5;   /* the phantom's pixels each 2x2: structures wide enough to bin */
+	double depth[40 * 40], amp[40 * 40], *d2 = malloc(sizeof(double) * n * n);
+	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
+	float *small[5], *img[5];
+	const struct c0_rng keep = rng;   /* its own noise; the later tests see theirs unchanged */
+	c0_rng_init(&rng, 23, 0);
+	phantom_images(&c, 40, nq, depth, amp, small);
+	for (int q = 0; q < nq; q++) {
+		img[q] = malloc(sizeof(float) * n * n);
+		for (int i = 0; i < n * n; i++)
+			img[q][i] = small[q][i / n / 2 * 40 + i % n / 2] * (float)(1 + 0.1 * c0_rng_normal(&rng));
+		free(small[q]);
+	}
+	rng = keep;
+	for (int i = 0; i < n * n; i++)
+		d2[i] = amp[i / n / 2 * 40 + i % n / 2] > 0;
+	struct c0_matirf_result r[4];   /* cold, coarse 2: defaults, then tight */
+	for (int k = 0; k < 4; k++) {
+		c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
+		c.solver = C0_MATIRF_APG, c.coarse = k % 2 ? 2 : 0;
+		if (k >= 2)
+			c.pdhg.tol = 1e-5, c.pdhg.maxit = 3000;
+		CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &r[k]) == C0_OK);
+	}
+	double med[2], *e = malloc(sizeof(double) * n * n);   /* coarse vs cold: defaults, tight */
+	for (int pair = 0; pair < 2; pair++) {
+		int k = 0;
+		for (int i = 0; i < n * n; i++)
+			if (d2[i] > 0)
+				e[k++] = fabs(r[2 * pair].depth[i] - r[2 * pair + 1].depth[i]);
+		qsort(e, k, sizeof *e, cmp_double);
+		med[pair] = e[k / 2];
+	}
+	fprintf(stderr, "apg cold vs coarse start: %d vs %d (+%d coarse) iterations, objectives %.8g %.8g, depths %.2f nm apart\n"
+		"  tol 1e-5: %d vs %d (+%d), objectives %.8g %.8g, depths %.3f nm apart\n",
+		r[0].iters, r[1].iters, r[1].coarse_iters, r[0].objective, r[1].objective, med[0],
+		r[2].iters, r[3].iters, r[3].coarse_iters, r[2].objective, r[3].objective, med[1]);
+	CHECK(r[0].coarse_iters == 0 && r[1].coarse_iters > 0 && r[0].converged && r[1].converged);
+	CHECK_MSG(r[3].objective <= r[2].objective * (1 + 2e-4) && r[2].objective <= r[3].objective * (1 + 2e-4) && med[1] < 2,
+		  "tight: objective %.8g vs %.8g, depths %.3f nm apart", r[3].objective, r[2].objective, med[1]);
+	CHECK_MSG(r[1].objective <= r[2].objective * 1.005 && med[0] < 3 && r[1].iters < 0.8 * r[0].iters,
+		  "defaults: objective %.8g (tight %.8g), depths %.2f nm apart, %d vs %d iterations", r[1].objective,
+		  r[2].objective, med[0], r[1].iters, r[0].iters);
+	for (int k = 0; k < 4; k++)
+		c0_matirf_result_free(&r[k]);
+	for (int q = 0; q < nq; q++)
+		free(img[q]);
+	free(e), free(d2);
+}
+
 /* The standard MA-TIRF path on raw-like images: a camera offset and a smooth
  * background on the layer + filament phantom (the background estimated
  * jointly), and a blurred phantom with and without joint deconvolution. */
@@ -503,6 +559,9 @@ static void test_refusals(void)
 	CHECK(c0_matirf_check(&c, 1, ANG) == C0_EINVAL && strstr(c0_errmsg(), "angles"));
 	c.dz_nm = 0;
 	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "z_range_nm"));
+	c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
+	c.coarse = -1;
+	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "matirf_coarse"));
 }
 
 int main(void)
@@ -515,6 +574,7 @@ int main(void)
 	RUN(test_fused);
 	RUN(test_nnqp);
 	RUN(test_solvers);
+	RUN(test_coarse);
 	RUN(test_offset_background);
 	RUN(test_deconvolution);
 	RUN(test_depth);

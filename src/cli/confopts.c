@@ -63,6 +63,7 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "axial_weight", { "axial-weight", 0, C0_OPT_DOUBLE, &c->axial_weight, "W", "axial weight of the regulariser relative to lateral", NULL, 0, NULL } },
 		{ "matirf_iterations", { "matirf-iterations", 0, C0_OPT_INT, &c->matirf_iterations, "N", "maximum primal-dual iterations", NULL, 0, NULL } },
 		{ "matirf_solver", { "matirf-solver", 0, C0_OPT_STRING, &m->solver, "exact|diag|auto|apg", "exact per-pixel data steps, diagonal steps, or apg: the per-pixel steps by projected gradient (auto: apg)", NULL, 0, NULL } },
+		{ "matirf_coarse", { "matirf-coarse", 0, C0_OPT_INT, &c->matirf_coarse, "N", "levels of the warm start from 2x2-binned images (apg and exact with TV)", "2 with apg, else 0", 0, NULL } },
 		{ "offset", { "offset", 0, C0_OPT_DOUBLE, &c->offset, "ADU", "camera offset subtracted from every image (refused at or above an image's mean)", NULL, 0, NULL } },
 		{ "matirf_background", { "background", 0, C0_OPT_DOUBLE, &c->matirf_background, "V", "constant background subtracted after the offset", NULL, 0, NULL } },
 		{ "estimate_background", { "estimate-background", 0, C0_OPT_FLAG, &c->estimate_background, NULL, "estimate a smooth background common to all angles jointly (background.tif)", NULL, 0, NULL } },

@@ -38,8 +38,10 @@ struct c0_matirf_conf {
 	/* 0: no deconvolution; > 0: the forward model blurs each angle's image
 	 * by a Gaussian of this sigma (camera pixels); uses the diag solver */
 	double psf_sigma_px;
+	/* levels of the warm start from 2x2-binned images (apg and exact with TV) */
+	int coarse;
 };
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0 }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0 }
 
 struct c0_matirf_result {
 	int nz, ny, nx;
@@ -48,6 +50,7 @@ struct c0_matirf_result {
 	float *depth;                /* ny x nx intensity-weighted mean depth (nm), 0 where empty */
 	float *total;                /* ny x nx sum over depth */
 	int iters, converged, exact, apg;   /* exact, apg: which solver ran */
+	int coarse_iters;            /* iterations of the coarse levels (their pixels are 1/4, 1/16.. of these) */
 	double seconds, scale;
 	double rel_change;           /* the last iteration's relative change (max of primal, dual) */
 	double objective;            /* at the result, data scaled to max 1 (compares solvers) */

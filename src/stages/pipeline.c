@@ -459,6 +459,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	cJSON_AddNumberToObject(j, "sparsity", m->sparsity);
 	cJSON_AddNumberToObject(j, "data_scale", res->scale);
 	cJSON_AddNumberToObject(j, "iterations", res->iters);
+	cJSON_AddNumberToObject(j, "coarse_iterations", res->coarse_iters);   /* on the binned grids */
 	cJSON_AddBoolToObject(j, "converged", res->converged);
 	cJSON_AddStringToObject(j, "solver", res->apg ? "apg" : res->exact ? "exact" : "diag");
 	cJSON_AddNumberToObject(j, "final_relative_change", res->rel_change);
