@@ -147,27 +147,18 @@ static void normal_ws(struct wctx *w, const double *v, double *out)
 			w->row[a] = 1;
 		}
 	}
-	/* out = Hy T at the set's pixels */
+	/* out = Hy T at the set's pixels: a column dot product per pixel (the
+	 * set's runs are short, 1-3 pixels at a tile's warm-up, so looping over
+	 * them inside each row of Hy cost twice as much) */
 #pragma omp parallel for schedule(dynamic, 16) if (par)
 	for (int a = 0; a < Ly; a++) {
-		const size_t j0 = w->rs[a], j1 = w->rs[a + 1];
-		if (j0 == j1)
-			continue;
-		for (size_t k = w->run[j0]; k < w->run[j1]; k++)
-			out[k] = 0;
-		const double *h = Hy->v + (size_t)a * Hy->w;
-		for (int u = 0; u < Hy->w; u++) {
-			const int y = Hy->start[a] + u;
-			if (!w->row[y] || h[u] == 0)
-				continue;
-			const double hu = h[u], *t = w->T + (size_t)y * Lx;
-			for (size_t j = j0; j < j1; j++) {
-				const size_t k0 = w->run[j], len = w->run[j + 1] - k0;
-				double *o = out + k0;
-				const double *tt = t + w->col[k0];
-				for (size_t e = 0; e < len; e++)
-					o[e] += hu * tt[e];
-			}
+		const double *h = Hy->v + (size_t)a * Hy->w, *tb = w->T + (size_t)Hy->start[a] * Lx;
+		for (size_t k = w->run[w->rs[a]]; k < w->run[w->rs[a + 1]]; k++) {
+			const double *t = tb + w->col[k];
+			double ax = 0;
+			for (int u = 0; u < Hy->w; u++)
+				ax += h[u] * t[(size_t)u * Lx];
+			out[k] = ax;
 		}
 	}
 }
