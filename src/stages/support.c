@@ -756,18 +756,32 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
  * to 512x512 images; its band costs about a quarter of a 1024x1024 frame's).
  * The subset depends on the tile grid only. */
 #define SUBSET_PX (512 * 512)
-static void noise_subset(const struct c0_tiling *tl, uint8_t *in)
+/* in[k] = 1 for m of the candidates cand[0..nc) (tile indices in tile order),
+ * spread evenly, with the largest m whose interiors hold at most px pixels */
+static void spread(const struct c0_tiling *tl, const int *cand, int nc, double px_max, uint8_t *in)
 {
-	for (int m = tl->n; m >= 1; m--) {
+	for (int m = nc; m >= 1; m--) {
 		double px = 0;
 		memset(in, 0, (size_t)tl->n);
 		for (int j = 0; j < m; j++) {
-			const struct c0_tile *t = &tl->t[(int)(((2LL * j + 1) * tl->n) / (2 * m))];
+			const struct c0_tile *t = &tl->t[cand[((2LL * j + 1) * nc) / (2 * m)]];
 			in[t - tl->t] = 1, px += (double)t->ih * t->iw;
 		}
-		if (px <= SUBSET_PX || m == 1)
+		if (px <= px_max || m == 1)
 			return;
 	}
+}
+
+static int noise_subset(const struct c0_tiling *tl, uint8_t *in)
+{
+	int *all = c0_alloc((size_t)tl->n, sizeof *all);
+	if (!all)
+		return C0_ENOMEM;
+	for (int k = 0; k < tl->n; k++)
+		all[k] = k;
+	spread(tl, all, tl->n, SUBSET_PX, in);
+	free(all);
+	return C0_OK;
 }
 
 /* Every tile's lambda_max on both scales (lm: 2 per tile); the subset's
@@ -819,14 +833,30 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 /* The localisation precision on tiles: each subset tile's halves solved on
  * their own (at most FRC_MAXIT iterations, the image's scale and lambda),
  * their interiors' matched distances added in tile order (half_frc on one
- * tile). The halves are solved side by side, one per thread, as the tiles
- * are (serially they took about as long as all the tiles' solves); the odd
- * bands they add are a quarter of the band at 1024x1024. No FRC: its
+ * tile), on part of the noise subset (PRECISION_PX). The halves are solved
+ * side by side, one per thread, as the tiles are. No FRC: its
  * ring sums added over Hann-windowed tiles disagreed with the one-tile
  * value (docs/parameters.md). */
+#define PRECISION_PX (256 * 256)
 static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-			   int k0, int k1, struct c0_cov_acc **odd, const struct scale *g, struct c0_support_result *res)
+			   int k0, int k1, struct c0_cov_acc **odd, const uint8_t *sub, const struct scale *g,
+			   struct c0_support_result *res)
 {
+	/* which of the noise subset: spread evenly, interiors up to
+	 * PRECISION_PX (all of them up to 256x256 images; each half solve costs
+	 * as much as a tile's whole solve) */
+	int nc = 0, *cand = c0_alloc((size_t)tl->n, sizeof *cand);
+	uint8_t *use = c0_alloc((size_t)tl->n, 1);
+	if (!cand || !use) {
+		free(cand), free(use);
+		return C0_ENOMEM;
+	}
+	for (int k = 0; k < tl->n; k++)
+		if (sub[k])
+			cand[nc++] = k;
+	if (nc)
+		spread(tl, cand, nc, PRECISION_PX, use);
+	free(cand);
 	double t0 = c0_now();
 	const int r = c->srf;
 	const double fine = c->pixel_nm / r;
@@ -842,7 +872,7 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 	int fail = sums && item && m ? C0_OK : C0_ENOMEM;
 	for (int k = k0; k < k1 && !fail; k++) {
 		const struct c0_tile *t = &tl->t[k];
-		if (!odd[k - k0])
+		if (!odd[k - k0] || !use[k])
 			continue;
 		if (!(m[k - k0] = c0_alloc(2 * (size_t)t->ih * r * t->iw * r, 1)))
 			fail = C0_ENOMEM;
@@ -884,7 +914,7 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 	}
 	for (int k = 0; m && k < k1 - k0; k++)
 		free(m[k]);
-	free(m), free(item);
+	free(m), free(item), free(use);
 	if (fail && msg[0])
 		fail = c0_fail(fail, "%s", msg);
 	if (fail) {
@@ -943,7 +973,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	if (!odd || !sub)
 		st = C0_ENOMEM;
 	else if (halves)
-		noise_subset(&tl, sub);
+		st = noise_subset(&tl, sub);
 	if (!st && rows > 0) {
 		st = c0_cov_acc_new(W, rows, d, &acc);
 		if (!st)
@@ -1048,7 +1078,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		g.lam = res->lambda, g.lmax_only = 0;
 		/* the halves first, then their bands are freed before the tiles' solves */
 		if (c->frc)
-			st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, &g, res));
+			st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, sub, &g, res));
 		for (int k = 0; k < k1 - k0; k++)
 			c0_cov_acc_free(odd[k]), odd[k] = NULL;
 		if (!st)
