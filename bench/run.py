@@ -120,7 +120,7 @@ def matirf350(tmp):
         base = base or (t, r, d)
 
 
-def support_row(what, d, w, T, extra=(), env=None, base=None):
+def support_row(what, d, w, T, extra=(), env=None, base=None, vs="the baseline"):
     """one 'support' run on d/stack_q01.tif; returns its seconds"""
     o = os.path.join(d, "out_" + "_".join(what.split()))
     cmd = [CLI, "support", "--fwhm", "229", "--pixel-size", "100", "--force", "-o", o, *extra,
@@ -133,7 +133,7 @@ def support_row(what, d, w, T, extra=(), env=None, base=None):
         "%d tiles, %d its max, %s; cov %.0f fr/s; %d thr; %s" % (s["tiles"], s["iterations"],
                                                                 "converged" if s["converged"] else "cap",
                                                                 s["covariance_frames_per_s"], rep["threads"], l0),
-        mem, "%.2fx the baseline" % (base / dt) if base else "baseline" if base is None else "no baseline (one tile: ~12 GB)")
+        mem, "%.2fx %s" % (base / dt, vs) if base else "baseline" if base is None else "no baseline (one tile: ~12 GB)")
     return dt
 
 
@@ -145,7 +145,7 @@ def large(tmp):
         base = support_row("support, one tile (baseline)", d, w, T, ("--tile", str(w))) if with_base else 0
         tdef = support_row("support, tiles (default)", d, w, T, base=base)
         support_row("support, tiles, --support-solver pruned", d, w, T, ("--support-solver", "pruned", "--iterations", "8000"),
-                    base=tdef)
+                    base=tdef, vs="the fista tiles row")
         if w == 1024:
             # thread scaling and a busy neighbour (the passive wait policy vs spinning threads)
             t1 = support_row("support, tiles, 1 thread", d, w, T, ("--threads", "1"))
