@@ -196,7 +196,7 @@ int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
 	TIFF *t = w->tif;
 	const uint16_t bps = (uint16_t)(8 * c0_dtype_size(o->dtype));
 	uint32_t rps = 0;
-	if (!TIFFSetDirectory(t, (tdir_t)w->written) || !TIFFGetField(t, TIFFTAG_ROWSPERSTRIP, &rps) || !rps)
+	if (!(w->written == 0 || TIFFReadDirectory(t)) || !TIFFGetField(t, TIFFTAG_ROWSPERSTRIP, &rps) || !rps)
 		return write_error(w, errno);
 	convert_plane(o, plane, w->buf);
 	size_t row = (size_t)o->width * (bps / 8);
