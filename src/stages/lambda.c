@@ -61,6 +61,17 @@ static void choose(const struct c0_support_conf *c, double sig, double lmax, dou
 		out->chosen_rel = fmin(CEL0_GAMMA * t * t / (2 * nm * nm) / lmax0, 0.5);
 }
 
+void c0_lambda_max(const double *C, double norm, double s0, const double *n, size_t L, double lm[2])
+{
+	lm[0] = lm[1] = 0;
+	for (size_t i = 0; i < L; i++) {
+		const double g = C[i] / norm - s0 * n[i];
+		lm[0] = fmax(lm[0], g);
+		if (g > 0)
+			lm[1] = fmax(lm[1], g * g / (2 * n[i] * n[i]));
+	}
+}
+
 int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		   struct c0_lambda_result *out)
 {
@@ -91,14 +102,11 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	correlate(&op, b, norm, R, cb, &trb);
 	/* lambda_max of the mean of the halves, on both scales (as in support.c) */
 	const double s0 = fmax(0, 0.5 * (tra + trb) / (double)n);
-	double lmax = 0, lmax0 = 0;
-	for (size_t i = 0; i < L; i++) {
-		double g = 0.5 * (ca[i] + cb[i]) - s0 * op.n[i];
-		lmax = fmax(lmax, g);
-		if (g > 0)
-			lmax0 = fmax(lmax0, g * g / (2 * op.n[i] * op.n[i]));
-		d[i] = fabs(ca[i] - cb[i]) / 2;
-	}
+	for (size_t i = 0; i < L; i++)
+		d[i] = fabs(ca[i] - cb[i]) / 2, ca[i] = 0.5 * (ca[i] + cb[i]);
+	double lm[2];
+	c0_lambda_max(ca, 1, s0, op.n, L, lm);
+	const double lmax = lm[0], lmax0 = lm[1];
 	if (!(lmax > 0)) {
 		st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
 		goto out;
@@ -156,14 +164,7 @@ int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all
 	for (size_t i = 0; i < n; i++)
 		trR += all->r[i] / norm;
 	c0_covop_adjoint(&op, all, all->r, C);
-	const double s0 = fmax(0, trR / (double)n);
-	lmax[0] = lmax[1] = 0;
-	for (size_t i = 0; i < L; i++) {
-		const double g = C[i] / norm - s0 * op.n[i];
-		lmax[0] = fmax(lmax[0], g);
-		if (g > 0)
-			lmax[1] = fmax(lmax[1], g * g / (2 * op.n[i] * op.n[i]));
-	}
+	c0_lambda_max(C, norm, fmax(0, trR / (double)n), op.n, L, lmax);
 	free(C);
 	c0_covop_free(&op);
 	return C0_OK;

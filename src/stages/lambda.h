@@ -26,6 +26,11 @@ struct c0_lambda_result {
 	double seconds;
 };
 
+/* lambda_max on the l1 and the l0 scale (lm[0], lm[1]) of the gradient at
+ * x = 0, g = C / norm - s0 n (C = A^T R, n the column norms, s0 the noise
+ * variance at x = 0): the smallest lambda for which x = 0 is optimal. */
+void c0_lambda_max(const double *C, double norm, double s0, const double *n, size_t L, double lm[2]);
+
 struct c0_support_conf;
 /* Uses c's optics, lag and penalty. */
 int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,

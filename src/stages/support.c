@@ -326,7 +326,6 @@ static double gap(void *vctx, const double *x)
 struct scale {
 	double norm;     /* largest pixel variance of the image */
 	double lam;      /* absolute lambda (normalised units) */
-	int lmax_only;   /* stop after lambda_max (for the image's lambda_max) */
 };
 
 static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
@@ -388,17 +387,10 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	for (size_t i = 0; i < L; i++)
 		C[i] /= mx;
 	/* lambda_max: the smallest lambda for which x = 0 (with s = tr R / HW) is optimal */
-	double s0 = fmax(0, ctx.trR / ctx.HW), lmax = 0;
-	for (size_t i = 0; i < L; i++) {
-		double gi = C[i] - s0 * op.n[i];
-		if (c->penalty == C0_PENALTY_L1)
-			lmax = fmax(lmax, gi);
-		else if (gi > 0)
-			lmax = fmax(lmax, gi * gi / (2 * op.n[i] * op.n[i]));
-	}
+	double lm[2];
+	c0_lambda_max(C, 1, fmax(0, ctx.trR / ctx.HW), op.n, L, lm);
+	const double lmax = lm[c->penalty != C0_PENALTY_L1];
 	res->lambda_max = lmax;
-	if (g && g->lmax_only)
-		goto out;
 	res->lambda = mask ? 0 : g ? g->lam : lambda_rel(c) * lmax;
 	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
 	ctx.lam = res->lambda;
@@ -683,7 +675,7 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 }
 
 /* One tile: its window's covariance from the accumulator (rows from ya),
- * solved with the image's scale; with lmax_only just its lambda_max. */
+ * solved with the image's scale. */
 static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tile *t,
 		      const struct scale *g, struct c0_support_result *tr)
 {
@@ -692,7 +684,7 @@ static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, i
 	int st = c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &cov);
 	if (!st)
 		st = solve(c, &cov, NULL, NULL, g, tr);
-	if (!st && !g->lmax_only)
+	if (!st)
 		tr->mean = cov.mean, cov.mean = NULL;
 	c0_cov_free(&cov);
 	return st;
@@ -702,23 +694,20 @@ static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, i
  * solvers' own loops then run serially, so a tile's numbers do not depend
  * on how many threads or processes share the work). */
 static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-		     int k0, int k1, const struct scale *g, struct c0_support_result *res, double *lmax, double *tile_s2,
-		     double *tile_stats)
+		     int k0, int k1, const struct scale *g, struct c0_support_result *res, double *tile_s2, double *tile_stats)
 {
 	const int r = c->srf, Lx = tl->t[tl->n - 1].x0 + tl->t[tl->n - 1].w;
 	int fail = C0_OK;
 	char msg[512] = "";
 	struct c0_progress pr;
 	int done = 0;
-	c0_progress_begin(&pr, g->lmax_only ? "support (lambda_max)" : "support (tiles)", k1 - k0);
+	c0_progress_begin(&pr, "support (tiles)", k1 - k0);
 #pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
 	for (int k = k0; k < k1; k++) {
 		const struct c0_tile *t = &tl->t[k];
 		struct c0_support_result tr;
 		int st = tile_solve(c, acc, ya, t, g, &tr);
-		if (!st && g->lmax_only)
-			lmax[k] = tr.lambda_max;
-		if (!st && !g->lmax_only) {
+		if (!st) {
 			/* keep the interior: fine rows and columns inside the window */
 			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
 			for (int y = 0; y < t->ih * r; y++) {
@@ -784,9 +773,9 @@ static int noise_subset(const struct c0_tiling *tl, uint8_t *in)
 	return C0_OK;
 }
 
-/* Every tile's lambda_max on both scales (lm: 2 per tile); the subset's
- * halves (the even frames from all and the odd ones) add the noise of the
- * correlation image to hist (stages/lambda.h). */
+/* Every tile's lambda_max on both scales (lm: 2 per tile); with hist, the
+ * subset's halves (the even frames from all and the odd ones) add the noise
+ * of the correlation image to it (stages/lambda.h). */
 static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
 			   int k0, int k1, struct c0_cov_acc **odd, double norm, double *lm, double *hist)
 {
@@ -799,7 +788,7 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 	for (int k = k0; k < k1; k++) {
 		const struct c0_tile *t = &tl->t[k];
 		struct c0_cov all, ev, od;
-		struct c0_cov_acc *o = odd[k - k0];
+		struct c0_cov_acc *o = hist ? odd[k - k0] : NULL;
 		double *h = o ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *h) : NULL;
 		int st = o && !h ? C0_ENOMEM : c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &all);
 		if (!st) {
@@ -1028,8 +1017,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		for (int x = 0; x < W; x++)
 			norm = fmax(norm, c0_cov_acc_variance(acc, y - ya, x));
 	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
-	double *lmax = c0_alloc(nt, sizeof *lmax), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
-	double *lm = automatic ? c0_alloc(2 * nt, sizeof *lm) : NULL;
+	double *lm = c0_alloc(2 * nt, sizeof *lm), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
 	double *hist = automatic ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *hist) : NULL;
 	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
@@ -1037,7 +1025,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	res->rx = c0_alloc(L, sizeof *res->rx);
 	res->mean = c0_alloc((size_t)W * H, sizeof *res->mean);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!st && (!lmax || !s2 || !stats || (automatic && (!lm || !hist)) || !res->mask || !res->rx || !res->mean || !res->hist))
+	if (!st && (!lm || !s2 || !stats || (automatic && !hist) || !res->mask || !res->rx || !res->mean || !res->hist))
 		st = C0_ENOMEM;
 	if (!(st = c0_comm_status(st))) {
 		c0_comm_max(&norm, 1);
@@ -1045,44 +1033,38 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	}
 	/* lambda relative to the image's lambda_max: the largest of the tiles';
 	 * automatic: chosen from the noise of the subset's correlation images */
-	struct scale g = { norm, 0, 1 };
-	double rel = lambda_rel(c);
-	if (!st && automatic) {
-		double tn = c0_now();
+	struct scale g = { norm, 0 };
+	double rel = lambda_rel(c), tn = c0_now(), l1 = 0, l0 = 0;
+	if (!st)
 		st = c0_comm_status(each_tile_noise(c, acc, ya, &tl, k0, k1, odd, norm, lm, hist));
-		if (!st) {
-			c0_comm_max(lm, 2 * tl.n);
-			c0_comm_sum(hist, 2 * C0_LAMBDA_BINS);
-			double l1 = 0, l0 = 0;
-			for (int k = 0; k < tl.n; k++)
-				l1 = fmax(l1, lm[2 * k]), l0 = fmax(l0, lm[2 * k + 1]), lmax[k] = lm[2 * k + (c->penalty != C0_PENALTY_L1)];
-			if (!(l1 > 0))
-				st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
-			else
-				c0_lambda_tiles_choose(c, hist, l1, l0, &res->cv), rel = res->cv.chosen_rel, res->lambda_auto = 1;
-			for (int k = 0; k < tl.n; k++)
-				res->cv.noise_tiles += sub[k];
-		}
+	if (!st) {
+		c0_comm_max(lm, 2 * tl.n);
+		for (int k = 0; k < tl.n; k++)
+			l1 = fmax(l1, lm[2 * k]), l0 = fmax(l0, lm[2 * k + 1]);
+		res->lambda_max = c->penalty == C0_PENALTY_L1 ? l1 : l0;
+	}
+	if (!st && automatic) {
+		c0_comm_sum(hist, 2 * C0_LAMBDA_BINS);
+		if (!(l1 > 0))
+			st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
+		else
+			c0_lambda_tiles_choose(c, hist, l1, l0, &res->cv), rel = res->cv.chosen_rel, res->lambda_auto = 1;
+		for (int k = 0; k < tl.n; k++)
+			res->cv.noise_tiles += sub[k];
 		res->cv.seconds = c0_now() - tn;
-	} else if (!st) {
-		st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
-		if (!st)
-			c0_comm_max(lmax, tl.n);
 	}
 	free(lm), free(hist);
 	if (!st) {
-		for (int k = 0; k < tl.n; k++)
-			res->lambda_max = fmax(res->lambda_max, lmax[k]);
 		res->lambda = rel * res->lambda_max;
 		res->norm = norm;
-		g.lam = res->lambda, g.lmax_only = 0;
+		g.lam = res->lambda;
 		/* the halves first, then their bands are freed before the tiles' solves */
 		if (c->frc)
 			st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, sub, &g, res));
 		for (int k = 0; k < k1 - k0; k++)
 			c0_cov_acc_free(odd[k]), odd[k] = NULL;
 		if (!st)
-			st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, lmax, s2, stats));
+			st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, s2, stats));
 	}
 	c0_cov_acc_free(acc);
 	for (int k = 0; odd && k < k1 - k0; k++)
@@ -1119,7 +1101,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		if (!c->frc)
 			res->precision_nm = -1;
 	}
-	free(lmax), free(s2), free(stats);
+	free(s2), free(stats);
 	c0_tiling_free(&tl);
 	res->t_solve = c0_now() - t1;
 	if (st)
