@@ -1009,8 +1009,12 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	}
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
+	/* the tiles below only read them, some from two threads (the halves) */
 	if (!st && acc)
-		c0_cov_acc_seal(acc);   /* the tiles below only read it */
+		c0_cov_acc_seal(acc);
+	for (int k = 0; !st && k < k1 - k0; k++)
+		if (odd[k])
+			c0_cov_acc_seal(odd[k]);
 	/* the image's normalisation: its largest pixel variance */
 	double norm = 0;
 	for (int y = ia; !st && y < ib; y++)
