@@ -13,9 +13,11 @@
 #include "io/outdir.h"
 #include "io/tiff.h"
 #include "core/band.h"
+#include "solve/fista.h"
 #include "core/rng.h"
 #include "core/err.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -353,6 +355,53 @@ static void test_wrong_inputs(void)
 }
 
 /* Gaussian read noise only (no Poisson): the estimated noise variance is the read noise's */
+/* The obvious form of the noise fit on a given support: FISTA on the whole
+ * grid with the gradient zeroed off the mask, f as in DESIGN (s in closed
+ * form). */
+struct mctx { struct c0_covop *op; const double *C; const uint8_t *m; double R2, trR, HW, *Ax; };
+
+static double masked_f(void *v, const double *x, double *g)
+{
+	struct mctx *c = v;
+	const size_t L = (size_t)c->op->Ly * c->op->Lx;
+	c0_covop_normal(c->op, x, c->Ax);
+	double xc = 0, xax = 0, xn = 0;
+	for (size_t i = 0; i < L; i++)
+		xc += x[i] * c->C[i], xax += x[i] * c->Ax[i], xn += x[i] * c->op->n[i];
+	const double s = fmax(0, (c->trR - xn) / c->HW);
+	for (size_t i = 0; i < L; i++)
+		g[i] = c->m[i] ? c->Ax[i] + s * c->op->n[i] - c->C[i] : 0;
+	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
+}
+
+static double masked_sigma2(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *m)
+{
+	const size_t n = (size_t)cov->W * cov->H, L = n * c->srf * c->srf;
+	struct c0_covop op;
+	CHECK(c0_covop_init(&op, cov->H, cov->W, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), cov->d) == C0_OK);
+	double mx = 0, *C = calloc(L, sizeof *C), *x = calloc(L, sizeof *x), *Ax = calloc(L, sizeof *Ax);
+	for (size_t i = 0; i < n; i++)
+		mx = fmax(mx, cov->r[i]);
+	struct mctx ctx = { &op, C, m, 0, 0, (double)n, Ax };
+	for (int l = 0; l < cov->nlag; l++)
+		for (size_t i = 0; i < n; i++) {
+			const double v = cov->r[(size_t)l * n + i] / mx;
+			ctx.R2 += c0_cov_weight(cov, l) * v * v;
+			ctx.trR += l == 0 ? v : 0;
+		}
+	c0_covop_adjoint(&op, cov, cov->r, C);
+	for (size_t i = 0; i < L; i++)
+		C[i] /= mx;
+	struct c0_fista_info info = { 0 };
+	CHECK(c0_fista_nn(masked_f, &ctx, L, op.lip, NULL, 0, x, &c->fista, &info) == C0_OK);
+	double xn = 0;
+	for (size_t i = 0; i < L; i++)
+		xn += x[i] * op.n[i];
+	free(C), free(x), free(Ax);
+	c0_covop_free(&op);
+	return fmax(0, (ctx.trR - xn) / ctx.HW) * mx;
+}
+
 static void test_noise_variance(void)
 {
 	struct c0_sim_conf s;
@@ -385,6 +434,15 @@ static void test_noise_variance(void)
 	CHECK(c0_support_solve(&c, &cov, &res) == C0_OK);
 	CHECK_MSG(fabs(res.sigma2 - sd * sd) <= 0.1 * sd * sd, "sigma2 %g vs %g", res.sigma2, sd * sd);
 	CHECK(res.support_pixels > 0);
+	/* on that support: the working-set fit against the whole-grid one */
+	struct c0_support_result nr;
+	memset(&nr, 0, sizeof nr);
+	c.fista.maxit = 100;
+	CHECK(c0_support_noise_solve(&c, &cov, res.mask, &nr) == C0_OK);
+	const double s2 = masked_sigma2(&c, &cov, res.mask);
+	CHECK_MSG(fabs(nr.sigma2 / s2 - 1) < 1e-9 && fabs(nr.sigma2 - sd * sd) <= 0.1 * sd * sd,
+		  "masked sigma2 %.12g, whole grid %.12g", nr.sigma2, s2);
+	c0_support_result_free(&nr);
 	c0_support_result_free(&res);
 	c0_cov_free(&cov);
 	c0_sim_scene_free(sc);

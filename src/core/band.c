@@ -1,4 +1,5 @@
 #include "core/band.h"
+#include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -6,14 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The banded products are the inner loops of every solver: build them for
- * AVX2+FMA as well and pick at load time (the results differ from the
- * baseline build only by FMA rounding). */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_ADDRESS__)
-#define C0_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define C0_HOT
-#endif
 
 int c0_band_alloc(struct c0_band *b, int m, int n, int w)
 {

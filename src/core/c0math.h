@@ -1,3 +1,13 @@
 #pragma once
 #define C0_PI 3.14159265358979323846
 #define C0_FWHM_TO_SIGMA 0.42466090014400953   /* 1 / (2 sqrt(2 ln 2)) */
+
+/* Inner loops of the solvers are also built for AVX2+FMA and picked at load
+ * time (results differ from the baseline build only by FMA rounding). An
+ * OpenMP loop body is outlined without the attribute: put the work in a
+ * C0_HOT function that the loop calls. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_ADDRESS__)
+#define C0_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define C0_HOT
+#endif

@@ -1,5 +1,6 @@
 #include "ops/psi_omega.h"
 #include "optics/psf.h"
+#include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -93,40 +94,45 @@ static int first_from_row(const struct c0_psi_omega *p, int row)
 	return lo;
 }
 
+/* support pixels k0..k1 scattered into y */
+C0_HOT static void scatter(const struct c0_psi_omega *p, int k0, int k1, const double *x, double *y)
+{
+	const int wy = p->GyT.w, wx = p->GxT.w;
+	for (int k = k0; k < k1; k++) {
+		if (x[k] == 0)
+			continue;
+		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
+		const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
+		const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
+		for (int i = 0; i < wy; i++) {
+			double c = x[k] * gy[i];
+			double *row = y + (size_t)(i0 + i) * p->Nx + j0;
+			for (int j = 0; j < wx; j++)
+				row[j] += c * gx[j];
+		}
+	}
+}
+
 /* A scatter: support pixels are cut into bands by the first coarse row they
  * touch. Bands at least as tall as a footprint, taken every other one, never
  * write the same row, so the even bands run in parallel, then the odd ones. */
 void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double *y)
 {
-	const int wy = p->GyT.w, wx = p->GxT.w;
+	const int wy = p->GyT.w;
 	const int B = wy > 8 ? wy : 8, nband = (p->Ny + B - 1) / B;
 	memset(y, 0, sizeof *y * (size_t)p->Ny * p->Nx);
 	for (int parity = 0; parity < 2; parity++) {
 #pragma omp parallel for schedule(dynamic, 1) if (p->n > 4096)
-		for (int band = parity; band < nband; band += 2) {
-			const int k1 = first_from_row(p, (band + 1) * B);
-			for (int k = first_from_row(p, band * B); k < k1; k++) {
-				if (x[k] == 0)
-					continue;
-				const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
-				const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
-				const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
-				for (int i = 0; i < wy; i++) {
-					double c = x[k] * gy[i];
-					double *row = y + (size_t)(i0 + i) * p->Nx + j0;
-					for (int j = 0; j < wx; j++)
-						row[j] += c * gx[j];
-				}
-			}
-		}
+		for (int band = parity; band < nband; band += 2)
+			scatter(p, first_from_row(p, band * B), first_from_row(p, (band + 1) * B), x, y);
 	}
 }
 
-void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x)
+/* y gathered at support pixels k0..k1 */
+C0_HOT static void gather(const struct c0_psi_omega *p, int k0, int k1, const double *y, double *x)
 {
 	const int wy = p->GyT.w, wx = p->GxT.w;
-#pragma omp parallel for schedule(static) if (p->n > 4096)
-	for (int k = 0; k < p->n; k++) {
+	for (int k = k0; k < k1; k++) {
 		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
 		const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
 		const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
@@ -140,6 +146,15 @@ void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double 
 		}
 		x[k] = s;
 	}
+}
+
+void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x)
+{
+	enum { CHUNK = 1024 };
+	const int nc = (p->n + CHUNK - 1) / CHUNK;
+#pragma omp parallel for schedule(static) if (p->n > 4096)
+	for (int c = 0; c < nc; c++)
+		gather(p, c * CHUNK, c * CHUNK + CHUNK < p->n ? c * CHUNK + CHUNK : p->n, y, x);
 }
 
 void c0_grad_omega(const struct c0_psi_omega *p, const double *x, double *g)

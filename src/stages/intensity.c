@@ -165,7 +165,7 @@ static double residual2(struct prob *p, const double *sol)
  * the floor is large, and it would try mu after mu */
 #define DP_LOGMU_TOL 0.01
 
-struct dp { struct prob *p; double *sol, target, tprev, tmin, lo, hi; int fail; };
+struct dp { struct prob *p; double *sol, target, tprev, tmin, lo, hi; int fail; const double *floor; };
 
 static double discrepancy(void *ctx, double t)
 {
@@ -174,11 +174,16 @@ static double discrepancy(void *ctx, double t)
 	/* Warm start from the last mu only when it is far (a factor e or more):
 	 * from a near one the start may already meet the CG tolerance and not
 	 * move, and the residual would step instead of rising with mu. */
-	if (!(fabs(t - d->tprev) >= 1) || t <= d->tmin)   /* at the smallest mu: as the floor was solved */
-		memset(d->sol, 0, sizeof *d->sol * (size_t)(d->p->n + d->p->nb));
+	const size_t nv = (size_t)(d->p->n + d->p->nb);
+	if (t <= d->tmin && d->floor)   /* the smallest mu: the floor's solve */
+		memcpy(d->sol, d->floor, sizeof *d->sol * nv);
+	else {
+		if (!(fabs(t - d->tprev) >= 1) || t <= d->tmin)
+			memset(d->sol, 0, sizeof *d->sol * nv);
+		if (solve(d->p, d->sol))
+			d->fail = 1;
+	}
 	d->tprev = t;
-	if (solve(d->p, d->sol))
-		d->fail = 1;
 	const double f = residual2(d->p, d->sol) - d->target;
 	if (f < 0)
 		d->lo = fmax(d->lo, t);
@@ -352,7 +357,7 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 	p.nb = c->background == C0_BG_SMOOTH ? p.NN : c->background == C0_BG_CONSTANT ? 1 : 0;
 	p.bscale = 1 / sqrt((double)p.NN);
 	size_t nv = (size_t)p.n + p.nb;
-	double *sol = c0_alloc(nv, sizeof *sol);
+	double *sol = c0_alloc(nv, sizeof *sol), *fsol = NULL;
 	p.fixed = c0_alloc(nv, 1);
 	p.dinv = c0_alloc(nv, sizeof *p.dinv);
 	p.psi2 = c0_alloc((size_t)p.n, sizeof *p.psi2);
@@ -385,13 +390,14 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 		res->floor2 = 0;
 		if (c->relative) {
 			p.mu = C0_INTENSITY_MU_MIN;
-			if (!(st = solve(&p, sol)))
-				res->floor2 = residual2(&p, sol);
-			memset(sol, 0, sizeof *sol * nv);
+			if (!(fsol = c0_alloc(nv, sizeof *fsol)))
+				st = C0_ENOMEM;
+			if (!st && !(st = solve(&p, fsol)))
+				res->floor2 = residual2(&p, fsol);
 			if (st)
 				goto out;
 		}
-		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0 };
+		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0, fsol };
 		double t;
 		int evals;
 		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
@@ -412,7 +418,7 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 	res->solves = p.solves, res->cg_iters = p.cg_iters, res->active_rounds = p.rounds;
 	res->tiles = 1, res->tiles_met = res->dp_status <= 0;
 out:
-	free(sol), free(p.fixed), free(p.dinv), free(p.psi2), free(p.deg), free(p.y), free(p.g), free(p.v), free(p.rhs);
+	free(sol), free(fsol), free(p.fixed), free(p.dinv), free(p.psi2), free(p.deg), free(p.y), free(p.g), free(p.v), free(p.rhs);
 	c0_psi_omega_free(&p.P);
 	return st;
 }

@@ -69,7 +69,6 @@ struct ctx {
 	const double *C;
 	double trR, R2, HW;
 	double *Ax;
-	const uint8_t *mask;     /* if set, x is free only here */
 	double lam;
 };
 
@@ -87,7 +86,7 @@ static double smooth(void *vctx, const double *x, double *g)
 	double s = fmax(0, (c->trR - xn) / c->HW);
 #pragma omp parallel for if (L > 100000)
 	for (size_t i = 0; i < L; i++)
-		g[i] = c->mask && !c->mask[i] ? 0 : c->Ax[i] + s * op->n[i] - c->C[i];
+		g[i] = c->Ax[i] + s * op->n[i] - c->C[i];
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
 
@@ -119,6 +118,19 @@ static void ws_index(struct wctx *w)
 		}
 	}
 	w->rs[Ly] = j, w->run[j] = k;
+}
+
+static int ws_alloc(struct wctx *w, struct ctx *c)
+{
+	const size_t Ly = (size_t)c->op->Ly, L = Ly * c->op->Lx;
+	*w = (struct wctx){ c, NULL, 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
+			    c0_alloc(L, sizeof(int)), c0_alloc(L, sizeof(double)), c0_alloc(Ly, 1) };
+	return w->rs && w->run && w->col && w->T && w->row ? C0_OK : C0_ENOMEM;
+}
+
+static void ws_free(struct wctx *w)
+{
+	free(w->rs), free(w->run), free(w->col), free(w->T), free(w->row);
 }
 
 /* out = A^T A v on the working set. Row by row (each output and each row of
@@ -216,13 +228,12 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 		free(xp), free(pw);
 		return st;
 	}
-	struct wctx w = { ctx, NULL, 0, c0_alloc((size_t)op->Ly + 1, sizeof(size_t)),
-			  c0_alloc(L + 1, sizeof(size_t)), c0_alloc(L, sizeof(int)),
-			  c0_alloc(L, sizeof(double)), c0_alloc((size_t)op->Ly, 1) };
+	struct wctx w;
+	st = ws_alloc(&w, ctx);
 	size_t *ws = c0_alloc(L, sizeof *ws);
 	double *xw = c0_alloc(L, sizeof *xw), *one = c0_alloc(L, sizeof *one), *g = ctx->Ax;
 	uint8_t *in = c0_alloc(L, 1);
-	if (!w.rs || !w.run || !w.col || !w.T || !w.row || !ws || !xw || !one || !in) {
+	if (st || !ws || !xw || !one || !in) {
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -290,8 +301,35 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 	info->iters = used, info->converged = part.converged, info->obj = part.obj;
 	info->restarts += part.restarts;
 out:
-	free(w.rs), free(w.run), free(w.col), free(w.T), free(w.row), free(ws), free(xw), free(one), free(in);
+	ws_free(&w);
+	free(ws), free(xw), free(one), free(in);
 	free(xp), free(pw);
+	return st;
+}
+
+/* lambda = 0 with x free only on the mask (the noise variance on a given
+ * support): FISTA on the mask's pixels alone, the whole grid's step */
+static int solve_masked(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, const uint8_t *mask, double *x,
+			struct c0_fista_info *info)
+{
+	const size_t L = (size_t)ctx->op->Ly * ctx->op->Lx;
+	struct wctx w;
+	int st = ws_alloc(&w, ctx);
+	size_t *ws = c0_alloc(L, sizeof *ws);
+	double *xw = c0_alloc(L, sizeof *xw);
+	if (!st && ws && xw) {
+		w.ws = ws;
+		for (size_t i = 0; i < L; i++)
+			if (mask[i])
+				xw[w.nws] = x[i], ws[w.nws++] = i;
+		ws_index(&w);
+		st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, 0, xw, fc, info);
+		for (size_t k = 0; !st && k < w.nws; k++)
+			x[ws[k]] = xw[k];
+	} else if (!st)
+		st = C0_ENOMEM;
+	ws_free(&w);
+	free(ws), free(xw);
 	return st;
 }
 
@@ -336,6 +374,14 @@ int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, 
 	return solve(c, cov, NULL, NULL, NULL, res);
 }
 
+int c0_support_noise_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
+			   struct c0_support_result *res)
+{
+	struct c0_support_conf cc = *c;
+	cc.penalty = C0_PENALTY_L1;
+	return solve(&cc, cov, mask, NULL, NULL, res);
+}
+
 /* x0 (or NULL): a start in camera units (rx of another solve) */
 static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
 		 const struct scale *g, struct c0_support_result *res)
@@ -372,7 +418,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	res->norm = mx;
 	for (size_t i = 0; x0 && i < L; i++)
 		x[i] = x0[i] / mx;
-	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, mask, 0 };
+	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, 0 };
 	for (int l = 0; l < cov->nlag; l++) {
 		double w = c0_cov_weight(cov, l);
 		for (size_t i = 0; i < n; i++) {
@@ -396,7 +442,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	ctx.lam = res->lambda;
 	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
 		if (mask)
-			st = c0_fista_nn(smooth, &ctx, L, op.lip, NULL, res->lambda, x, &c->fista, &info);
+			st = solve_masked(&ctx, &c->fista, op.lip, mask, x, &info);
 		else if (c->penalty == C0_PENALTY_L1)
 			st = solve_l1(&ctx, &c->fista, op.lip, c->solver == C0_SUPPORT_PRUNED, x, &info);
 		else
@@ -544,7 +590,6 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 	if (!st && (!s2 || !*mean))
 		st = C0_ENOMEM;
 	struct c0_support_conf cc = *c;
-	cc.penalty = C0_PENALTY_L1;
 	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
 	int fail = st;
 	char msg[512] = "";
@@ -560,7 +605,7 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 		for (int a = 0; !ts && a < t->h * r; a++)
 			memcpy(m + a * Lw, mask + (size_t)(t->y0 * r + a) * W * r + (size_t)t->x0 * r, Lw);
 		if (!ts)
-			ts = solve(&cc, &cov, m, NULL, NULL, &tr);
+			ts = c0_support_noise_solve(&cc, &cov, m, &tr);
 		if (!ts) {
 			s2[k] = tr.sigma2;
 			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;

@@ -97,3 +97,7 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double *
  * Also the temporal mean (allocated). */
 int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *f, const uint8_t *mask, double **mean,
 		   int64_t *frames, double *sigma2, double *seconds);
+/* One window's part of it: the fit on the mask (L = H r x W r fine pixels),
+ * res->sigma2 its noise variance (c->fista.maxit iterations, l1 scale). */
+int c0_support_noise_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
+			   struct c0_support_result *res);
