@@ -7,6 +7,9 @@
 #include "core/comm.h"
 #include "c0_version.h"
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -36,6 +39,17 @@ static void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
+#ifdef __GLIBC__
+	/* The tiles' covariance windows and solver arrays (tens of MB each,
+	 * freed and allocated again tile after tile) were each a fresh mmap
+	 * faulted in page by page. One heap that keeps up to 64 MB of free
+	 * memory reuses them: 1024x1024x500 support with a fixed lambda and one
+	 * iteration, 1.10M -> 0.51M page faults, 29.9 -> 24.5 s, peak RSS
+	 * 817 -> 837 MB. */
+	mallopt(M_ARENA_MAX, 1);
+	mallopt(M_MMAP_THRESHOLD, 256 << 20);
+	mallopt(M_TRIM_THRESHOLD, 64 << 20);
+#endif
 	c0_threads_startup(argv);
 	if (argc < 2) {
 		usage(stderr);

@@ -8,10 +8,17 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* fftw_plan_* are not thread-safe; fftw_execute_* on new arrays are */
+/* fftw_plan_* are not thread-safe; fftw_execute_* on new arrays are. The
+ * work buffers (tens of MB for a camera frame) are kept for the next call:
+ * allocated afresh per frame they cost a page fault per page, which took as
+ * long as the transforms. */
+enum { POOL = 16 };
+struct work { double *re; fftw_complex *sp, *w; };
 struct c0_fshift {
 	int H, W;
 	fftw_plan rf, rb, cf, cb;     /* H rows of 2W; W columns of 2H */
+	struct work pool[POOL];
+	int npool;
 };
 
 static int plans(int n, int howmany, fftw_plan *f, fftw_plan *b)
@@ -27,10 +34,17 @@ static int plans(int n, int howmany, fftw_plan *f, fftw_plan *b)
 	return *f && *b ? C0_OK : c0_fail(C0_ENOMEM, "drift: cannot plan the FFTs of %d x %d", howmany, N);
 }
 
+static void work_free(struct work *w)
+{
+	fftw_free(w->re), fftw_free(w->sp), fftw_free(w->w);
+}
+
 void c0_fshift_free(struct c0_fshift *s)
 {
 	if (!s)
 		return;
+	for (int i = 0; i < s->npool; i++)
+		work_free(&s->pool[i]);
 	if (s->rf) fftw_destroy_plan(s->rf);
 	if (s->rb) fftw_destroy_plan(s->rb);
 	if (s->cf) fftw_destroy_plan(s->cf);
@@ -61,44 +75,68 @@ int c0_fshift_new(int H, int W, struct c0_fshift **out)
 }
 
 /* howmany lines of n samples (line k at v + k * lstride, sample stride
- * sstride) shifted by d samples */
-static void shift_lines(fftw_plan f, fftw_plan b, double *re, fftw_complex *sp, float *v, int n, int howmany,
+ * sstride) shifted by d samples; w: n + 1 phase factors */
+static void shift_lines(fftw_plan f, fftw_plan b, const struct work *wk, float *v, int n, int howmany,
 			long lstride, long sstride, double d)
 {
+	enum { KB = 16 };   /* lines at a time: columns read a cache line of each row */
 	const int N = 2 * n;
-	for (int k = 0; k < howmany; k++)
-		for (int i = 0; i < n; i++) {
-			double x = v[k * lstride + i * sstride];
-			re[(long)k * N + i] = x, re[(long)k * N + N - 1 - i] = x;
-		}
+	double *re = wk->re;
+	fftw_complex *sp = wk->sp, *w = wk->w;
+	for (int k0 = 0; k0 < howmany; k0 += KB) {
+		const int k1 = k0 + KB < howmany ? k0 + KB : howmany;
+		for (int i = 0; i < n; i++)
+			for (int k = k0; k < k1; k++) {
+				double x = v[k * lstride + i * sstride];
+				re[(long)k * N + i] = x, re[(long)k * N + N - 1 - i] = x;
+			}
+	}
 	fftw_execute_dft_r2c(f, re, sp);
-	for (int j = 0; j <= n; j++) {
-		/* sample at i + d: multiply bin j by exp(+2 pi i j d / N); the
-		 * Nyquist bin of a real signal keeps only its real part */
-		double complex w = j == n ? cos(C0_PI * d) : cexp(2 * C0_PI * I * j * d / N);
-		w /= N;
-		for (int k = 0; k < howmany; k++)
-			sp[(long)k * (n + 1) + j] *= w;
+	/* sample at i + d: multiply bin j by exp(+2 pi i j d / N); the Nyquist
+	 * bin of a real signal keeps only its real part */
+	for (int j = 0; j <= n; j++)
+		w[j] = (j == n ? cos(C0_PI * d) : cexp(2 * C0_PI * I * j * d / N)) / N;
+	for (int k = 0; k < howmany; k++) {
+		fftw_complex *line = sp + (long)k * (n + 1);
+		for (int j = 0; j <= n; j++)
+			line[j] *= w[j];
 	}
 	fftw_execute_dft_c2r(b, sp, re);
-	for (int k = 0; k < howmany; k++)
+	for (int k0 = 0; k0 < howmany; k0 += KB) {
+		const int k1 = k0 + KB < howmany ? k0 + KB : howmany;
 		for (int i = 0; i < n; i++)
-			v[k * lstride + i * sstride] = (float)re[(long)k * N + i];
+			for (int k = k0; k < k1; k++)
+				v[k * lstride + i * sstride] = (float)re[(long)k * N + i];
+	}
 }
 
-int c0_fshift_apply(const struct c0_fshift *s, float *img, double dx, double dy)
+int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy)
 {
 	const int H = s->H, W = s->W, m = H > W ? H : W;
-	double *re = fftw_malloc(sizeof(double) * 2 * (size_t)m * m);
-	fftw_complex *sp = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1) * m);
-	if (!re || !sp) {
-		fftw_free(re), fftw_free(sp);
-		return c0_fail(C0_ENOMEM, "drift: out of memory for a %dx%d frame", W, H);
+	if (dx == 0 && dy == 0)
+		return C0_OK;
+	struct work wk = { 0 };
+#pragma omp critical(c0_fshift_pool)
+	if (s->npool > 0)
+		wk = s->pool[--s->npool];
+	if (!wk.re) {
+		wk.re = fftw_malloc(sizeof(double) * 2 * (size_t)m * m);
+		wk.sp = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1) * m);
+		wk.w = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1));
+		if (!wk.re || !wk.sp || !wk.w) {
+			work_free(&wk);
+			return c0_fail(C0_ENOMEM, "drift: out of memory for a %dx%d frame", W, H);
+		}
 	}
 	if (dx != 0)
-		shift_lines(s->rf, s->rb, re, sp, img, W, H, W, 1, dx);
+		shift_lines(s->rf, s->rb, &wk, img, W, H, W, 1, dx);
 	if (dy != 0)
-		shift_lines(s->cf, s->cb, re, sp, img, H, W, 1, W, dy);
-	fftw_free(re), fftw_free(sp);
+		shift_lines(s->cf, s->cb, &wk, img, H, W, 1, W, dy);
+	int kept = 0;
+#pragma omp critical(c0_fshift_pool)
+	if (s->npool < POOL)
+		s->pool[s->npool++] = wk, kept = 1;
+	if (!kept)
+		work_free(&wk);
 	return C0_OK;
 }

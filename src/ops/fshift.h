@@ -11,5 +11,6 @@ struct c0_fshift;
 int c0_fshift_new(int H, int W, struct c0_fshift **out);
 void c0_fshift_free(struct c0_fshift *s);
 /* img (H x W) <- img sampled at (x + dx, y + dy): content moves by (-dx, -dy).
- * Thread-safe for one c0_fshift (buffers are per call). */
-int c0_fshift_apply(const struct c0_fshift *s, float *img, double dx, double dy);
+ * Thread-safe for one c0_fshift: each call takes its own work buffers from
+ * the object's pool (and returns them). */
+int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy);
