@@ -87,6 +87,34 @@ static void test_cov_even(void)
 	c0_cov_acc_free(all), c0_cov_acc_free(even), c0_cov_acc_free(odd);
 }
 
+/* rows given back (tiles done) leave the windows below them as they were;
+ * a window reaching into them is refused */
+static void test_cov_drop(void)
+{
+	enum { W = 2048, H = 24, T = 12, Y0 = 10, h = 8 };   /* a row is two pages: whole pages go */
+	struct c0_cov_acc *a;
+	CHECK(c0_cov_acc_new(W, H, 2, &a) == C0_OK);
+	float *f = malloc(sizeof *f * W * H);
+	struct c0_rng own;   /* the other tests' draws stay as they were */
+	c0_rng_init(&own, 11, 0);
+	for (int t = 0; t < T; t++) {
+		for (int i = 0; i < W * H; i++)
+			f[i] = (float)(100 + 10 * c0_rng_normal(&own));
+		c0_cov_acc_add(a, f);
+	}
+	c0_cov_acc_seal(a);
+	struct c0_cov before, after;
+	CHECK(c0_cov_acc_window(a, Y0, 0, h, W, &before) == C0_OK);
+	c0_cov_acc_drop_rows(a, Y0);
+	CHECK(c0_cov_acc_window(a, Y0, 0, h, W, &after) == C0_OK);
+	CHECK(!memcmp(before.r, after.r, sizeof(double) * before.nlag * W * h) &&
+	      !memcmp(before.mean, after.mean, sizeof(double) * W * h));
+	CHECK(c0_cov_acc_window(a, Y0 - 1, 0, h, W, &after) == C0_EINVAL && strstr(c0_errmsg(), "dropped"));
+	c0_cov_free(&before), c0_cov_free(&after);
+	c0_cov_acc_free(a);
+	free(f);
+}
+
 static void test_fshift(void)
 {
 	enum { S = 40 };
@@ -351,6 +379,7 @@ int main(void)
 	quick = getenv("C0_QUICK") != NULL;
 	RUN(test_cov_pool);
 	RUN(test_cov_even);
+	RUN(test_cov_drop);
 	RUN(test_fshift);
 	RUN(test_frc);
 	RUN(test_sim_drift);

@@ -3,6 +3,9 @@
 
 #include <stdint.h>
 #include <stdlib.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 void *c0_alloc(size_t n, size_t size)
 {
@@ -19,4 +22,11 @@ void *c0_alloc(size_t n, size_t size)
 void c0_free(void *p)
 {
 	free(p);
+}
+
+void c0_mem_release(void)
+{
+#ifdef __GLIBC__
+	malloc_trim(0);
+#endif
 }

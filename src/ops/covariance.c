@@ -1,3 +1,4 @@
+#define _DEFAULT_SOURCE   /* madvise */
 #include "ops/covariance.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -6,6 +7,8 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #define BLOCK 32                 /* at most this many frames per pass over the sums */
 #define BLOCK_BYTES (64 << 20)   /* and at most this much memory for them */
@@ -20,6 +23,7 @@ struct c0_cov_acc {
 	double *st;         /* sum over frames of t (y - shift): the linear trend */
 	float *blk;         /* up to `block` frames, shifted */
 	int nb, block;
+	int dropped;        /* rows [0, dropped) of sum are given back */
 };
 
 int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
@@ -171,6 +175,8 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 		return c0_fail(C0_EINVAL, "covariance needs at least 3 frames (got %lld)", (long long)a->frames);
 	if (y0 < 0 || x0 < 0 || h < 1 || w < 1 || y0 + h > a->H || x0 + w > a->W)
 		return c0_fail(C0_EINVAL, "covariance: window %dx%d at (%d, %d) outside %dx%d", w, h, x0, y0, a->W, a->H);
+	if (y0 < a->dropped)
+		return c0_fail(C0_EINVAL, "covariance: window from row %d, but rows up to %d were dropped", y0, a->dropped);
 	flush(a);
 	struct c0_cov *c = out;
 	c->W = w, c->H = h, c->d = a->d, c->nlag = a->nlag, c->frames = a->frames;
@@ -233,6 +239,24 @@ void c0_cov_acc_seal(struct c0_cov_acc *a)
 {
 	flush(a);
 	free(a->blk), a->blk = NULL;
+}
+
+void c0_cov_acc_drop_rows(struct c0_cov_acc *a, int y1)
+{
+	y1 = y1 < a->H ? y1 : a->H;
+	if (y1 <= a->dropped)
+		return;
+	a->dropped = y1;
+	/* the whole pages inside rows [0, y1) of each lag's plane; the sums
+	 * are not read again, so the pages need not keep their contents */
+	const uintptr_t pg = (uintptr_t)sysconf(_SC_PAGESIZE);
+	const size_t n = (size_t)a->W * a->H;
+	for (int l = 0; l < a->nlag; l++) {
+		const uintptr_t b = (uintptr_t)(a->sum + (size_t)l * n), e = (uintptr_t)(a->sum + (size_t)l * n + (size_t)y1 * a->W);
+		const uintptr_t pb = (b + pg - 1) / pg * pg, pe = e / pg * pg;
+		if (pe > pb)
+			madvise((void *)pb, pe - pb, MADV_DONTNEED);
+	}
 }
 
 int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y0, int x0, struct c0_cov *out)

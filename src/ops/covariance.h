@@ -41,6 +41,10 @@ int64_t c0_cov_acc_frames(const struct c0_cov_acc *a);
  * to 64 MB, next to the tiles' solves); call it before cutting windows from
  * several threads (they then only read). A later frame allocates it again. */
 void c0_cov_acc_seal(struct c0_cov_acc *a);
+/* Rows [0, y1) will not be read again (windows below them are all cut):
+ * their sums' memory goes back to the system, so that a tiled solve's
+ * results can grow while the band shrinks. Windows from those rows fail. */
+void c0_cov_acc_drop_rows(struct c0_cov_acc *a, int y1);
 /* Frames added per pass over the sums for an image of this many pixels (the
  * sums round once per pass). An accumulator over some rows of an image sets
  * the whole image's value, so that it gives the same numbers bit for bit. */

@@ -39,12 +39,17 @@ static void work_free(struct work *w)
 	fftw_free(w->re), fftw_free(w->sp), fftw_free(w->w);
 }
 
+void c0_fshift_trim(struct c0_fshift *s)
+{
+	for (; s && s->npool > 0; s->npool--)
+		work_free(&s->pool[s->npool - 1]);
+}
+
 void c0_fshift_free(struct c0_fshift *s)
 {
 	if (!s)
 		return;
-	for (int i = 0; i < s->npool; i++)
-		work_free(&s->pool[i]);
+	c0_fshift_trim(s);
 	if (s->rf) fftw_destroy_plan(s->rf);
 	if (s->rb) fftw_destroy_plan(s->rb);
 	if (s->cf) fftw_destroy_plan(s->cf);

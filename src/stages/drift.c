@@ -395,6 +395,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 	for (int k = 0; d->bm && k < d->nb; k++)
 		free(d->bm[k]);
 	free(d->bm), d->bm = NULL;
+	c0_mem_release();     /* the block means: 16 MB each at 2048x2048 */
 	d->seconds = c0_now() - t0;
 	if (st) {
 		c0_drift_free(d);
@@ -424,6 +425,10 @@ void *c0_drift_hook(struct c0_drift *d, int q) { return &d->hooks[q]; }
 int c0_drift_frame_fn(void *ctx, int64_t t, float *frame, int H, int W)
 {
 	const struct hook *h = ctx;
+	if (!frame) {
+		c0_fshift_trim(h->d->sh);
+		return C0_OK;
+	}
 	if (H != h->d->H || W != h->d->W)
 		return c0_fail(C0_EINVAL, "drift: a %dx%d frame for a %dx%d trajectory", W, H, h->d->W, h->d->H);
 	double dx, dy;

@@ -170,33 +170,38 @@ int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all
 	return C0_OK;
 }
 
-int c0_lambda_tile_noise(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b, double norm,
-			 int iy, int ix, int ih, int iw, double *hist)
+int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *half, double **C)
 {
-	if (a->W != b->W || a->H != b->H || a->nlag != b->nlag)
-		return c0_fail(C0_EINVAL, "lambda: the two halves differ in size");
-	const int W = a->W, H = a->H, r = c->srf, Lx = W * r;
-	const size_t L = (size_t)W * H * r * r;
+	const int W = half->W, H = half->H, r = c->srf;
 	struct c0_covop op;
-	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), a->d);
+	*C = NULL;
+	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), half->d);
 	if (st)
 		return st;
-	double *ca = c0_alloc(L, sizeof *ca), *cb = c0_alloc(L, sizeof *cb);
-	if (ca && cb) {
-		c0_covop_adjoint(&op, a, a->r, ca);
-		c0_covop_adjoint(&op, b, b->r, cb);
-		for (int y = iy * r; y < (iy + ih) * r; y++)
-			for (int x = ix * r; x < (ix + iw) * r; x++) {
-				const size_t i = (size_t)y * Lx + x;
-				bin(hist, fabs(ca[i] - cb[i]) / (2 * norm));
-				bin(hist + C0_LAMBDA_BINS, op.n[i]);
-			}
-	} else {
+	if ((*C = c0_alloc((size_t)W * H * r * r, sizeof **C)))
+		c0_covop_adjoint(&op, half, half->r, *C);
+	else
 		st = C0_ENOMEM;
-	}
-	free(ca), free(cb);
 	c0_covop_free(&op);
 	return st;
+}
+
+int c0_lambda_tile_noise(const struct c0_support_conf *c, const double *ca, const double *cb, int H, int W, int d,
+			 double norm, int iy, int ix, int ih, int iw, double *hist)
+{
+	const int r = c->srf, Lx = W * r;
+	struct c0_covop op;
+	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), d);
+	if (st)
+		return st;
+	for (int y = iy * r; y < (iy + ih) * r; y++)
+		for (int x = ix * r; x < (ix + iw) * r; x++) {
+			const size_t i = (size_t)y * Lx + x;
+			bin(hist, fabs(ca[i] - cb[i]) / (2 * norm));
+			bin(hist + C0_LAMBDA_BINS, op.n[i]);
+		}
+	c0_covop_free(&op);
+	return C0_OK;
 }
 
 void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist, double lmax, double lmax0,

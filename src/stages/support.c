@@ -231,9 +231,9 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 	struct wctx w;
 	st = ws_alloc(&w, ctx);
 	size_t *ws = c0_alloc(L, sizeof *ws);
-	double *xw = c0_alloc(L, sizeof *xw), *one = c0_alloc(L, sizeof *one), *g = ctx->Ax;
+	double *xw = c0_alloc(L, sizeof *xw), *one = pruned ? c0_alloc(L, sizeof *one) : NULL, *g = ctx->Ax;
 	uint8_t *in = c0_alloc(L, 1);
-	if (st || !ws || !xw || !one || !in) {
+	if (st || !ws || !xw || (pruned && !one) || !in) {
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -366,7 +366,7 @@ struct scale {
 	double lam;      /* absolute lambda (normalised units) */
 };
 
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
+static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double **band,
 		 const struct scale *g, struct c0_support_result *res);
 
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
@@ -382,8 +382,9 @@ int c0_support_noise_solve(const struct c0_support_conf *c, const struct c0_cov 
 	return solve(&cc, cov, mask, NULL, NULL, res);
 }
 
-/* x0 (or NULL): a start in camera units (rx of another solve) */
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, const float *x0,
+/* band (or NULL): &cov->r, freed once read, before the solver's arrays are
+ * allocated (a tile's band is 53 MB at 256 tiles, one per thread) */
+static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double **band,
 		 const struct scale *g, struct c0_support_result *res)
 {
 	double t0 = c0_now();
@@ -416,8 +417,6 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 		goto out;
 	}
 	res->norm = mx;
-	for (size_t i = 0; x0 && i < L; i++)
-		x[i] = x0[i] / mx;
 	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, 0 };
 	for (int l = 0; l < cov->nlag; l++) {
 		double w = c0_cov_weight(cov, l);
@@ -432,6 +431,8 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	c0_covop_adjoint(&op, cov, cov->r, C);
 	for (size_t i = 0; i < L; i++)
 		C[i] /= mx;
+	if (band)
+		free(*band), *band = NULL;
 	/* lambda_max: the smallest lambda for which x = 0 (with s = tr R / HW) is optimal */
 	double lm[2];
 	c0_lambda_max(C, 1, fmax(0, ctx.trR / ctx.HW), op.n, L, lm);
@@ -728,7 +729,7 @@ static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, i
 	memset(tr, 0, sizeof *tr);
 	int st = c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &cov);
 	if (!st)
-		st = solve(c, &cov, NULL, NULL, g, tr);
+		st = solve(c, &cov, NULL, &cov.r, g, tr);
 	if (!st)
 		tr->mean = cov.mean, cov.mean = NULL;
 	c0_cov_free(&cov);
@@ -745,7 +746,10 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 	int fail = C0_OK;
 	char msg[512] = "";
 	struct c0_progress pr;
-	int done = 0;
+	int done = 0, lo = k0;       /* the tiles before lo are done */
+	uint8_t *fin = c0_alloc((size_t)(k1 - k0) + 1, 1);
+	if (!fin)
+		return C0_ENOMEM;
 	c0_progress_begin(&pr, "support (tiles)", k1 - k0);
 #pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
 	for (int k = k0; k < k1; k++) {
@@ -778,9 +782,19 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 		}
 		c0_support_result_free(&tr);
 #pragma omp critical(c0_support_progress)
-		c0_progress_update(&pr, ++done);
+		{
+			c0_progress_update(&pr, ++done);
+			/* tiles start in tile order, so every tile from lo on cuts its
+			 * window from row t[lo].y0 down: the band above goes back (it
+			 * shrinks faster than rx and the mask grow) */
+			for (fin[k - k0] = 1; lo < k1 && fin[lo - k0]; lo++)
+				;
+			if (lo < k1)
+				c0_cov_acc_drop_rows(acc, tl->t[lo].y0 - ya);
+		}
 	}
 	c0_progress_end(&pr);
+	free(fin);
 	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
 }
 
@@ -840,11 +854,20 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 			st = c0_lambda_tile_max(c, &all, norm, lm + 2 * (size_t)k);
 			c0_cov_free(&all);
 		}
+		/* one half's band at a time: each gives its correlation image */
+		double *ca = NULL, *cb = NULL;
 		if (!st && o && !(st = c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &ev))) {
-			if (!(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od)))
-				st = c0_lambda_tile_noise(c, &ev, &od, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
-			c0_cov_free(&ev), c0_cov_free(&od);
+			st = c0_lambda_tile_corr(c, &ev, &ca);
+			c0_cov_free(&ev);
+			if (!st && !(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od))) {
+				st = c0_lambda_tile_corr(c, &od, &cb);
+				c0_cov_free(&od);
+			}
+			if (!st)
+				st = c0_lambda_tile_noise(c, ca, cb, t->h, t->w, c0_support_lag(c), norm, t->iy0 - t->y0,
+							  t->ix0 - t->x0, t->ih, t->iw, h);
 		}
+		free(ca), free(cb);
 		if (!st && h) {
 			/* counts: the sum is exact in any order */
 #pragma omp critical(c0_support_noise)
@@ -928,7 +951,7 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 		struct c0_cov_acc *o = odd[k - k0];
 		int st = j ? c0_cov_acc_window(o, 0, 0, t->h, t->w, &h) : c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &h);
 		if (!st) {
-			st = solve(&cc, &h, NULL, NULL, g, &hr);
+			st = solve(&cc, &h, NULL, &h.r, g, &hr);
 			c0_cov_free(&h);
 		}
 		for (int y = 0; !st && y < ih; y++)
@@ -1051,6 +1074,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		}
 		c0_progress_end(&pr);
 		free(frame), free(win);
+		if (c->frame_fn)
+			c->frame_fn(c->frame_ctx, -1, NULL, H, W);
 	}
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
@@ -1060,6 +1085,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	for (int k = 0; !st && k < k1 - k0; k++)
 		if (odd[k])
 			c0_cov_acc_seal(odd[k]);
+	c0_mem_release();    /* the blocks, the frame and the drift's shift buffers */
 	/* the image's normalisation: its largest pixel variance */
 	double norm = 0;
 	for (int y = ia; !st && y < ib; y++)
@@ -1070,11 +1096,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	double *hist = automatic ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *hist) : NULL;
 	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
-	res->mask = c0_alloc(L, 1);
-	res->rx = c0_alloc(L, sizeof *res->rx);
-	res->mean = c0_alloc((size_t)W * H, sizeof *res->mean);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!st && (!lm || !s2 || !stats || (automatic && !hist) || !res->mask || !res->rx || !res->mean || !res->hist))
+	if (!st && (!lm || !s2 || !stats || (automatic && !hist) || !res->hist))
 		st = C0_ENOMEM;
 	if (!(st = c0_comm_status(st))) {
 		c0_comm_max(&norm, 1);
@@ -1112,8 +1135,14 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 			st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, sub, &g, res));
 		for (int k = 0; k < k1 - k0; k++)
 			c0_cov_acc_free(odd[k]), odd[k] = NULL;
+		c0_mem_release();     /* the odd bands and the halves' solves */
+		/* the results only now: the steps above fill freed memory again */
+		res->mask = c0_alloc(L, 1);
+		res->rx = c0_alloc(L, sizeof *res->rx);
+		res->mean = c0_alloc((size_t)W * H, sizeof *res->mean);
 		if (!st)
-			st = c0_comm_status(each_tile(c, acc, ya, &tl, k0, k1, &g, res, s2, stats));
+			st = c0_comm_status(res->mask && res->rx && res->mean ? each_tile(c, acc, ya, &tl, k0, k1, &g, res, s2, stats)
+					    : C0_ENOMEM);
 	}
 	c0_cov_acc_free(acc);
 	for (int k = 0; odd && k < k1 - k0; k++)
