@@ -6,7 +6,8 @@ Prints a markdown table: the Jaccard index (40 nm, 3 camera pixels of margin)
 for each fixed lambda and for the defaults (automatic lambda, drift correction).
 SEEDS=5,6,7 in the environment: each member simulated with each seed, the
 Jaccard indices averaged over them (one 48x48 field of a sparse member holds
-a few short filaments, and its index jumps between neighbouring lambdas)."""
+a few short filaments, and its index jumps between neighbouring lambdas).
+SWEEP=... in the environment replaces the sweep's lambdas."""
 import json, os, subprocess, sys
 
 BIN, WORK = sys.argv[1], sys.argv[2]
@@ -25,6 +26,8 @@ PANEL = {
 }
 SWEEP = {"l1": ["4e-2", "2e-2", "1e-2", "5e-3", "2.5e-3", "1.2e-3"],
          "cel0": ["1e-4", "3e-5", "1e-5", "3e-6", "1e-6", "3e-7"]}[PEN]
+if os.environ.get("SWEEP"):      # another sweep, e.g. SWEEP=3e-2,2e-2,1.5e-2,1e-2,7e-3,5e-3
+    SWEEP = os.environ["SWEEP"].split(",")
 
 
 def run(args):
