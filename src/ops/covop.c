@@ -35,7 +35,7 @@ static int hadamard_gram(const struct c0_band *G, struct c0_band *H)
 	int st = c0_band_transpose(G, &GT);
 	if (st)
 		return st;
-	int w = 2 * GT.w * (G->w) + 1;     /* generous; trimmed below */
+	int w = 2 * G->w + 1;     /* G^T G (a, b) = 0 unless a row of G holds both: |a - b| < G->w */
 	if (w > L)
 		w = L;
 	if ((st = c0_band_alloc(H, L, L, w))) {
