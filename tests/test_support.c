@@ -339,6 +339,20 @@ static void test_covariance_operator(void)
 	c0_covop_free(&op);
 }
 
+/* A failure inside a parallel loop reaches the caller with its own message
+ * (the message is per thread; the tiles' loops rely on this). */
+static void test_first_fail(void)
+{
+	struct c0_first_fail f = { 0 };
+#pragma omp parallel for schedule(dynamic, 1)
+	for (int i = 0; i < 64; i++)
+		c0_first_fail_note(&f, i == 37 ? c0_fail(C0_EINVAL, "tile %d: no luck", i) : C0_OK);
+	c0_clear_error();
+	CHECK(c0_first_fail_raise(&f) == C0_EINVAL && !strcmp(c0_errmsg(), "tile 37: no luck"));
+	struct c0_first_fail none = { 0 };
+	CHECK(c0_first_fail_raise(&none) == C0_OK);
+}
+
 static void test_wrong_inputs(void)
 {
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
@@ -561,6 +575,7 @@ int main(void)
 	RUN(test_dense_identities);
 	RUN(test_covariance);
 	RUN(test_covariance_operator);
+	RUN(test_first_fail);
 	RUN(test_wrong_inputs);
 	RUN(test_noise_variance);
 	RUN(test_solver_converges);

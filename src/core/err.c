@@ -45,3 +45,17 @@ const char *c0_last_error(void)
 {
 	return c0_errmsg();
 }
+
+void c0_first_fail_note(struct c0_first_fail *f, int code)
+{
+	if (!code)
+		return;
+#pragma omp critical(c0_first_fail)
+	if (!f->code)
+		f->code = code, snprintf(f->msg, sizeof f->msg, "%s", c0_errmsg());
+}
+
+int c0_first_fail_raise(const struct c0_first_fail *f)
+{
+	return f->code ? c0_fail(f->code, "%s", f->msg) : C0_OK;
+}

@@ -7,16 +7,18 @@
 #include <fftw3.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
-/* fftw_plan_* are not thread-safe; fftw_execute_* on new arrays are. The
- * work buffers (tens of MB for a camera frame) are kept for the next call:
- * allocated afresh per frame they cost a page fault per page, which took as
- * long as the transforms. */
-enum { POOL = 16 };
+/* fftw_plan_* are not thread-safe; fftw_execute_* on new arrays are. Lines
+ * are shifted LB at a time, so the work buffers stay small (1 MB for 2048-
+ * pixel lines) whatever the frame, and are kept for the next call: a fresh
+ * frame-sized buffer per frame cost a page fault per page, as long as the
+ * transforms themselves. */
+enum { LB = 32, POOL = 16 };
 struct work { double *re; fftw_complex *sp, *w; };
 struct c0_fshift {
-	int H, W;
-	fftw_plan rf, rb, cf, cb;     /* H rows of 2W; W columns of 2H */
+	int H, W, br, bc;             /* lines per block: rows, columns */
+	fftw_plan rf, rb, cf, cb;     /* br rows of 2W; bc columns of 2H */
 	struct work pool[POOL];
 	int npool;
 };
@@ -39,17 +41,12 @@ static void work_free(struct work *w)
 	fftw_free(w->re), fftw_free(w->sp), fftw_free(w->w);
 }
 
-void c0_fshift_trim(struct c0_fshift *s)
-{
-	for (; s && s->npool > 0; s->npool--)
-		work_free(&s->pool[s->npool - 1]);
-}
-
 void c0_fshift_free(struct c0_fshift *s)
 {
 	if (!s)
 		return;
-	c0_fshift_trim(s);
+	for (int i = 0; i < s->npool; i++)
+		work_free(&s->pool[i]);
 	if (s->rf) fftw_destroy_plan(s->rf);
 	if (s->rb) fftw_destroy_plan(s->rb);
 	if (s->cf) fftw_destroy_plan(s->cf);
@@ -63,13 +60,13 @@ int c0_fshift_new(int H, int W, struct c0_fshift **out)
 	*out = NULL;
 	if (!s)
 		return C0_ENOMEM;
-	s->H = H, s->W = W;
+	s->H = H, s->W = W, s->br = H < LB ? H : LB, s->bc = W < LB ? W : LB;
 	int st;
 #pragma omp critical(c0_fftw_plan)
 	{
-		st = plans(W, H, &s->rf, &s->rb);
+		st = plans(W, s->br, &s->rf, &s->rb);
 		if (!st)
-			st = plans(H, W, &s->cf, &s->cb);
+			st = plans(H, s->bc, &s->cf, &s->cb);
 	}
 	if (st) {
 		c0_fshift_free(s);
@@ -80,38 +77,39 @@ int c0_fshift_new(int H, int W, struct c0_fshift **out)
 }
 
 /* howmany lines of n samples (line k at v + k * lstride, sample stride
- * sstride) shifted by d samples; w: n + 1 phase factors */
-static void shift_lines(fftw_plan f, fftw_plan b, const struct work *wk, float *v, int n, int howmany,
+ * sstride) shifted by d samples, nb lines per transform (the last block's
+ * spare lines are zeros) */
+static void shift_lines(fftw_plan f, fftw_plan b, int nb, const struct work *wk, float *v, int n, int howmany,
 			long lstride, long sstride, double d)
 {
-	enum { KB = 16 };   /* lines at a time: columns read a cache line of each row */
 	const int N = 2 * n;
 	double *re = wk->re;
 	fftw_complex *sp = wk->sp, *w = wk->w;
-	for (int k0 = 0; k0 < howmany; k0 += KB) {
-		const int k1 = k0 + KB < howmany ? k0 + KB : howmany;
-		for (int i = 0; i < n; i++)
-			for (int k = k0; k < k1; k++) {
-				double x = v[k * lstride + i * sstride];
-				re[(long)k * N + i] = x, re[(long)k * N + N - 1 - i] = x;
-			}
-	}
-	fftw_execute_dft_r2c(f, re, sp);
 	/* sample at i + d: multiply bin j by exp(+2 pi i j d / N); the Nyquist
 	 * bin of a real signal keeps only its real part */
 	for (int j = 0; j <= n; j++)
 		w[j] = (j == n ? cos(C0_PI * d) : cexp(2 * C0_PI * I * j * d / N)) / N;
-	for (int k = 0; k < howmany; k++) {
-		fftw_complex *line = sp + (long)k * (n + 1);
-		for (int j = 0; j <= n; j++)
-			line[j] *= w[j];
-	}
-	fftw_execute_dft_c2r(b, sp, re);
-	for (int k0 = 0; k0 < howmany; k0 += KB) {
-		const int k1 = k0 + KB < howmany ? k0 + KB : howmany;
+	for (int k0 = 0; k0 < howmany; k0 += nb) {
+		const int m = howmany - k0 < nb ? howmany - k0 : nb;
+		if (m < nb)
+			memset(re + (long)m * N, 0, sizeof *re * (size_t)(nb - m) * N);
+		/* line by line within a block: for columns, each row's cache line
+		 * serves the block's lines */
 		for (int i = 0; i < n; i++)
-			for (int k = k0; k < k1; k++)
-				v[k * lstride + i * sstride] = (float)re[(long)k * N + i];
+			for (int k = 0; k < m; k++) {
+				double x = v[(k0 + k) * lstride + i * sstride];
+				re[(long)k * N + i] = x, re[(long)k * N + N - 1 - i] = x;
+			}
+		fftw_execute_dft_r2c(f, re, sp);
+		for (int k = 0; k < m; k++) {
+			fftw_complex *line = sp + (long)k * (n + 1);
+			for (int j = 0; j <= n; j++)
+				line[j] *= w[j];
+		}
+		fftw_execute_dft_c2r(b, sp, re);
+		for (int i = 0; i < n; i++)
+			for (int k = 0; k < m; k++)
+				v[(k0 + k) * lstride + i * sstride] = (float)re[(long)k * N + i];
 	}
 }
 
@@ -125,8 +123,8 @@ int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy)
 	if (s->npool > 0)
 		wk = s->pool[--s->npool];
 	if (!wk.re) {
-		wk.re = fftw_malloc(sizeof(double) * 2 * (size_t)m * m);
-		wk.sp = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1) * m);
+		wk.re = fftw_malloc(sizeof(double) * 2 * (size_t)m * LB);
+		wk.sp = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1) * LB);
 		wk.w = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1));
 		if (!wk.re || !wk.sp || !wk.w) {
 			work_free(&wk);
@@ -134,9 +132,9 @@ int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy)
 		}
 	}
 	if (dx != 0)
-		shift_lines(s->rf, s->rb, &wk, img, W, H, W, 1, dx);
+		shift_lines(s->rf, s->rb, s->br, &wk, img, W, H, W, 1, dx);
 	if (dy != 0)
-		shift_lines(s->cf, s->cb, &wk, img, H, W, 1, W, dy);
+		shift_lines(s->cf, s->cb, s->bc, &wk, img, H, W, 1, W, dy);
 	int kept = 0;
 #pragma omp critical(c0_fshift_pool)
 	if (s->npool < POOL)

@@ -14,5 +14,3 @@ void c0_fshift_free(struct c0_fshift *s);
  * Thread-safe for one c0_fshift: each call takes its own work buffers from
  * the object's pool (and returns them). */
 int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy);
-/* Frees the pooled work buffers (134 MB for a 2048x2048 frame) after a pass. */
-void c0_fshift_trim(struct c0_fshift *s);

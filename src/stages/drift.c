@@ -180,8 +180,8 @@ static int refine(struct c0_drift *d)
 	/* each stack against the mean of its own blocks: an angle changes the
 	 * image (depth-dependent excitation), which a correlation across angles
 	 * would read as a shift. The stacks' blocks are apart: side by side. */
-	int k0[MAXQ + 1], fail = C0_OK;
-	char msg[256] = "";
+	int k0[MAXQ + 1];
+	struct c0_first_fail fail = { 0 };
 	k0[0] = 0;
 	for (int q = 0; q < d->nq; q++) {
 		int k1 = k0[q];
@@ -202,16 +202,12 @@ static int refine(struct c0_drift *d)
 		for (int q = 0; q < d->nq; q++)
 			if (!st)
 				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1]);
-		if (st) {
-#pragma omp critical(c0_drift_fail)
-			if (!fail)
-				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
-		}
+		c0_first_fail_note(&fail, st);
 		xcorr_free(&x);
 		free(ref), free(tmp);
 	}
-	if (fail)
-		return c0_fail(fail, "%s", msg);
+	if (fail.code)
+		return c0_first_fail_raise(&fail);
 	for (int k = d->nb - 1; k >= 0; k--)
 		d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
 	/* an axis whose shifts stay within SIGNIF noise sds of zero has no
@@ -425,10 +421,6 @@ void *c0_drift_hook(struct c0_drift *d, int q) { return &d->hooks[q]; }
 int c0_drift_frame_fn(void *ctx, int64_t t, float *frame, int H, int W)
 {
 	const struct hook *h = ctx;
-	if (!frame) {
-		c0_fshift_trim(h->d->sh);
-		return C0_OK;
-	}
 	if (H != h->d->H || W != h->d->W)
 		return c0_fail(C0_EINVAL, "drift: a %dx%d frame for a %dx%d trajectory", W, H, h->d->W, h->d->H);
 	double dx, dy;

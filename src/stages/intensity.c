@@ -281,8 +281,7 @@ static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, in
 	}
 	struct c0_intensity_conf cc = *c;
 	cc.tile = 0;
-	int fail = C0_OK;
-	char msg[512] = "";
+	struct c0_first_fail fail = { 0 };
 	/* one tile per thread: each solve then runs serially, so a tile's
 	 * numbers do not depend on the thread count */
 #pragma omp parallel for schedule(dynamic, 1)
@@ -315,16 +314,12 @@ static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, in
 			s[0] = any ? (double)t->ih * t->iw / (double)nw : 0;   /* the interior's share of the window */
 			s[1] = tr.mu, s[2] = tr.residual2, s[3] = tr.target2, s[4] = tr.floor2;
 			s[5] = tr.dp_status, s[6] = tr.solves, s[7] = tr.cg_iters;
-		} else {
-#pragma omp critical(c0_intensity_tile_fail)
-			if (!fail)
-				fail = tst, snprintf(msg, sizeof msg, "%s", c0_errmsg());
 		}
+		c0_first_fail_note(&fail, tst);
 		c0_intensity_result_free(&tr);
 		free(y), free(m);
 	}
-	if (fail)
-		st = c0_fail(fail, "%s", msg);
+	st = c0_first_fail_raise(&fail);
 	/* in tile order: the same sums whatever the schedule */
 	double lmu = 0, wmu = 0;
 	res->dp_status = c->mu > 0 ? -1 : 0;

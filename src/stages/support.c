@@ -592,10 +592,9 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 		st = C0_ENOMEM;
 	struct c0_support_conf cc = *c;
 	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
-	int fail = st;
-	char msg[512] = "";
+	struct c0_first_fail fail = { 0 };
 #pragma omp parallel for schedule(dynamic, 1) if (tl.n > 1)
-	for (int k = 0; k < (fail ? 0 : tl.n); k++) {
+	for (int k = 0; k < (st ? 0 : tl.n); k++) {
 		const struct c0_tile *t = &tl.t[k];
 		struct c0_cov cov = { 0 };
 		struct c0_support_result tr;
@@ -614,17 +613,13 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 				memcpy(*mean + (size_t)(t->iy0 + a) * W + t->ix0, cov.mean + (size_t)(oy + a) * t->w + ox,
 				       (size_t)t->iw * sizeof **mean);
 		}
-		if (ts) {
-#pragma omp critical(c0_noise_fail)
-			if (!fail)
-				fail = ts, snprintf(msg, sizeof msg, "%s", c0_errmsg());
-		}
+		c0_first_fail_note(&fail, ts);
 		c0_cov_free(&cov);
 		c0_support_result_free(&tr);
 		free(m);
 	}
-	if (!st && fail)
-		st = c0_fail(fail, "%s", msg);
+	if (!st)
+		st = c0_first_fail_raise(&fail);
 	double area = 0;
 	for (int k = 0; !st && k < tl.n; k++)   /* in tile order: the same sum on any schedule */
 		*sigma2 += s2[k] * tl.t[k].ih * tl.t[k].iw, area += (double)tl.t[k].ih * tl.t[k].iw;
@@ -743,8 +738,7 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 		     int k0, int k1, const struct scale *g, struct c0_support_result *res, double *tile_s2, double *tile_stats)
 {
 	const int r = c->srf, Lx = tl->t[tl->n - 1].x0 + tl->t[tl->n - 1].w;
-	int fail = C0_OK;
-	char msg[512] = "";
+	struct c0_first_fail fail = { 0 };
 	struct c0_progress pr;
 	int done = 0, lo = k0;       /* the tiles before lo are done */
 	uint8_t *fin = c0_alloc((size_t)(k1 - k0) + 1, 1);
@@ -775,11 +769,7 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 			for (int i = 0; i < res->nhist; i++)      /* a finished tile keeps its last value */
 				res->hist[i] += tr.nhist ? tr.hist[i < tr.nhist ? i : tr.nhist - 1] : 0;
 		}
-		if (st) {
-#pragma omp critical(c0_support_fail)
-			if (!fail)
-				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
-		}
+		c0_first_fail_note(&fail, st);
 		c0_support_result_free(&tr);
 #pragma omp critical(c0_support_progress)
 		{
@@ -795,7 +785,7 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 	}
 	c0_progress_end(&pr);
 	free(fin);
-	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
+	return c0_first_fail_raise(&fail);
 }
 
 /* The automatic lambda on tiles needs the odd frames' covariance too; it is
@@ -838,8 +828,7 @@ static int noise_subset(const struct c0_tiling *tl, uint8_t *in)
 static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
 			   int k0, int k1, struct c0_cov_acc **odd, double norm, double *lm, double *hist)
 {
-	int fail = C0_OK;
-	char msg[512] = "";
+	struct c0_first_fail fail = { 0 };
 	struct c0_progress pr;
 	int done = 0;
 	c0_progress_begin(&pr, "support (lambda)", k1 - k0);
@@ -875,16 +864,12 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 				hist[i] += h[i];
 		}
 		free(h);
-		if (st) {
-#pragma omp critical(c0_support_fail)
-			if (!fail)
-				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
-		}
+		c0_first_fail_note(&fail, st);
 #pragma omp critical(c0_support_progress)
 		c0_progress_update(&pr, ++done);
 	}
 	c0_progress_end(&pr);
-	return fail ? c0_fail(fail, "%s", msg) : C0_OK;
+	return c0_first_fail_raise(&fail);
 }
 
 /* The localisation precision on tiles: each subset tile's halves solved on
@@ -927,6 +912,7 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 	int *item = c0_alloc(2 * (size_t)(k1 - k0) + 1, sizeof *item);
 	uint8_t **m = c0_alloc((size_t)(k1 - k0) + 1, sizeof *m);     /* both halves' interior masks */
 	int fail = sums && item && m ? C0_OK : C0_ENOMEM;
+	struct c0_first_fail ff = { 0 };
 	for (int k = k0; k < k1 && !fail; k++) {
 		const struct c0_tile *t = &tl->t[k];
 		if (!odd[k - k0] || !use[k])
@@ -935,7 +921,6 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 			fail = C0_ENOMEM;
 		item[nw++] = 2 * k, item[nw++] = 2 * k + 1;
 	}
-	char msg[512] = "";
 	/* side by side, one solve per thread (the solver's own loops then run
 	 * serially, as in each_tile): two solves at a time, as there */
 #pragma omp parallel for schedule(dynamic, 1) if (nw > 1 && !fail)
@@ -957,12 +942,10 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 		for (int y = 0; !st && y < ih; y++)
 			memcpy(m[k - k0] + ((size_t)j * ih + y) * iw, hr.mask + (size_t)(oy + y) * hr.Lx + ox, (size_t)iw);
 		c0_support_result_free(&hr);
-		if (st) {
-#pragma omp critical(c0_support_fail)
-			if (!fail)
-				fail = st, snprintf(msg, sizeof msg, "%s", c0_errmsg());
-		}
+		c0_first_fail_note(&ff, st);
 	}
+	if (!fail)
+		fail = c0_first_fail_raise(&ff);
 	for (int k = k0; k < k1 && !fail; k++) {
 		const struct c0_tile *t = &tl->t[k];
 		const size_t n1 = (size_t)t->ih * r * t->iw * r;
@@ -972,8 +955,6 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 	for (int k = 0; m && k < k1 - k0; k++)
 		free(m[k]);
 	free(m), free(item), free(use);
-	if (fail && msg[0])
-		fail = c0_fail(fail, "%s", msg);
 	if (fail) {
 		free(sums);
 		return fail;
@@ -1074,8 +1055,6 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		}
 		c0_progress_end(&pr);
 		free(frame), free(win);
-		if (c->frame_fn)
-			c->frame_fn(c->frame_ctx, -1, NULL, H, W);
 	}
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
@@ -1085,7 +1064,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	for (int k = 0; !st && k < k1 - k0; k++)
 		if (odd[k])
 			c0_cov_acc_seal(odd[k]);
-	c0_mem_release();    /* the blocks, the frame and the drift's shift buffers */
+	c0_mem_release();    /* the blocks and the frame */
 	/* the image's normalisation: its largest pixel variance */
 	double norm = 0;
 	for (int y = ia; !st && y < ib; y++)

@@ -14,8 +14,7 @@
 #include "col0rme.h"   /* enum c0_penalty */
 
 /* Per-frame preprocessing in the streaming passes (drift correction): frame
- * t (0-based in its stack, H x W) is changed in place before it is used.
- * frame NULL (t -1): the pass is over, work buffers may be given back. */
+ * t (0-based in its stack, H x W) is changed in place before it is used. */
 typedef int (*c0_frame_fn)(void *ctx, int64_t t, float *frame, int H, int W);
 
 struct c0_support_conf {
