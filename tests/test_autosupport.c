@@ -109,8 +109,8 @@ static void test_cov_drop(void)
 	CHECK(c0_cov_acc_window(a, Y0, 0, h, W, &after) == C0_OK);
 	CHECK(!memcmp(before.r, after.r, sizeof(double) * before.nlag * W * h) &&
 	      !memcmp(before.mean, after.mean, sizeof(double) * W * h));
-	CHECK(c0_cov_acc_window(a, Y0 - 1, 0, h, W, &after) == C0_EINVAL && strstr(c0_errmsg(), "dropped"));
 	c0_cov_free(&before), c0_cov_free(&after);
+	CHECK(c0_cov_acc_window(a, Y0 - 1, 0, h, W, &after) == C0_EINVAL && strstr(c0_errmsg(), "dropped"));
 	c0_cov_acc_free(a);
 	free(f);
 }
