@@ -170,38 +170,39 @@ int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all
 	return C0_OK;
 }
 
-int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *half, double **C)
+int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *half, double **C, double **n)
 {
 	const int W = half->W, H = half->H, r = c->srf;
+	const size_t L = (size_t)W * H * r * r;
 	struct c0_covop op;
 	*C = NULL;
+	if (n)
+		*n = NULL;
 	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), half->d);
 	if (st)
 		return st;
-	if ((*C = c0_alloc((size_t)W * H * r * r, sizeof **C)))
+	if ((*C = c0_alloc(L, sizeof **C)) && (!n || (*n = c0_alloc(L, sizeof **n)))) {
 		c0_covop_adjoint(&op, half, half->r, *C);
-	else
+		if (n)
+			memcpy(*n, op.n, L * sizeof **n);
+	} else {
+		free(*C), *C = NULL;
 		st = C0_ENOMEM;
+	}
 	c0_covop_free(&op);
 	return st;
 }
 
-int c0_lambda_tile_noise(const struct c0_support_conf *c, const double *ca, const double *cb, int H, int W, int d,
-			 double norm, int iy, int ix, int ih, int iw, double *hist)
+void c0_lambda_tile_noise(const struct c0_support_conf *c, const double *ca, const double *cb, const double *n, int W,
+			  double norm, int iy, int ix, int ih, int iw, double *hist)
 {
 	const int r = c->srf, Lx = W * r;
-	struct c0_covop op;
-	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), d);
-	if (st)
-		return st;
 	for (int y = iy * r; y < (iy + ih) * r; y++)
 		for (int x = ix * r; x < (ix + iw) * r; x++) {
 			const size_t i = (size_t)y * Lx + x;
 			bin(hist, fabs(ca[i] - cb[i]) / (2 * norm));
-			bin(hist + C0_LAMBDA_BINS, op.n[i]);
+			bin(hist + C0_LAMBDA_BINS, n[i]);
 		}
-	c0_covop_free(&op);
-	return C0_OK;
 }
 
 void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist, double lmax, double lmax0,

@@ -42,17 +42,18 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
  * solve finds it (normalisation norm). */
 int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, double lmax[2]);
 /* One half's correlation image *C = A^T R (fine grid of its window), so
- * that the two halves' bands need not be held at once. */
-int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *half, double **C);
-/* A tile's halves (even, odd frames; their correlation images ca, cb on the
- * fine grid of the H x W window, lag d): |C_a - C_b| / 2 and the column
- * norms over its interior (camera pixels iy, ix, ih, iw inside the window)
- * added to hist (2 x C0_LAMBDA_BINS counts in fixed log bins, so that sums
- * over tiles and ranks are exact and their medians do not depend on who
- * computed what). */
+ * that the two halves' bands need not be held at once; with n, also the
+ * column norms ||a||^2 there (both allocated). */
+int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *half, double **C, double **n);
+/* A tile's halves (even, odd frames; their correlation images ca, cb and
+ * the column norms n on the fine grid of a window W camera pixels wide):
+ * |C_a - C_b| / 2 and the column norms over its interior (camera pixels iy,
+ * ix, ih, iw inside the window) added to hist (2 x C0_LAMBDA_BINS counts in
+ * fixed log bins, so that sums over tiles and ranks are exact and their
+ * medians do not depend on who computed what). */
 #define C0_LAMBDA_BINS 14000
-int c0_lambda_tile_noise(const struct c0_support_conf *c, const double *ca, const double *cb, int H, int W, int d,
-			 double norm, int iy, int ix, int ih, int iw, double *hist);
+void c0_lambda_tile_noise(const struct c0_support_conf *c, const double *ca, const double *cb, const double *n, int W,
+			  double norm, int iy, int ix, int ih, int iw, double *hist);
 /* The rule from the summed histograms and the image's lambda_max (l1, l0 scale). */
 void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist, double lmax, double lmax0,
 			    struct c0_lambda_result *out);

@@ -96,7 +96,7 @@ static double smooth(void *vctx, const double *x, double *g)
  * grid order, so each grid row's pixels are a run ws[rs[a]..rs[a+1]). */
 struct wctx {
 	struct ctx *c;
-	const size_t *ws;
+	size_t *ws;          /* the set's grid indices */
 	size_t nws;
 	size_t *rs;          /* Ly + 1: row a's runs are run[rs[a]..rs[a+1]) */
 	size_t *run;         /* runs of adjacent columns: ws[run[j]..run[j+1]) */
@@ -123,14 +123,25 @@ static void ws_index(struct wctx *w)
 static int ws_alloc(struct wctx *w, struct ctx *c)
 {
 	const size_t Ly = (size_t)c->op->Ly, L = Ly * c->op->Lx;
-	*w = (struct wctx){ c, NULL, 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
+	*w = (struct wctx){ c, c0_alloc(L, sizeof(size_t)), 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
 			    c0_alloc(L, sizeof(int)), c0_alloc(L, sizeof(double)), c0_alloc(Ly, 1) };
-	return w->rs && w->run && w->col && w->T && w->row ? C0_OK : C0_ENOMEM;
+	return w->ws && w->rs && w->run && w->col && w->T && w->row ? C0_OK : C0_ENOMEM;
 }
 
 static void ws_free(struct wctx *w)
 {
-	free(w->rs), free(w->run), free(w->col), free(w->T), free(w->row);
+	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->T), free(w->row);
+}
+
+/* The set := the pixels with in[i], in grid order; xw their values in x. */
+static void ws_set(struct wctx *w, const uint8_t *in, const double *x, double *xw)
+{
+	const size_t L = (size_t)w->c->op->Ly * w->c->op->Lx;
+	w->nws = 0;
+	for (size_t i = 0; i < L; i++)
+		if (in[i])
+			xw[w->nws] = x[i], w->ws[w->nws++] = i;
+	ws_index(w);
 }
 
 /* out = A^T A v on the working set. Row by row (each output and each row of
@@ -197,12 +208,12 @@ static double smooth_ws(void *vctx, const double *xw, double *gw)
  * gradient would make them so), whose optimality is checked on the whole
  * grid whenever it converges: pixels that would move join the set and the
  * solve goes on from where it was.
- * pruned (the default): the set is also re-made every PIECE iterations,
+ * pruned: the set is also re-made every PIECE iterations,
  * dropping every pixel at 0 that is not pushed up, with FISTA's momentum
  * carried across; each piece takes the longest step safe on its set. The
  * set shrinks from the warm-up's blur (~4x the support at 256x256) towards
  * the support, so the iterations get cheaper and the steps longer.
- * Otherwise (fista): the set changes only when FISTA has converged on it, a
+ * Otherwise (fista, the default): the set changes only when FISTA has converged on it, a
  * pixel at 0 leaves only when held there by a margin, the whole grid's step. */
 #define WS_WARMUP 100
 #define PRUNED_WARMUP 30
@@ -230,14 +241,13 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 	}
 	struct wctx w;
 	st = ws_alloc(&w, ctx);
-	size_t *ws = c0_alloc(L, sizeof *ws);
 	double *xw = c0_alloc(L, sizeof *xw), *one = pruned ? c0_alloc(L, sizeof *one) : NULL, *g = ctx->Ax;
 	uint8_t *in = c0_alloc(L, 1);
-	if (st || !ws || !xw || (pruned && !one) || !in) {
+	const size_t *ws = w.ws;
+	if (st || !xw || (pruned && !one) || !in) {
 		st = C0_ENOMEM;
 		goto out;
 	}
-	w.ws = ws;
 	struct c0_fista_info part = *info;
 	const double leave = pruned ? 0 : 0.1;
 	for (;;) {
@@ -255,14 +265,9 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 		}
 		if (!grew && part.converged)
 			break;
-		w.nws = 0;
-		for (size_t i = 0; i < L; i++)
-			if (in[i]) {
-				if (pruned)
-					pw[w.nws] = xp[i];
-				xw[w.nws] = x[i], ws[w.nws++] = i;
-			}
-		ws_index(&w);
+		ws_set(&w, in, x, xw);
+		for (size_t k = 0; pruned && k < w.nws; k++)
+			pw[k] = xp[ws[k]];
 		part.prev = pruned ? pw : NULL;
 		struct c0_fista_conf fw = *fc;
 		fw.maxit = fc->maxit - used;
@@ -302,7 +307,7 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 	info->restarts += part.restarts;
 out:
 	ws_free(&w);
-	free(ws), free(xw), free(one), free(in);
+	free(xw), free(one), free(in);
 	free(xp), free(pw);
 	return st;
 }
@@ -315,21 +320,16 @@ static int solve_masked(struct ctx *ctx, const struct c0_fista_conf *fc, double 
 	const size_t L = (size_t)ctx->op->Ly * ctx->op->Lx;
 	struct wctx w;
 	int st = ws_alloc(&w, ctx);
-	size_t *ws = c0_alloc(L, sizeof *ws);
 	double *xw = c0_alloc(L, sizeof *xw);
-	if (!st && ws && xw) {
-		w.ws = ws;
-		for (size_t i = 0; i < L; i++)
-			if (mask[i])
-				xw[w.nws] = x[i], ws[w.nws++] = i;
-		ws_index(&w);
+	if (!st && xw) {
+		ws_set(&w, mask, x, xw);
 		st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, 0, xw, fc, info);
 		for (size_t k = 0; !st && k < w.nws; k++)
-			x[ws[k]] = xw[k];
+			x[w.ws[k]] = xw[k];
 	} else if (!st)
 		st = C0_ENOMEM;
 	ws_free(&w);
-	free(ws), free(xw);
+	free(xw);
 	return st;
 }
 
@@ -794,32 +794,22 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
  * to 512x512 images; its band costs about a quarter of a 1024x1024 frame's).
  * The subset depends on the tile grid only. */
 #define SUBSET_PX (512 * 512)
-/* in[k] = 1 for m of the candidates cand[0..nc) (tile indices in tile order),
- * spread evenly, with the largest m whose interiors hold at most px pixels */
+/* in[k] = 1 for m of the candidates cand[0..nc) (tile indices in tile order;
+ * cand NULL: tiles 0..nc), spread evenly, with the largest m whose interiors
+ * hold at most px pixels */
 static void spread(const struct c0_tiling *tl, const int *cand, int nc, double px_max, uint8_t *in)
 {
 	for (int m = nc; m >= 1; m--) {
 		double px = 0;
 		memset(in, 0, (size_t)tl->n);
 		for (int j = 0; j < m; j++) {
-			const struct c0_tile *t = &tl->t[cand[((2LL * j + 1) * nc) / (2 * m)]];
+			const int c = (int)(((2LL * j + 1) * nc) / (2 * m));
+			const struct c0_tile *t = &tl->t[cand ? cand[c] : c];
 			in[t - tl->t] = 1, px += (double)t->ih * t->iw;
 		}
 		if (px <= px_max || m == 1)
 			return;
 	}
-}
-
-static int noise_subset(const struct c0_tiling *tl, uint8_t *in)
-{
-	int *all = c0_alloc((size_t)tl->n, sizeof *all);
-	if (!all)
-		return C0_ENOMEM;
-	for (int k = 0; k < tl->n; k++)
-		all[k] = k;
-	spread(tl, all, tl->n, SUBSET_PX, in);
-	free(all);
-	return C0_OK;
 }
 
 /* Every tile's lambda_max on both scales (lm: 2 per tile); with hist, the
@@ -844,19 +834,18 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 			c0_cov_free(&all);
 		}
 		/* one half's band at a time: each gives its correlation image */
-		double *ca = NULL, *cb = NULL;
+		double *ca = NULL, *cb = NULL, *cn = NULL;
 		if (!st && o && !(st = c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &ev))) {
-			st = c0_lambda_tile_corr(c, &ev, &ca);
+			st = c0_lambda_tile_corr(c, &ev, &ca, &cn);
 			c0_cov_free(&ev);
 			if (!st && !(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od))) {
-				st = c0_lambda_tile_corr(c, &od, &cb);
+				st = c0_lambda_tile_corr(c, &od, &cb, NULL);
 				c0_cov_free(&od);
 			}
 			if (!st)
-				st = c0_lambda_tile_noise(c, ca, cb, t->h, t->w, c0_support_lag(c), norm, t->iy0 - t->y0,
-							  t->ix0 - t->x0, t->ih, t->iw, h);
+				c0_lambda_tile_noise(c, ca, cb, cn, t->w, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
 		}
-		free(ca), free(cb);
+		free(ca), free(cb), free(cn);
 		if (!st && h) {
 			/* counts: the sum is exact in any order */
 #pragma omp critical(c0_support_noise)
@@ -1011,7 +1000,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	if (!odd || !sub)
 		st = C0_ENOMEM;
 	else if (halves)
-		st = noise_subset(&tl, sub);
+		spread(&tl, NULL, tl.n, SUBSET_PX, sub);
 	if (!st && rows > 0) {
 		st = c0_cov_acc_new(W, rows, d, &acc);
 		if (!st)
