@@ -6,15 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static double norm2(const double *v, size_t n)
-{
-	double s = 0;
-#pragma omp parallel for reduction(+ : s) if (n > 100000)
-	for (size_t i = 0; i < n; i++)
-		s += v[i] * v[i];
-	return sqrt(s);
-}
-
 int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w, double lam,
 		double *x, const struct c0_fista_conf *conf, struct c0_fista_info *info)
 {
@@ -37,8 +28,8 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 	int nh = info->nhist, restarts = 0;
 	info->iters = info->converged = 0;
 	for (int it = 0; it < conf->maxit; it++) {
-		double fz = f(ctx, z, g), pen = 0, dn = 0, dot = 0;
-#pragma omp parallel for reduction(+ : pen, dn, dot) if (n > 100000)
+		double fz = f(ctx, z, g), pen = 0, dn = 0, dot = 0, vv = 0;
+#pragma omp parallel for reduction(+ : pen, dn, dot, vv) if (n > 100000)
 		for (size_t i = 0; i < n; i++) {
 			double wi = w ? w[i] : 1;
 			pen += wi * z[i];
@@ -47,13 +38,14 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 			double d = v - x[i];
 			dn += d * d;
 			dot += (z[i] - v) * d;     /* restart test <z - x+, x+ - x> */
+			vv += v * v;
 			xn[i] = v;
 		}
 		info->obj = fz + lam * pen;
 		if (info->hist && it < nh)
 			info->hist[it] = info->obj;
 		info->iters = it + 1;
-		double xnorm = norm2(xn, n);
+		double xnorm = sqrt(vv);
 		double tp = (1 + sqrt(1 + 4 * theta * theta)) / 2, beta = (theta - 1) / tp;
 		if (dot > 0) {
 			beta = 0, tp = 1;   /* momentum points uphill: restart */
