@@ -6,6 +6,7 @@
 #include <complex.h>
 #include <fftw3.h>
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,7 +16,7 @@
  * frame-sized buffer per frame cost a page fault per page, as long as the
  * transforms themselves. */
 enum { LB = 32, POOL = 16 };
-struct work { double *re; fftw_complex *sp, *w; };
+struct work { double *re; fftw_complex *sp; };
 struct c0_fshift {
 	int H, W, br, bc;             /* lines per block: rows, columns */
 	fftw_plan rf, rb, cf, cb;     /* br rows of 2W; bc columns of 2H */
@@ -38,7 +39,7 @@ static int plans(int n, int howmany, fftw_plan *f, fftw_plan *b)
 
 static void work_free(struct work *w)
 {
-	fftw_free(w->re), fftw_free(w->sp), fftw_free(w->w);
+	fftw_free(w->re), fftw_free(w->sp);
 }
 
 void c0_fshift_free(struct c0_fshift *s)
@@ -76,70 +77,126 @@ int c0_fshift_new(int H, int W, struct c0_fshift **out)
 	return C0_OK;
 }
 
-/* howmany lines of n samples (line k at v + k * lstride, sample stride
- * sstride) shifted by d samples, nb lines per transform (the last block's
- * spare lines are zeros) */
-static void shift_lines(fftw_plan f, fftw_plan b, int nb, const struct work *wk, float *v, int n, int howmany,
-			long lstride, long sstride, double d)
+/* sample at i + d: multiply bin j by exp(+2 pi i j d / N); the Nyquist bin
+ * of a real signal keeps only its real part */
+static void phases(fftw_complex *w, int n, double d)
+{
+	const int N = 2 * n;
+	for (int j = 0; j <= n; j++)
+		w[j] = (j == n ? cos(C0_PI * d) : cexp(2 * C0_PI * I * j * d / N)) / N;
+}
+
+/* lines k0..k0+nb of howmany lines of n samples (line k at v + k * lstride,
+ * sample stride sstride) multiplied by the phases w in one transform (the
+ * last block's spare lines are zeros) */
+static void shift_block(fftw_plan f, fftw_plan b, int nb, const struct work *wk, const fftw_complex *w, float *v, int n,
+			int howmany, long lstride, long sstride, int k0)
 {
 	const int N = 2 * n;
 	double *re = wk->re;
-	fftw_complex *sp = wk->sp, *w = wk->w;
-	/* sample at i + d: multiply bin j by exp(+2 pi i j d / N); the Nyquist
-	 * bin of a real signal keeps only its real part */
-	for (int j = 0; j <= n; j++)
-		w[j] = (j == n ? cos(C0_PI * d) : cexp(2 * C0_PI * I * j * d / N)) / N;
-	for (int k0 = 0; k0 < howmany; k0 += nb) {
-		const int m = howmany - k0 < nb ? howmany - k0 : nb;
-		if (m < nb)
-			memset(re + (long)m * N, 0, sizeof *re * (size_t)(nb - m) * N);
-		/* line by line within a block: for columns, each row's cache line
-		 * serves the block's lines */
+	fftw_complex *sp = wk->sp;
+	const int m = howmany - k0 < nb ? howmany - k0 : nb;
+	if (m < nb)
+		memset(re + (long)m * N, 0, sizeof *re * (size_t)(nb - m) * N);
+	/* rows are read along their samples; columns line by line within the
+	 * block, so that each row's cache line serves the block's lines */
+	if (sstride == 1)
+		for (int k = 0; k < m; k++) {
+			const float *src = v + (k0 + k) * lstride;
+			double *r = re + (long)k * N;
+			for (int i = 0; i < n; i++)
+				r[i] = src[i], r[N - 1 - i] = src[i];
+		}
+	else
 		for (int i = 0; i < n; i++)
 			for (int k = 0; k < m; k++) {
 				double x = v[(k0 + k) * lstride + i * sstride];
 				re[(long)k * N + i] = x, re[(long)k * N + N - 1 - i] = x;
 			}
-		fftw_execute_dft_r2c(f, re, sp);
-		for (int k = 0; k < m; k++) {
-			fftw_complex *line = sp + (long)k * (n + 1);
-			for (int j = 0; j <= n; j++)
-				line[j] *= w[j];
+	fftw_execute_dft_r2c(f, re, sp);
+	/* the product written out: C's complex multiply checks for NaNs */
+	for (int k = 0; k < m; k++) {
+		double *line = (double *)(sp + (long)k * (n + 1));
+		const double *ph = (const double *)w;
+		for (int j = 0; j <= n; j++) {
+			const double a = line[2 * j], b = line[2 * j + 1], c = ph[2 * j], d = ph[2 * j + 1];
+			line[2 * j] = a * c - b * d, line[2 * j + 1] = a * d + b * c;
 		}
-		fftw_execute_dft_c2r(b, sp, re);
+	}
+	fftw_execute_dft_c2r(b, sp, re);
+	if (sstride == 1)
+		for (int k = 0; k < m; k++) {
+			float *dst = v + (k0 + k) * lstride;
+			const double *r = re + (long)k * N;
+			for (int i = 0; i < n; i++)
+				dst[i] = (float)r[i];
+		}
+	else
 		for (int i = 0; i < n; i++)
 			for (int k = 0; k < m; k++)
 				v[(k0 + k) * lstride + i * sstride] = (float)re[(long)k * N + i];
-	}
 }
 
-int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy)
+static int take(struct c0_fshift *s, struct work *wk)
 {
-	const int H = s->H, W = s->W, m = H > W ? H : W;
-	if (dx == 0 && dy == 0)
-		return C0_OK;
-	struct work wk = { 0 };
+	const int m = s->H > s->W ? s->H : s->W;
+	*wk = (struct work){ 0 };
 #pragma omp critical(c0_fshift_pool)
 	if (s->npool > 0)
-		wk = s->pool[--s->npool];
-	if (!wk.re) {
-		wk.re = fftw_malloc(sizeof(double) * 2 * (size_t)m * LB);
-		wk.sp = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1) * LB);
-		wk.w = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1));
-		if (!wk.re || !wk.sp || !wk.w) {
-			work_free(&wk);
-			return c0_fail(C0_ENOMEM, "drift: out of memory for a %dx%d frame", W, H);
+		*wk = s->pool[--s->npool];
+	if (!wk->re) {
+		wk->re = fftw_malloc(sizeof(double) * 2 * (size_t)m * LB);
+		wk->sp = fftw_malloc(sizeof(fftw_complex) * (size_t)(m + 1) * LB);
+		if (!wk->re || !wk->sp) {
+			work_free(wk);
+			return C0_ENOMEM;
 		}
 	}
-	if (dx != 0)
-		shift_lines(s->rf, s->rb, s->br, &wk, img, W, H, W, 1, dx);
-	if (dy != 0)
-		shift_lines(s->cf, s->cb, s->bc, &wk, img, H, W, 1, W, dy);
+	return C0_OK;
+}
+
+static void give(struct c0_fshift *s, struct work *wk)
+{
 	int kept = 0;
 #pragma omp critical(c0_fshift_pool)
 	if (s->npool < POOL)
-		s->pool[s->npool++] = wk, kept = 1;
+		s->pool[s->npool++] = *wk, kept = 1;
 	if (!kept)
-		work_free(&wk);
-	return C0_OK;
+		work_free(wk);
+}
+
+/* The blocks of lines are shared among the threads when the caller is not
+ * itself one of several (a single stack's drift, frame by frame). */
+int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy)
+{
+	const int H = s->H, W = s->W;
+	if (dx == 0 && dy == 0)
+		return C0_OK;
+	fftw_complex *wr = fftw_malloc(sizeof(fftw_complex) * (size_t)(W + 1));
+	fftw_complex *wc = fftw_malloc(sizeof(fftw_complex) * (size_t)(H + 1));
+	int fail = wr && wc ? C0_OK : C0_ENOMEM;
+	if (!fail)
+		phases(wr, W, dx), phases(wc, H, dy);
+#pragma omp parallel if (!fail && !omp_in_parallel() && H * W >= 256 * 256)
+	{
+		struct work wk;
+		const int st = take(s, &wk);
+		if (st) {
+#pragma omp atomic write
+			fail = st;
+		}
+		/* every thread meets both loops; one without buffers leaves its lines */
+#pragma omp for schedule(static)
+		for (int k0 = 0; k0 < H; k0 += s->br)
+			if (!st && dx != 0)
+				shift_block(s->rf, s->rb, s->br, &wk, wr, img, W, H, W, 1, k0);
+#pragma omp for schedule(static)
+		for (int k0 = 0; k0 < W; k0 += s->bc)
+			if (!st && dy != 0)
+				shift_block(s->cf, s->cb, s->bc, &wk, wc, img, H, W, 1, W, k0);
+		if (!st)
+			give(s, &wk);
+	}
+	fftw_free(wr), fftw_free(wc);
+	return fail ? c0_fail(C0_ENOMEM, "drift: out of memory for a %dx%d frame", W, H) : C0_OK;
 }
