@@ -126,9 +126,9 @@ static int ws_alloc(struct wctx *w, struct ctx *c)
 {
 	const size_t Ly = (size_t)c->op->Ly, L = Ly * c->op->Lx;
 	*w = (struct wctx){ c, c0_alloc(L, sizeof(size_t)), 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
-			    c0_alloc(L, sizeof(int)), c0_alloc(L, sizeof(double)), c0_alloc(L, sizeof(double)),
-			    c0_alloc(L, sizeof(double)), c0_alloc(Ly, sizeof(int)), c0_alloc(Ly, sizeof(int)) };
-	return w->ws && w->rs && w->run && w->col && w->cw && w->nw && w->T && w->lo && w->hi ? C0_OK : C0_ENOMEM;
+			    c0_alloc(L, sizeof(int)), NULL, NULL, c0_alloc(L, sizeof(double)), c0_alloc(Ly, sizeof(int)),
+			    c0_alloc(Ly, sizeof(int)) };
+	return w->ws && w->rs && w->run && w->col && w->T && w->lo && w->hi ? C0_OK : C0_ENOMEM;
 }
 
 static void ws_free(struct wctx *w)
@@ -136,17 +136,22 @@ static void ws_free(struct wctx *w)
 	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->cw), free(w->nw), free(w->T), free(w->lo), free(w->hi);
 }
 
-/* The set := the pixels with in[i], in grid order; xw their values in x. */
-static void ws_set(struct wctx *w, const uint8_t *in, const double *x, double *xw)
+/* The set := the pixels with in[i], in grid order; xw their values in x */
+static int ws_set(struct wctx *w, const uint8_t *in, const double *x, double *xw)
 {
 	const size_t L = (size_t)w->c->op->Ly * w->c->op->Lx;
 	w->nws = 0;
 	for (size_t i = 0; i < L; i++)
-		if (in[i]) {
-			xw[w->nws] = x[i], w->cw[w->nws] = w->c->C[i], w->nw[w->nws] = w->c->op->n[i];
-			w->ws[w->nws++] = i;
-		}
+		if (in[i])
+			xw[w->nws] = x[i], w->ws[w->nws++] = i;
 	ws_index(w);
+	free(w->cw), free(w->nw);
+	w->cw = c0_alloc(w->nws, sizeof *w->cw), w->nw = c0_alloc(w->nws, sizeof *w->nw);
+	if (!w->cw || !w->nw)
+		return C0_ENOMEM;
+	for (size_t k = 0; k < w->nws; k++)
+		w->cw[k] = w->c->C[w->ws[k]], w->nw[k] = w->c->op->n[w->ws[k]];
+	return C0_OK;
 }
 
 /* Row a of T = V Hx: the set's non-zero pixels in row a, scattered (Hx
@@ -292,7 +297,8 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 		}
 		if (!grew && part.converged)
 			break;
-		ws_set(&w, in, x, xw);
+		if ((st = ws_set(&w, in, x, xw)))
+			break;
 		for (size_t k = 0; pruned && k < w.nws; k++)
 			pw[k] = xp[ws[k]];
 		part.prev = pruned ? pw : NULL;
@@ -350,8 +356,7 @@ static int solve_masked(struct ctx *ctx, const struct c0_fista_conf *fc, double 
 	struct wctx w;
 	int st = ws_alloc(&w, ctx);
 	double *xw = c0_alloc(L, sizeof *xw);
-	if (!st && xw) {
-		ws_set(&w, mask, x, xw);
+	if (!st && xw && !(st = ws_set(&w, mask, x, xw))) {
 		st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, 0, xw, fc, info);
 		for (size_t k = 0; !st && k < w.nws; k++)
 			x[w.ws[k]] = xw[k];
