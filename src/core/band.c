@@ -164,6 +164,27 @@ void c0_band_apply_x(const struct c0_band *b, int ny, const double *in, double *
 	}
 }
 
+C0_HOT static void scatter_row(const struct c0_band *b, const double *in, double *out)
+{
+	const int w = b->w;
+	memset(out, 0, sizeof *out * (size_t)b->m);
+	for (int k = 0; k < b->n; k++) {
+		if (in[k] == 0)
+			continue;
+		const double v = in[k], *r = b->v + (size_t)k * w;
+		double *o = out + b->start[k];
+		for (int u = 0; u < w; u++)
+			o[u] += v * r[u];
+	}
+}
+
+void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *in, double *out)
+{
+#pragma omp parallel for schedule(static) if ((long)ny * b->m * b->w > 100000)
+	for (int y = 0; y < ny; y++)
+		scatter_row(b, in + (size_t)y * b->n, out + (size_t)y * b->m);
+}
+
 void c0_band_apply_y(const struct c0_band *b, int nx, const double *in, double *out)
 {
 	const int m = b->m, n = b->n, nblk = (nx + VB - 1) / VB;

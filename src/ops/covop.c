@@ -166,9 +166,19 @@ void c0_covop_adjoint(struct c0_covop *op, const struct c0_cov *cov, const doubl
 	}
 }
 
+/* x is sparse in the solvers (a few % of the grid after their first
+ * iterations): the first product then goes through its non-zeros only */
 void c0_covop_normal(struct c0_covop *op, const double *x, double *out)
 {
-	c0_band_apply_x(&op->Hx, op->Ly, x, op->tmp);
+	const size_t L = (size_t)op->Ly * op->Lx;
+	size_t nz = 0;
+#pragma omp parallel for reduction(+ : nz) if (L > 100000)
+	for (size_t i = 0; i < L; i++)
+		nz += x[i] != 0;
+	if (nz < L / 4)
+		c0_band_apply_x_sym_sparse(&op->Hx, op->Ly, x, op->tmp);
+	else
+		c0_band_apply_x(&op->Hx, op->Ly, x, op->tmp);
 	c0_band_apply_y(&op->Hy, op->Lx, op->tmp, out);
 }
 
