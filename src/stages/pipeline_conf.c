@@ -42,7 +42,7 @@ static const struct param params[] = {
 	{ "penalty", P_ENUM, F(penalty), 0, 0, "l1|cel0", "support sparsity penalty (l1)" },
 	NUM(lambda, P_DOUBLE, "support regularisation relative to lambda_max (0: automatic, from the noise of the frame halves)"),
 	NUM(lag, P_INT, "covariance lag radius in pixels (0: ceil(6 sigma / pixel))"),
-	NUM(iterations, P_INT, "maximum FISTA iterations, per reweighting for cel0 (2000)"),
+	NUM(iterations, P_INT, "maximum FISTA iterations, per reweighting for cel0 (-1: 2000, or 10000 for pruned)"),
 	{ "support_solver", P_ENUM, F(support_solver), 0, 0, "fista|pruned",
 	  "l1 support solver: FISTA on a working set fixed until it converges (fista), or re-made every 100 iterations (pruned)" },
 	NUM(tol, P_DOUBLE, "FISTA stops when the iterate's relative change falls below this (1e-5)"),
@@ -235,7 +235,10 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 		return c0_fail(C0_EINVAL, "depth_pool_nm %g: must be a window in nm (0: off, -1: the default, %g FWHM)", c->depth_pool_nm, C0_DEPTH_POOL_FWHM);
 	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
-					       .fista = { c->iterations, c->tol }, .cel0_outer = c->reweightings,
+					       .fista = { c->iterations != -1 ? c->iterations
+							  : c->support_solver == C0_SUPPORT_PRUNED ? C0_PRUNED_MAXIT : C0_FISTA_MAXIT,
+							  c->tol },
+					       .cel0_outer = c->reweightings,
 					       .solver = c->support_solver,
 					       .frc = c->frc, .tile = c->tile };
 	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,

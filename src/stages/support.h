@@ -34,7 +34,12 @@ struct c0_support_conf {
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { 2000, 1e-5 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, 1e-5 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL }
+/* The iteration caps: fista's is part of the estimator (its capped iterate
+ * matched the simulated truth better than the minimiser, docs/parameters.md);
+ * pruned's is a safety net (it stops on converging, 3300-5300 at 256 tiles). */
+#define C0_FISTA_MAXIT 2000
+#define C0_PRUNED_MAXIT 10000
 /* Default tile side (docs/parameters.md): tiles are solved side by side and
  * overlap by two covariance lags on each side. */
 #define C0_SUPPORT_TILE 256
