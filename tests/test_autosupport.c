@@ -146,6 +146,20 @@ static void test_fshift(void)
 	v0 /= S * S, v1 /= n, c1 /= n;
 	CHECK_MSG(fabs(v1 / v0 - 1) < 0.1 && fabs(c1 / v1) < 0.08, "noise variance ratio %g, lag-1 correlation %g", v1 / v0, c1 / v1);
 	c0_fshift_free(sh);
+	/* a frame large enough for the threads to share its lines gives the
+	 * same bits as one shifted inside a team (serially) */
+	enum { BH = 260, BW = 300 };
+	float *p = malloc(sizeof *p * BH * BW), *q = malloc(sizeof *q * BH * BW);
+	for (int i = 0; i < BH * BW; i++)
+		p[i] = q[i] = (float)c0_rng_normal(&rng);
+	CHECK(c0_fshift_new(BH, BW, &sh) == C0_OK);
+	int st = c0_fshift_apply(sh, p, 0.3, -2.7), st2 = -1;
+#pragma omp parallel num_threads(2)
+#pragma omp single
+	st2 = c0_fshift_apply(sh, q, 0.3, -2.7);
+	CHECK(st == C0_OK && st2 == C0_OK && memcmp(p, q, sizeof *p * BH * BW) == 0);
+	c0_fshift_free(sh);
+	free(p), free(q);
 }
 
 static void test_frc(void)
