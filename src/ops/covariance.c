@@ -26,6 +26,15 @@ struct c0_cov_acc {
 	int dropped;        /* rows [0, dropped) of sum are given back */
 };
 
+int c0_cov_lag_count(int d)
+{
+	int n = 0;
+	for (int dy = 0; dy <= d; dy++)
+		for (int dx = -d; dx <= d; dx++)
+			n += (dy > 0 || dx >= 0) && dy * dy + dx * dx <= d * d;
+	return n;
+}
+
 int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 {
 	*out = NULL;
@@ -35,7 +44,7 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 	if (!a)
 		return C0_ENOMEM;
 	a->W = W, a->H = H, a->d = d;
-	a->nlag = (d + 1) * (2 * d + 1) - d;
+	a->nlag = c0_cov_lag_count(d);
 	size_t n = (size_t)W * H;
 	a->block = c0_cov_block_frames(n);
 	a->dy = c0_alloc((size_t)a->nlag, sizeof(int));
@@ -47,12 +56,12 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 	a->blk = c0_alloc(n * (size_t)a->block, sizeof(float));
 	if (!a->dy || !a->dx || !a->sum || !a->shift || !a->s1 || !a->st || !a->blk) {
 		c0_cov_acc_free(a);
-		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, (d + 1) * (2 * d + 1) - d);
+		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, a->nlag);
 	}
 	int l = 0;
 	for (int dy = 0; dy <= d; dy++)
 		for (int dx = -d; dx <= d; dx++)
-			if (dy > 0 || dx >= 0)
+			if ((dy > 0 || dx >= 0) && dy * dy + dx * dx <= d * d)
 				a->dy[l] = dy, a->dx[l] = dx, l++;
 	*out = a;
 	return C0_OK;

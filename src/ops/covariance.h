@@ -1,7 +1,10 @@
 /* Banded spatial covariance of a stack, streamed frame by frame.
  *
- * Only pixel pairs within the lag radius d per axis are kept, and only half
- * of them (R is symmetric): lags (dy, dx) with dy > 0, or dy = 0 and dx >= 0.
+ * Only pixel pairs within the lag radius d are kept (dy^2 + dx^2 <= d^2: a
+ * pair r apart holds at most exp(-r^2 / 4 sigma^2) of an emitter's signal,
+ * 1e-4 at the support's d = 6 sigma, 1.5e-8 at the corners of the square the
+ * disk leaves out; 57 lags instead of 85 at d = 6), and only half of them (R
+ * is symmetric): lags (dy, dx) with dy > 0, or dy = 0 and dx >= 0.
  * r[l][y][x] = cov(pixel (y, x), pixel (y + dy_l, x + dx_l)) over time, each
  * pixel's mean and linear trend in time removed (a fade would otherwise add
  * to every covariance), normalised by T - 2; 0 where the partner falls outside.
@@ -24,6 +27,8 @@ struct c0_cov {
 struct c0_cov_acc;
 
 int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out);
+/* The number of lags kept for radius d. */
+int c0_cov_lag_count(int d);
 int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame);
 /* The covariance of the window (rows y0..y0+h-1, columns x0..x0+w-1) as if
  * the stack had only those pixels (pairs leaving the window are 0). The

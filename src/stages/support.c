@@ -1096,7 +1096,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
 	double *lm = c0_alloc(2 * nt, sizeof *lm), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
 	double *hist = automatic ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *hist) : NULL;
-	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = (d + 1) * (2 * d + 1) - d, res->frames = in->count;
+	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = c0_cov_lag_count(d), res->frames = in->count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
 	if (!st && (!lm || !s2 || !stats || (automatic && !hist) || !res->hist))
