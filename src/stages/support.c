@@ -323,8 +323,6 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 		if ((st = c0_fista_nn(smooth_ws, &w, w.nws, lw, NULL, ctx->lam, xw, &fw, &part)))
 			break;
 		used += part.iters;
-		if (getenv("C0_DBG")) { size_t nz = 0, nr = w.rs[op->Ly]; for (size_t k = 0; k < w.nws; k++) nz += xw[k] > 0;
-			fprintf(stderr, "dbg L %zu nws %zu nz %zu runs %zu its %d used %d conv %d\n", L, w.nws, nz, nr, part.iters, used, part.converged); }
 		memset(x, 0, L * sizeof *x);
 		for (size_t k = 0; k < w.nws; k++)
 			x[ws[k]] = xw[k];
