@@ -147,17 +147,14 @@ static void shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
  * their shifts, and each block is re-measured after its own shift has been
  * undone, so that the sub-pixel fit works near zero where it is unbiased.
  * The trajectory stays relative to the first block. */
-/* REFINE rounds on blocks k0..k1-1 against the mean of those blocks moved
- * back (each block moved once a round: kept for its own correlation) */
-static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, int k0, int k1)
+/* REFINE rounds on blocks k0..k1-1 against the mean of those blocks moved back */
+static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1)
 {
 	const size_t n = (size_t)d->H * d->W;
-	float *moved = k1 - k0 > 1 ? c0_alloc((size_t)(k1 - k0) * n, sizeof *moved) : NULL;
-	int st = k1 - k0 > 1 && !moved ? C0_ENOMEM : C0_OK;
+	int st = C0_OK;
 	for (int round = 0; round < REFINE && k1 - k0 > 1 && !st; round++) {
 		memset(ref, 0, n * sizeof *ref);
 		for (int k = k0; k < k1 && !st; k++) {
-			float *tmp = moved + (size_t)(k - k0) * n;
 			memcpy(tmp, d->bm[k], n * sizeof *tmp);
 			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
 			for (size_t i = 0; i < n; i++)
@@ -166,7 +163,8 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, int k0
 		spectrum(x, ref);
 		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
 		for (int k = k0; k < k1 && !st; k++) {
-			const float *tmp = moved + (size_t)(k - k0) * n;
+			memcpy(tmp, d->bm[k], n * sizeof *tmp);
+			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
 			for (size_t i = 0; i < n; i++)
 				ref[i] = tmp[i];
 			double rx, ry;
@@ -174,7 +172,6 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, int k0
 			d->bx[k] += rx, d->by[k] += ry;
 		}
 	}
-	free(moved);
 	return st;
 }
 
@@ -197,16 +194,17 @@ static int refine(struct c0_drift *d)
 	{
 		struct xcorr x;
 		double *ref = c0_alloc(n, sizeof *ref);
+		float *tmp = c0_alloc(n, sizeof *tmp);
 		int st = xcorr_init(&x, d->H, d->W);
-		if (!st && !ref)
+		if (!st && (!ref || !tmp))
 			st = C0_ENOMEM;
 #pragma omp for schedule(dynamic, 1)
 		for (int q = 0; q < d->nq; q++)
 			if (!st)
-				st = refine_range(d, &x, ref, k0[q], k0[q + 1]);
+				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1]);
 		c0_first_fail_note(&fail, st);
 		xcorr_free(&x);
-		free(ref);
+		free(ref), free(tmp);
 	}
 	if (fail.code)
 		return c0_first_fail_raise(&fail);
