@@ -23,8 +23,8 @@ void c0_band_to_dense(const struct c0_band *b, double *dense);   /* m*n, row-maj
 void c0_band_apply_x(const struct c0_band *b, int ny, const double *in, double *out);
 /* The same for a symmetric B (row k of B is its column k) and a sparse in:
  * each non-zero in[y][k] adds its row of B to out's row y. The sums run in
- * the same order as c0_band_apply_x's, so the numbers are the same; it pays
- * below ~1/2 non-zeros. */
+ * the same order as c0_band_apply_x's, so the numbers are the same, at the
+ * cost of a row of B per non-zero instead of a dot product per output. */
 void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *in, double *out);
 /* out[i][x] = sum_k B[i][k] in[k][x]; in is n x nx, out is m x nx */
 void c0_band_apply_y(const struct c0_band *b, int nx, const double *in, double *out);
