@@ -26,12 +26,19 @@ struct c0_cov_acc {
 	int dropped;        /* rows [0, dropped) of sum are given back */
 };
 
+/* lag (dy, dx) is stored: in the disk of radius d, and in the half that
+ * stands for its mirror (dy > 0, or dy = 0 and dx >= 0) */
+static int kept_lag(int dy, int dx, int d)
+{
+	return (dy > 0 || dx >= 0) && dy * dy + dx * dx <= d * d;
+}
+
 int c0_cov_lag_count(int d)
 {
 	int n = 0;
 	for (int dy = 0; dy <= d; dy++)
 		for (int dx = -d; dx <= d; dx++)
-			n += (dy > 0 || dx >= 0) && dy * dy + dx * dx <= d * d;
+			n += kept_lag(dy, dx, d);
 	return n;
 }
 
@@ -61,7 +68,7 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 	int l = 0;
 	for (int dy = 0; dy <= d; dy++)
 		for (int dx = -d; dx <= d; dx++)
-			if ((dy > 0 || dx >= 0) && dy * dy + dx * dx <= d * d)
+			if (kept_lag(dy, dx, d))
 				a->dy[l] = dy, a->dx[l] = dx, l++;
 	*out = a;
 	return C0_OK;

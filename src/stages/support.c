@@ -136,7 +136,8 @@ static void ws_free(struct wctx *w)
 	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->cw), free(w->nw), free(w->T), free(w->lo), free(w->hi);
 }
 
-/* The set := the pixels with in[i], in grid order; xw their values in x */
+/* The set := the pixels with in[i], in grid order; xw their values in x,
+ * cw and nw those of C and the column norms */
 static int ws_set(struct wctx *w, const uint8_t *in, const double *x, double *xw)
 {
 	const size_t L = (size_t)w->c->op->Ly * w->c->op->Lx;
