@@ -9,6 +9,7 @@
 #include <complex.h>
 #include <fftw3.h>
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -47,46 +48,89 @@ void c0_drift_free(struct c0_drift *d)
 }
 
 /* The correlation set-up: the reference block's spectrum, and the window
- * that keeps the image edges from correlating. */
+ * that keeps the image edges from correlating. The images are zero-padded
+ * to PH x PW, enough for the lags up to LY, LX to be those of the linear
+ * correlation: a drift beyond a quarter of the field is refused anyway, and
+ * padding to twice the image would cost 2.5x the transforms. */
 struct xcorr {
-	int H, W, PH, PW;      /* image, and the zero-padded FFT (linear, not circular, correlation) */
-	size_t ns;             /* spectrum length */
+	int H, W, PH, PW, LY, LX;
+	size_t ns;               /* spectrum length */
 	double *win, *re;
-	fftw_complex *ref, *sp;
+	fftw_complex *ref, *sp, *xs;   /* reference, image and cross spectra */
 	fftw_plan f, b;
+	int borrowed;            /* win and ref are another xcorr's */
 };
 
 static void xcorr_free(struct xcorr *x)
 {
 	if (x->f) fftw_destroy_plan(x->f);
 	if (x->b) fftw_destroy_plan(x->b);
-	free(x->win), fftw_free(x->re), fftw_free(x->ref), fftw_free(x->sp);
+	if (!x->borrowed)
+		free(x->win), fftw_free(x->ref);
+	fftw_free(x->re), fftw_free(x->sp), fftw_free(x->xs);
+}
+
+/* the smallest n' >= n with no prime factor above 5 (FFTW's fast sizes) */
+static int fft_size(int n)
+{
+	for (;; n++) {
+		int m = n;
+		while (m % 2 == 0) m /= 2;
+		while (m % 3 == 0) m /= 3;
+		while (m % 5 == 0) m /= 5;
+		if (m == 1)
+			return n;
+	}
+}
+
+/* the transforms' buffers and plans; the window and reference are x's own
+ * (share == NULL) or share's */
+static int xcorr_buffers(struct xcorr *x, const struct xcorr *share)
+{
+	x->re = fftw_malloc((size_t)x->PH * x->PW * sizeof(double));
+	x->sp = fftw_malloc(x->ns * sizeof(fftw_complex));
+	x->xs = fftw_malloc(x->ns * sizeof(fftw_complex));
+	if (share)
+		x->win = share->win, x->ref = share->ref, x->borrowed = 1;
+	else {
+		x->win = c0_alloc((size_t)x->H * x->W, sizeof *x->win);
+		x->ref = fftw_malloc(x->ns * sizeof(fftw_complex));
+	}
+	if (!x->win || !x->re || !x->ref || !x->sp || !x->xs)
+		return c0_fail(C0_ENOMEM, "drift: out of memory for the correlations of %dx%d", x->W, x->H);
+#pragma omp critical(c0_fftw_plan)
+	{
+		x->f = fftw_plan_dft_r2c_2d(x->PH, x->PW, x->re, x->sp, FFTW_ESTIMATE);
+		x->b = fftw_plan_dft_c2r_2d(x->PH, x->PW, x->xs, x->re, FFTW_ESTIMATE);
+	}
+	if (!x->f || !x->b)
+		return c0_fail(C0_ENOMEM, "drift: cannot plan the FFTs of %dx%d", x->W, x->H);
+	return C0_OK;
 }
 
 static int xcorr_init(struct xcorr *x, int H, int W)
 {
 	memset(x, 0, sizeof *x);
-	x->H = H, x->W = W, x->PH = 2 * H, x->PW = 2 * W;
-	const size_t n = (size_t)H * W, ns = (size_t)x->PH * (x->PW / 2 + 1);
-	x->ns = ns;
-	x->win = c0_alloc(n, sizeof *x->win);
-	x->re = fftw_malloc((size_t)x->PH * x->PW * sizeof(double));
-	x->ref = fftw_malloc(ns * sizeof(fftw_complex));
-	x->sp = fftw_malloc(ns * sizeof(fftw_complex));
-	if (!x->win || !x->re || !x->ref || !x->sp)
-		return C0_ENOMEM;
-#pragma omp critical(c0_fftw_plan)
-	{
-		x->f = fftw_plan_dft_r2c_2d(x->PH, x->PW, x->re, x->sp, FFTW_ESTIMATE);
-		x->b = fftw_plan_dft_c2r_2d(x->PH, x->PW, x->sp, x->re, FFTW_ESTIMATE);
-	}
-	if (!x->f || !x->b)
-		return c0_fail(C0_ENOMEM, "drift: cannot plan the FFTs of %dx%d", W, H);
+	/* lags to a quarter of the field, and one more for the sub-pixel fit */
+	x->H = H, x->W = W, x->LY = H / 4 + 2, x->LX = W / 4 + 2;
+	x->PH = fft_size(H + x->LY), x->PW = fft_size(W + x->LX);
+	x->ns = (size_t)x->PH * (x->PW / 2 + 1);
+	int st = xcorr_buffers(x, NULL);
+	if (st)
+		return st;
 	for (int y = 0; y < H; y++)
 		for (int i = 0; i < W; i++)   /* Hann */
 			x->win[(size_t)y * W + i] = (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (y + 0.5) / H)) *
 						    (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (i + 0.5) / W));
 	return C0_OK;
+}
+
+/* another thread's set-up against the same reference */
+static int xcorr_clone(struct xcorr *y, const struct xcorr *x)
+{
+	*y = *x;
+	y->re = NULL, y->sp = y->xs = NULL, y->f = y->b = NULL;
+	return xcorr_buffers(y, x);
 }
 
 /* windowed, mean-removed spectrum of img into x->sp */
@@ -119,20 +163,20 @@ static double peak3(double a, double b, double c)
 	return den < 0 ? 0.5 * (a - c) / den : 0;
 }
 
-/* shift (px) of the content of img relative to the reference */
+/* shift (px) of the content of img relative to the reference; img's
+ * spectrum is left in x->sp */
 static void shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
 {
 	const int H = x->PH, W = x->PW;
 	spectrum(x, img);
 	for (size_t i = 0; i < x->ns; i++)
-		x->sp[i] = x->sp[i] * conj(x->ref[i]);
+		x->xs[i] = x->sp[i] * conj(x->ref[i]);
 	fftw_execute(x->b);   /* x->re: circular cross-correlation, lag (0, 0) at index 0 */
 	int by = 0, bx = 0;
 	double best = -INFINITY;
-	for (int y = 0; y < H; y++)
-		for (int i = 0; i < W; i++) {
-			int ly = y <= H / 2 ? y : y - H, lx = i <= W / 2 ? i : i - W;
-			double v = x->re[(size_t)y * W + i];
+	for (int ly = 1 - x->LY; ly < x->LY; ly++)   /* the lags free of wrap-around, but the last */
+		for (int lx = 1 - x->LX; lx < x->LX; lx++) {
+			double v = x->re[(size_t)(ly < 0 ? ly + H : ly) * W + (lx < 0 ? lx + W : lx)];
 			if (v > best)
 				best = v, by = ly, bx = lx;
 		}
@@ -147,8 +191,24 @@ static void shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
  * their shifts, and each block is re-measured after its own shift has been
  * undone, so that the sub-pixel fit works near zero where it is unbiased.
  * The trajectory stays relative to the first block. */
-/* REFINE rounds on blocks k0..k1-1 against the mean of those blocks moved back */
-static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1)
+/* block k moved back by its shift, re-measured against x->ref */
+static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tmp, int k)
+{
+	const size_t n = (size_t)d->H * d->W;
+	memcpy(tmp, d->bm[k], n * sizeof *tmp);
+	int st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+	for (size_t i = 0; i < n; i++)
+		img[i] = tmp[i];
+	double rx, ry;
+	shift_of(x, img, &rx, &ry);
+	d->bx[k] += rx, d->by[k] += ry;
+	return st;
+}
+
+/* REFINE rounds on blocks k0..k1-1 against the mean of those blocks moved
+ * back; par: the blocks are re-measured side by side (one stack: the
+ * threads are not taken by the stacks), each thread with its own transforms */
+static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1, int par)
 {
 	const size_t n = (size_t)d->H * d->W;
 	int st = C0_OK;
@@ -162,15 +222,34 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float 
 		}
 		spectrum(x, ref);
 		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
-		for (int k = k0; k < k1 && !st; k++) {
-			memcpy(tmp, d->bm[k], n * sizeof *tmp);
-			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
-			for (size_t i = 0; i < n; i++)
-				ref[i] = tmp[i];
-			double rx, ry;
-			shift_of(x, ref, &rx, &ry);
-			d->bx[k] += rx, d->by[k] += ry;
+		if (!par) {
+			for (int k = k0; k < k1 && !st; k++)
+				st = remeasure(d, x, ref, tmp, k);
+			continue;
 		}
+		struct c0_first_fail fail = { 0 };
+#pragma omp parallel
+		{
+			struct xcorr own, *y = x;
+			double *img = ref;
+			float *t = tmp;
+			int ts = C0_OK;
+			if (omp_get_thread_num() > 0) {
+				y = &own, ts = xcorr_clone(&own, x);
+				img = c0_alloc(n, sizeof *img), t = c0_alloc(n, sizeof *t);
+				if (!ts && (!img || !t))
+					ts = C0_ENOMEM;
+			}
+#pragma omp for schedule(dynamic, 1)
+			for (int k = k0; k < k1; k++)
+				if (!ts)
+					ts = remeasure(d, y, img, t, k);
+			c0_first_fail_note(&fail, ts);
+			if (y != x)
+				xcorr_free(&own), free(img), free(t);
+		}
+		if (fail.code)
+			st = c0_first_fail_raise(&fail);
 	}
 	return st;
 }
@@ -201,7 +280,7 @@ static int refine(struct c0_drift *d)
 #pragma omp for schedule(dynamic, 1)
 		for (int q = 0; q < d->nq; q++)
 			if (!st)
-				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1]);
+				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1], d->nq == 1);
 		c0_first_fail_note(&fail, st);
 		xcorr_free(&x);
 		free(ref), free(tmp);
@@ -278,7 +357,8 @@ static int stack_pass(struct c0_frames *r, int64_t B, struct stack_blocks *o)
 			o->bm[k][i] = (float)sum[i];
 		if (k > 0)
 			shift_of(&x, sum, &o->sx[k], &o->sy[k]);
-		spectrum(&x, sum);
+		else
+			spectrum(&x, sum);
 		memcpy(x.ref, x.sp, x.ns * sizeof *x.ref);
 	}
 	c0_progress_end(&pr);
