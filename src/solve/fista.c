@@ -29,17 +29,34 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 	info->iters = info->converged = 0;
 	for (int it = 0; it < conf->maxit; it++) {
 		double fz = f(ctx, z, g), pen = 0, dn = 0, dot = 0, vv = 0;
-#pragma omp parallel for reduction(+ : pen, dn, dot, vv) if (n > 100000)
-		for (size_t i = 0; i < n; i++) {
-			double wi = w ? w[i] : 1;
-			pen += wi * z[i];
-			double v = z[i] - step * (g[i] + lam * wi);
-			v = v > 0 ? v : 0;
-			double d = v - x[i];
-			dn += d * d;
-			dot += (z[i] - v) * d;     /* restart test <z - x+, x+ - x> */
-			vv += v * v;
-			xn[i] = v;
+		/* x+ = max(0, z - step (g + lam w)), then the sums in a loop of
+		 * their own: both loops vectorise, one with the clamp among the
+		 * sums does not. The sums feed only the objective and the restart
+		 * and stopping tests, so their lanes' order does not move x. */
+#pragma omp parallel if (n > 100000)
+		{
+			if (w) {
+#pragma omp for simd schedule(static) reduction(+ : pen)
+				for (size_t i = 0; i < n; i++) {
+					pen += w[i] * z[i];
+					double v = z[i] - step * (g[i] + lam * w[i]);
+					xn[i] = v > 0 ? v : 0;
+				}
+			} else {
+#pragma omp for simd schedule(static) reduction(+ : pen)
+				for (size_t i = 0; i < n; i++) {
+					pen += z[i];
+					double v = z[i] - step * (g[i] + lam);
+					xn[i] = v > 0 ? v : 0;
+				}
+			}
+#pragma omp for simd schedule(static) reduction(+ : dn, dot, vv)
+			for (size_t i = 0; i < n; i++) {
+				const double d = xn[i] - x[i];
+				dn += d * d;
+				dot += (z[i] - xn[i]) * d;     /* restart test <z - x+, x+ - x> */
+				vv += xn[i] * xn[i];
+			}
 		}
 		info->obj = fz + lam * pen;
 		if (info->hist && it < nh)
@@ -51,11 +68,11 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 			beta = 0, tp = 1;   /* momentum points uphill: restart */
 			restarts++;
 		}
+		if (info->prev)
+			memcpy(info->prev, x, n * sizeof *x);
 #pragma omp parallel for if (n > 100000)
 		for (size_t i = 0; i < n; i++) {
 			z[i] = xn[i] + beta * (xn[i] - x[i]);
-			if (info->prev)
-				info->prev[i] = x[i];
 			x[i] = xn[i];
 		}
 		theta = tp;
