@@ -102,15 +102,21 @@ struct wctx {
 	size_t *rs;          /* Ly + 1: row a's runs are run[rs[a]..rs[a+1]) */
 	size_t *run;         /* runs of adjacent columns: ws[run[j]..run[j+1]) */
 	int *col;            /* column of each ws pixel */
+	size_t *rg;          /* Ly + 1: row a's groups are grp[rg[a]..rg[a+1]) */
+	size_t *grp;         /* groups of up to 4 adjacent pixels of a run: ws[grp[g]..grp[g + 1]) */
 	double *cw, *nw;     /* C and the column norms at the set's pixels */
-	double *T;           /* Ly x Lx scratch, zero outside the columns in use */
+	double *T;           /* Ly x TLD scratch, zero outside the columns in use */
 	int *lo, *hi;        /* Ly: columns [lo, hi) of T's row written by the last call */
 };
+
+/* T's row stride: 3 columns past the grid's, never written, so that a group
+ * of 4 at the row's end reads its lanes within the row */
+#define TLD(Lx) ((size_t)(Lx) + 3)
 
 static void ws_index(struct wctx *w)
 {
 	const int Ly = w->c->op->Ly, Lx = w->c->op->Lx;
-	size_t k = 0, j = 0;
+	size_t k = 0, j = 0, g = 0;
 	for (int a = 0; a < Ly; a++) {
 		w->rs[a] = j;
 		for (; k < w->nws && w->ws[k] < (size_t)(a + 1) * Lx; k++) {
@@ -120,20 +126,28 @@ static void ws_index(struct wctx *w)
 		}
 	}
 	w->rs[Ly] = j, w->run[j] = k;
+	for (int a = 0; a < Ly; a++) {
+		w->rg[a] = g;
+		for (size_t r = w->rs[a]; r < w->rs[a + 1]; r++)
+			for (k = w->run[r]; k < w->run[r + 1]; k += 4)
+				w->grp[g++] = k;
+	}
+	w->rg[Ly] = g, w->grp[g] = w->nws;
 }
 
 static int ws_alloc(struct wctx *w, struct ctx *c)
 {
 	const size_t Ly = (size_t)c->op->Ly, L = Ly * c->op->Lx;
 	*w = (struct wctx){ c, c0_alloc(L, sizeof(size_t)), 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
-			    c0_alloc(L, sizeof(int)), NULL, NULL, c0_alloc(L, sizeof(double)), c0_alloc(Ly, sizeof(int)),
-			    c0_alloc(Ly, sizeof(int)) };
-	return w->ws && w->rs && w->run && w->col && w->T && w->lo && w->hi ? C0_OK : C0_ENOMEM;
+			    c0_alloc(L, sizeof(int)), c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)), NULL, NULL,
+			    c0_alloc(Ly * TLD(c->op->Lx), sizeof(double)), c0_alloc(Ly, sizeof(int)), c0_alloc(Ly, sizeof(int)) };
+	return w->ws && w->rs && w->run && w->col && w->rg && w->grp && w->T && w->lo && w->hi ? C0_OK : C0_ENOMEM;
 }
 
 static void ws_free(struct wctx *w)
 {
-	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->cw), free(w->nw), free(w->T), free(w->lo), free(w->hi);
+	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->rg), free(w->grp), free(w->cw), free(w->nw), free(w->T);
+	free(w->lo), free(w->hi);
 }
 
 /* The set := the pixels with in[i], in grid order; xw their values in x,
@@ -173,31 +187,42 @@ C0_HOT static void ws_row_scatter(const struct wctx *w, const struct c0_band *Hx
 }
 
 /* out = Hy T at the set's pixels of row a: a column dot product per pixel,
- * four adjacent pixels of a run in one vector (each lane sums in the scalar
- * loop's order, so the grouping does not change a bit) */
+ * a group of 4 adjacent pixels of a run in one vector, and four groups side
+ * by side, whose sums are independent chains: one chain of Hy->w dependent
+ * additions is bound by the addition's latency. Each lane sums in the
+ * order of a scalar loop over u, so the grouping does not change a bit. */
 typedef double c0_v4 __attribute__((vector_size(32)));
+static inline void put_group(const struct wctx *w, size_t g, c0_v4 ax, double *out)
+{
+	for (size_t k = w->grp[g]; k < w->grp[g + 1]; k++)
+		out[k] = ax[k - w->grp[g]];
+}
 C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy, int a, int Lx, double *out)
 {
-	const double *h = Hy->v + (size_t)a * Hy->w, *tb = w->T + (size_t)Hy->start[a] * Lx;
-	for (size_t j = w->rs[a]; j < w->rs[a + 1]; j++) {
-		size_t k = w->run[j];
-		for (; k + 1 < w->run[j + 1] && w->col[k] + 4 <= Lx; k += 4) {
-			const double *t = tb + w->col[k];
-			c0_v4 ax = { 0, 0, 0, 0 }, tu;
-			for (int u = 0; u < Hy->w; u++) {
-				memcpy(&tu, t + (size_t)u * Lx, sizeof tu);
-				ax += h[u] * tu;
-			}
-			for (size_t q = 0; q < 4 && k + q < w->run[j + 1]; q++)
-				out[k + q] = ax[q];
+	const size_t ld = TLD(Lx);
+	const double *h = Hy->v + (size_t)a * Hy->w, *tb = w->T + (size_t)Hy->start[a] * ld;
+	size_t g = w->rg[a];
+	for (; g + 4 <= w->rg[a + 1]; g += 4) {
+		const double *t0 = tb + w->col[w->grp[g]], *t1 = tb + w->col[w->grp[g + 1]];
+		const double *t2 = tb + w->col[w->grp[g + 2]], *t3 = tb + w->col[w->grp[g + 3]];
+		c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
+		for (int u = 0; u < Hy->w; u++) {
+			const size_t o = (size_t)u * ld;
+			memcpy(&v0, t0 + o, sizeof v0), memcpy(&v1, t1 + o, sizeof v1);
+			memcpy(&v2, t2 + o, sizeof v2), memcpy(&v3, t3 + o, sizeof v3);
+			a0 += h[u] * v0, a1 += h[u] * v1, a2 += h[u] * v2, a3 += h[u] * v3;
 		}
-		for (; k < w->run[j + 1]; k++) {
-			const double *t = tb + w->col[k];
-			double ax = 0;
-			for (int u = 0; u < Hy->w; u++)
-				ax += h[u] * t[(size_t)u * Lx];
-			out[k] = ax;
+		put_group(w, g, a0, out), put_group(w, g + 1, a1, out);
+		put_group(w, g + 2, a2, out), put_group(w, g + 3, a3, out);
+	}
+	for (; g < w->rg[a + 1]; g++) {
+		const double *t = tb + w->col[w->grp[g]];
+		c0_v4 ax = { 0, 0, 0, 0 }, tu;
+		for (int u = 0; u < Hy->w; u++) {
+			memcpy(&tu, t + (size_t)u * ld, sizeof tu);
+			ax += h[u] * tu;
 		}
+		put_group(w, g, ax, out);
 	}
 }
 
@@ -211,7 +236,7 @@ static void normal_ws(struct wctx *w, const double *v, double *out)
 	const int par = w->nws > 20000;
 #pragma omp parallel for schedule(dynamic, 16) if (par)
 	for (int a = 0; a < Ly; a++) {
-		double *t = w->T + (size_t)a * Lx;
+		double *t = w->T + (size_t)a * TLD(Lx);
 		if (w->hi[a] > w->lo[a])
 			memset(t + w->lo[a], 0, sizeof *t * (size_t)(w->hi[a] - w->lo[a]));
 		w->lo[a] = Lx, w->hi[a] = 0;
