@@ -24,10 +24,8 @@ static int lag_factor(const struct c0_band *G, int d, struct c0_band *K)
 	return C0_OK;
 }
 
-/* H = (G^T G) o (G^T G), stored as a band without the tails below 1e-8 of
- * its largest entry: 49 instead of 69 entries a row at 229 nm / 25 nm, the
- * same support (bitwise, 128x128x200, 300 iterations) for 16 % fewer
- * instructions in the whole support step. */
+/* H = (G^T G) o (G^T G), stored as a band without the tails below
+ * C0_COVOP_TRIM of its largest entry (covop.h). */
 static int hadamard_gram(const struct c0_band *G, struct c0_band *H)
 {
 	const int L = G->n;
@@ -58,7 +56,7 @@ static int hadamard_gram(const struct c0_band *G, struct c0_band *H)
 		}
 	}
 	c0_band_free(&GT);
-	return c0_band_trim(H, 1e-8);
+	return c0_band_trim(H, C0_COVOP_TRIM);
 }
 
 static int axis(int N, int r, double sigma, int d, struct c0_band *G, struct c0_band *H,
