@@ -115,7 +115,16 @@ __attribute__((target_clones("avx2", "default")))
 #endif
 static void row_products(double *row, const float *p, const float *q, int x0, int x1, int nb, size_t stride)
 {
-	for (int b = 0; b < nb; b++) {
+	int b = 0;
+	/* four frames a pass: a quarter of the loads and stores of row */
+	for (; b + 4 <= nb; b += 4) {
+		const float *p0 = p + b * stride, *p1 = p0 + stride, *p2 = p1 + stride, *p3 = p2 + stride;
+		const float *q0 = q + b * stride, *q1 = q0 + stride, *q2 = q1 + stride, *q3 = q2 + stride;
+		for (int x = x0; x < x1; x++)
+			row[x] = row[x] + (double)p0[x] * q0[x] + (double)p1[x] * q1[x] + (double)p2[x] * q2[x] +
+				 (double)p3[x] * q3[x];
+	}
+	for (; b < nb; b++) {
 		const float *pb = p + b * stride, *qb = q + b * stride;
 		for (int x = x0; x < x1; x++)
 			row[x] += (double)pb[x] * qb[x];
