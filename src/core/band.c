@@ -124,10 +124,11 @@ void c0_band_to_dense(const struct c0_band *b, double *d)
 			d[(size_t)i * b->n + b->start[i] + k] = b->v[(size_t)i * b->w + k];
 }
 
-/* Both products run the same kernel on 8 vectors at once, stored
- * interleaved (t[k*8 + j] is entry k of vector j): the inner loop has unit
- * stride over the 8 vectors and vectorises, where a dot product per vector
- * would not without reassociating floating-point sums. */
+/* The product along x runs on 8 rows at once, stored interleaved (t[k*8 +
+ * j] is entry k of row j): the inner loop has unit stride over the 8 rows
+ * and vectorises, where a dot product per row would not without
+ * reassociating floating-point sums. (Along y the rows are already
+ * contiguous: strip_product below.) */
 #define VB 8
 C0_HOT static void kernel8(const struct c0_band *b, const double *t, double *o)
 {
@@ -185,25 +186,43 @@ void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *i
 		scatter_row(b, in + (size_t)y * b->n, out + (size_t)y * b->m);
 }
 
+/* The product along the slow axis on 16 columns from x: each output row
+ * combines input rows, the 16 sums held in registers (four independent
+ * chains); each column sums over k in order, as the scalar tail does. The
+ * columns' strip of the input (all rows) stays in cache for every output
+ * row, as apply_x's interleaved blocks do, without copying it. */
+typedef double c0_v4 __attribute__((vector_size(32)));
+C0_HOT static void strip_product(const struct c0_band *b, int nx, int x, const double *in, double *out)
+{
+	for (int i = 0; i < b->m; i++) {
+		const double *r = b->v + (size_t)i * b->w, *s = in + (size_t)b->start[i] * nx + x;
+		double *o = out + (size_t)i * nx + x;
+		if (x + 16 <= nx) {
+			c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
+			for (int k = 0; k < b->w; k++) {
+				const double *sk = s + (size_t)k * nx;
+				memcpy(&v0, sk, sizeof v0), memcpy(&v1, sk + 4, sizeof v1);
+				memcpy(&v2, sk + 8, sizeof v2), memcpy(&v3, sk + 12, sizeof v3);
+				a0 += r[k] * v0, a1 += r[k] * v1, a2 += r[k] * v2, a3 += r[k] * v3;
+			}
+			memcpy(o, &a0, sizeof a0), memcpy(o + 4, &a1, sizeof a1);
+			memcpy(o + 8, &a2, sizeof a2), memcpy(o + 12, &a3, sizeof a3);
+			continue;
+		}
+		for (int j = 0; j < nx - x; j++) {
+			double acc = 0;
+			for (int k = 0; k < b->w; k++)
+				acc += r[k] * s[(size_t)k * nx + j];
+			o[j] = acc;
+		}
+	}
+}
+
 void c0_band_apply_y(const struct c0_band *b, int nx, const double *in, double *out)
 {
-	const int m = b->m, n = b->n, nblk = (nx + VB - 1) / VB;
-#pragma omp parallel if ((long)nx * m * b->w > 100000)
-	{
-		double *t = malloc(sizeof *t * (size_t)n * VB), *o = malloc(sizeof *o * (size_t)m * VB);
-#pragma omp for schedule(static)
-		for (int blk = 0; blk < nblk; blk++) {
-			const int x0 = blk * VB, nc = nx - x0 < VB ? nx - x0 : VB;
-			for (int k = 0; k < n; k++)
-				for (int j = 0; j < VB; j++)
-					t[(size_t)k * VB + j] = j < nc ? in[(size_t)k * nx + x0 + j] : 0;
-			kernel8(b, t, o);
-			for (int i = 0; i < m; i++)
-				for (int j = 0; j < nc; j++)
-					out[(size_t)i * nx + x0 + j] = o[(size_t)i * VB + j];
-		}
-		free(t), free(o);
-	}
+#pragma omp parallel for schedule(static) if ((long)nx * b->m * b->w > 100000)
+	for (int x = 0; x < nx; x += 16)
+		strip_product(b, nx, x, in, out);
 }
 
 double c0_band_lambda_max(const struct c0_band *b, int iters)
