@@ -11,3 +11,10 @@
 #else
 #define C0_HOT
 #endif
+
+/* Parallel sums run over fixed blocks of this many elements, each summed by
+ * one thread, and the blocks' sums are added in block order: the same bits
+ * for any number of threads (a reduction clause splits the sum by thread,
+ * and a sum that moves the iterates or a stopping test would then make the
+ * results depend on the thread count). */
+#define C0_SUM_BLOCK 16384

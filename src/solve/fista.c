@@ -1,4 +1,5 @@
 #include "solve/fista.h"
+#include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -11,9 +12,11 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 {
 	if (!(lip > 0) || !(lam >= 0))
 		return c0_fail(C0_EINVAL, "fista: need a positive Lipschitz constant and lambda >= 0 (got %g, %g)", lip, lam);
+	const size_t nb = (n + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK;
 	double *z = c0_alloc(n, sizeof *z), *g = c0_alloc(n, sizeof *g), *xn = c0_alloc(n, sizeof *xn);
-	if (!z || !g || !xn) {
-		free(z), free(g), free(xn);
+	double *part = c0_alloc(4 * nb + 4, sizeof *part);
+	if (!z || !g || !xn || !part) {
+		free(z), free(g), free(xn), free(part);
 		return C0_ENOMEM;
 	}
 	double theta = info->prev && info->theta > 1 ? info->theta : 1, step = 1 / lip;
@@ -29,35 +32,39 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 	info->iters = info->converged = 0;
 	for (int it = 0; it < conf->maxit; it++) {
 		double fz = f(ctx, z, g), pen = 0, dn = 0, dot = 0, vv = 0;
-		/* x+ = max(0, z - step (g + lam w)), then the sums in a loop of
-		 * their own: both loops vectorise, one with the clamp among the
-		 * sums does not. The sums feed only the objective and the restart
-		 * and stopping tests, so their lanes' order does not move x. */
-#pragma omp parallel if (n > 100000)
-		{
+		/* block by block (C0_SUM_BLOCK): x+ = max(0, z - step (g + lam w)),
+		 * then the sums in a loop of their own (both loops vectorise; with
+		 * the clamp among the sums one would not) */
+#pragma omp parallel for schedule(static) if (n > 100000)
+		for (size_t b = 0; b < nb; b++) {
+			const size_t i0 = b * C0_SUM_BLOCK, i1 = n - i0 < C0_SUM_BLOCK ? n : i0 + C0_SUM_BLOCK;
+			double pb = 0, db = 0, ob = 0, vb = 0;
 			if (w) {
-#pragma omp for simd schedule(static) reduction(+ : pen)
-				for (size_t i = 0; i < n; i++) {
-					pen += w[i] * z[i];
+#pragma omp simd reduction(+ : pb)
+				for (size_t i = i0; i < i1; i++) {
+					pb += w[i] * z[i];
 					double v = z[i] - step * (g[i] + lam * w[i]);
 					xn[i] = v > 0 ? v : 0;
 				}
 			} else {
-#pragma omp for simd schedule(static) reduction(+ : pen)
-				for (size_t i = 0; i < n; i++) {
-					pen += z[i];
+#pragma omp simd reduction(+ : pb)
+				for (size_t i = i0; i < i1; i++) {
+					pb += z[i];
 					double v = z[i] - step * (g[i] + lam);
 					xn[i] = v > 0 ? v : 0;
 				}
 			}
-#pragma omp for simd schedule(static) reduction(+ : dn, dot, vv)
-			for (size_t i = 0; i < n; i++) {
+#pragma omp simd reduction(+ : db, ob, vb)
+			for (size_t i = i0; i < i1; i++) {
 				const double d = xn[i] - x[i];
-				dn += d * d;
-				dot += (z[i] - xn[i]) * d;     /* restart test <z - x+, x+ - x> */
-				vv += xn[i] * xn[i];
+				db += d * d;
+				ob += (z[i] - xn[i]) * d;     /* restart test <z - x+, x+ - x> */
+				vb += xn[i] * xn[i];
 			}
+			part[4 * b] = pb, part[4 * b + 1] = db, part[4 * b + 2] = ob, part[4 * b + 3] = vb;
 		}
+		for (size_t b = 0; b < nb; b++)
+			pen += part[4 * b], dn += part[4 * b + 1], dot += part[4 * b + 2], vv += part[4 * b + 3];
 		info->obj = fz + lam * pen;
 		if (info->hist && it < nh)
 			info->hist[it] = info->obj;
@@ -83,7 +90,7 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 	}
 	info->restarts = restarts;
 	info->theta = theta;
-	free(z), free(g), free(xn);
+	free(z), free(g), free(xn), free(part);
 	return C0_OK;
 }
 

@@ -71,7 +71,28 @@ struct ctx {
 	double trR, R2, HW;
 	double *Ax;
 	double lam;
+	double *part;        /* 4 per C0_SUM_BLOCK of the grid: the sums' blocks */
 };
+
+/* <x, C>, <x, A^T A x>, <x, n> and sum x over the grid (A^T A x in c->Ax),
+ * in blocks (C0_SUM_BLOCK): s, from <x, n>, moves the iterates */
+static void grid_sums(struct ctx *c, const double *x, double out[4])
+{
+	const double *n = c->op->n, *C = c->C, *Ax = c->Ax;
+	const size_t L = (size_t)c->op->Ly * c->op->Lx, nb = (L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK;
+#pragma omp parallel for schedule(static) if (L > 100000)
+	for (size_t b = 0; b < nb; b++) {
+		const size_t i0 = b * C0_SUM_BLOCK, i1 = L - i0 < C0_SUM_BLOCK ? L : i0 + C0_SUM_BLOCK;
+		double xc = 0, xax = 0, xn = 0, x1 = 0;
+		for (size_t i = i0; i < i1; i++)
+			xc += x[i] * C[i], xax += x[i] * Ax[i], xn += x[i] * n[i], x1 += x[i];
+		c->part[4 * b] = xc, c->part[4 * b + 1] = xax, c->part[4 * b + 2] = xn, c->part[4 * b + 3] = x1;
+	}
+	out[0] = out[1] = out[2] = out[3] = 0;
+	for (size_t b = 0; b < nb; b++)
+		for (int k = 0; k < 4; k++)
+			out[k] += c->part[4 * b + k];
+}
 
 /* f(x) = min_s 1/2 ||R - M(x) - s I||^2 (s in closed form) and its gradient */
 static double smooth(void *vctx, const double *x, double *g)
@@ -80,10 +101,9 @@ static double smooth(void *vctx, const double *x, double *g)
 	const struct c0_covop *op = c->op;
 	const size_t L = (size_t)op->Ly * op->Lx;
 	c0_covop_normal(c->op, x, c->Ax);
-	double xc = 0, xax = 0, xn = 0;
-#pragma omp parallel for reduction(+ : xc, xax, xn) if (L > 100000)
-	for (size_t i = 0; i < L; i++)
-		xc += x[i] * c->C[i], xax += x[i] * c->Ax[i], xn += x[i] * op->n[i];
+	double sum[4];
+	grid_sums(c, x, sum);
+	const double xc = sum[0], xax = sum[1], xn = sum[2];
 	double s = fmax(0, (c->trR - xn) / c->HW);
 #pragma omp parallel for if (L > 100000)
 	for (size_t i = 0; i < L; i++)
@@ -402,10 +422,9 @@ static double gap(void *vctx, const double *x)
 	const struct c0_covop *op = c->op;
 	const size_t L = (size_t)op->Ly * op->Lx;
 	c0_covop_normal(c->op, x, c->Ax);
-	double xc = 0, xax = 0, xn = 0, x1 = 0;
-#pragma omp parallel for reduction(+ : xc, xax, xn, x1) if (L > 100000)
-	for (size_t i = 0; i < L; i++)
-		xc += x[i] * c->C[i], xax += x[i] * c->Ax[i], xn += x[i] * op->n[i], x1 += x[i];
+	double sum[4];
+	grid_sums(c, x, sum);
+	const double xc = sum[0], xax = sum[1], xn = sum[2], x1 = sum[3];
 	const double s = fmax(0, (c->trR - xn) / c->HW);
 	double worst = 0;      /* max_a (A^T rho)_a = max_a -g_a */
 #pragma omp parallel for reduction(max : worst) if (L > 100000)
@@ -454,12 +473,13 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 		return st;
 	double *C = c0_alloc(L, sizeof *C);
 	double *x = c0_alloc(L, sizeof *x), *Ax = c0_alloc(L, sizeof *Ax);
+	double *part = c0_alloc(4 * ((L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK), sizeof *part);
 	res->Ly = H * r, res->Lx = W * r, res->lag = cov->d, res->nlag = cov->nlag, res->frames = cov->frames;
 	res->mask = c0_alloc(L, 1);
 	res->rx = c0_alloc(L, sizeof *res->rx);
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!C || !x || !Ax || !res->mask || !res->rx || !res->hist) {
+	if (!C || !x || !Ax || !part || !res->mask || !res->rx || !res->hist) {
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -475,7 +495,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 		goto out;
 	}
 	res->norm = mx;
-	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, 0 };
+	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, 0, part };
 	for (int l = 0; l < cov->nlag; l++) {
 		double w = c0_cov_weight(cov, l);
 		for (size_t i = 0; i < n; i++) {
@@ -522,7 +542,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	}
 	res->sigma2 = fmax(0, (ctx.trR - xn) / ctx.HW) * mx;
 out:
-	free(C), free(x), free(Ax);
+	free(C), free(x), free(Ax), free(part);
 	c0_covop_free(&op);
 	res->t_solve = c0_now() - t0;
 	return st;
