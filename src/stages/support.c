@@ -212,10 +212,10 @@ C0_HOT static void ws_row_scatter(const struct wctx *w, const struct c0_band *Hx
  * additions is bound by the addition's latency. Each lane sums in the
  * order of a scalar loop over u, so the grouping does not change a bit. */
 typedef double c0_v4 __attribute__((vector_size(32)));
-static inline void put_group(const struct wctx *w, size_t g, c0_v4 ax, double *out)
+static inline void put_group(const struct wctx *w, size_t g, const c0_v4 *ax, double *out)
 {
 	for (size_t k = w->grp[g]; k < w->grp[g + 1]; k++)
-		out[k] = ax[k - w->grp[g]];
+		out[k] = (*ax)[k - w->grp[g]];
 }
 C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy, int a, int Lx, double *out)
 {
@@ -232,8 +232,8 @@ C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy,
 			memcpy(&v2, t2 + o, sizeof v2), memcpy(&v3, t3 + o, sizeof v3);
 			a0 += h[u] * v0, a1 += h[u] * v1, a2 += h[u] * v2, a3 += h[u] * v3;
 		}
-		put_group(w, g, a0, out), put_group(w, g + 1, a1, out);
-		put_group(w, g + 2, a2, out), put_group(w, g + 3, a3, out);
+		put_group(w, g, &a0, out), put_group(w, g + 1, &a1, out);
+		put_group(w, g + 2, &a2, out), put_group(w, g + 3, &a3, out);
 	}
 	for (; g < w->rg[a + 1]; g++) {
 		const double *t = tb + w->col[w->grp[g]];
@@ -242,7 +242,7 @@ C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy,
 			memcpy(&tu, t + (size_t)u * ld, sizeof tu);
 			ax += h[u] * tu;
 		}
-		put_group(w, g, ax, out);
+		put_group(w, g, &ax, out);
 	}
 }
 
