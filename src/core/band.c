@@ -191,7 +191,6 @@ void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *i
  * chains); each column sums over k in order, as the scalar tail does. The
  * columns' strip of the input (all rows) stays in cache for every output
  * row, as apply_x's interleaved blocks do, without copying it. */
-typedef double c0_v4 __attribute__((vector_size(32)));
 C0_HOT static void strip_product(const struct c0_band *b, int nx, int x, const double *in, double *out)
 {
 	for (int i = 0; i < b->m; i++) {

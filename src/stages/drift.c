@@ -186,17 +186,18 @@ static void shift_of(struct xcorr *x, const double *img, double *dx, double *dy)
 #undef AT
 }
 
-/* The first estimates correlate each block with the first, one noisy block
- * mean. Refined: the reference becomes the mean of all blocks moved back by
- * their shifts, and each block is re-measured after its own shift has been
- * undone, so that the sub-pixel fit works near zero where it is unbiased.
- * The trajectory stays relative to the first block. */
-/* block k moved back by its shift, re-measured against x->ref */
+/* block k moved back by its shift, into tmp */
+static int moved_back(struct c0_drift *d, int k, float *tmp)
+{
+	memcpy(tmp, d->bm[k], (size_t)d->H * d->W * sizeof *tmp);
+	return c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+}
+
+/* block k moved back, re-measured against x->ref */
 static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tmp, int k)
 {
 	const size_t n = (size_t)d->H * d->W;
-	memcpy(tmp, d->bm[k], n * sizeof *tmp);
-	int st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+	int st = moved_back(d, k, tmp);
 	for (size_t i = 0; i < n; i++)
 		img[i] = tmp[i];
 	double rx, ry;
@@ -205,9 +206,14 @@ static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tm
 	return st;
 }
 
-/* REFINE rounds on blocks k0..k1-1 against the mean of those blocks moved
- * back; par: the blocks are re-measured side by side (one stack: the
- * threads are not taken by the stacks), each thread with its own transforms */
+/* The first estimates correlate each block with the first, one noisy block
+ * mean. Refined: the reference becomes the mean of all blocks moved back by
+ * their shifts, and each block is re-measured after its own shift has been
+ * undone, so that the sub-pixel fit works near zero where it is unbiased.
+ * The trajectory stays relative to the first block.
+ * REFINE rounds on blocks k0..k1-1; par: the blocks are re-measured side by
+ * side (one stack: the threads are not taken by the stacks), each thread but
+ * the first with transforms of its own */
 static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1, int par)
 {
 	const size_t n = (size_t)d->H * d->W;
@@ -215,20 +221,16 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float 
 	for (int round = 0; round < REFINE && k1 - k0 > 1 && !st; round++) {
 		memset(ref, 0, n * sizeof *ref);
 		for (int k = k0; k < k1 && !st; k++) {
-			memcpy(tmp, d->bm[k], n * sizeof *tmp);
-			st = c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+			st = moved_back(d, k, tmp);
 			for (size_t i = 0; i < n; i++)
 				ref[i] += tmp[i];
 		}
+		if (st)
+			break;
 		spectrum(x, ref);
 		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
-		if (!par) {
-			for (int k = k0; k < k1 && !st; k++)
-				st = remeasure(d, x, ref, tmp, k);
-			continue;
-		}
 		struct c0_first_fail fail = { 0 };
-#pragma omp parallel
+#pragma omp parallel if (par)
 		{
 			struct xcorr own, *y = x;
 			double *img = ref;

@@ -211,7 +211,6 @@ C0_HOT static void ws_row_scatter(const struct wctx *w, const struct c0_band *Hx
  * by side, whose sums are independent chains: one chain of Hy->w dependent
  * additions is bound by the addition's latency. Each lane sums in the
  * order of a scalar loop over u, so the grouping does not change a bit. */
-typedef double c0_v4 __attribute__((vector_size(32)));
 static inline void put_group(const struct wctx *w, size_t g, const c0_v4 *ax, double *out)
 {
 	for (size_t k = w->grp[g]; k < w->grp[g + 1]; k++)
