@@ -132,6 +132,43 @@ static void test_band_ops(void)
 	c0_band_free(&t), c0_band_free(&b), free(x), free(xy);
 }
 
+/* A sparse image through X Bx and By (X Bx) with the occupancy of X Bx's
+ * strips: the same bits as without it, the occupancy covers every non-zero,
+ * and it is sparse enough that strips are skipped. */
+static void test_band_occ(void)
+{
+	struct c0_band bx, by;
+	c0_band_alloc(&bx, 40, 40, 5), c0_band_alloc(&by, 9, 9, 3);
+	for (int i = 0; i < 40; i++) {
+		bx.start[i] = i < 2 ? 0 : i > 37 ? 35 : i - 2;
+		for (int k = 0; k < 5; k++)
+			bx.v[i * 5 + k] = c0_rng_uniform(&rng);
+	}
+	for (int i = 0; i < 9; i++) {
+		by.start[i] = i < 1 ? 0 : i > 7 ? 6 : i - 1;
+		for (int k = 0; k < 3; k++)
+			by.v[i * 3 + k] = c0_rng_uniform(&rng);
+	}
+	double x[9 * 40] = { 0 }, t1[9 * 40], t2[9 * 40], y1[9 * 40], y2[9 * 40];
+	x[2 * 40 + 3] = 0.7, x[2 * 40 + 30] = -0.2, x[6 * 40 + 17] = 1.3;
+	unsigned char occ[9 * C0_BAND_STRIPS(40)];
+	c0_band_apply_x_sym_sparse(&bx, 9, x, t1);
+	c0_band_apply_x_sym_sparse_occ(&bx, 9, x, t2, occ);
+	CHECK(!memcmp(t1, t2, sizeof t1));
+	int covered = 1, empty = 0;
+	for (int y = 0; y < 9; y++)
+		for (int c = 0; c < 40; c++)
+			covered &= t2[y * 40 + c] == 0 || occ[y * C0_BAND_STRIPS(40) + c / C0_BAND_STRIP];
+	for (int k = 0; k < 9 * C0_BAND_STRIPS(40); k++)
+		empty += !occ[k];
+	CHECK(covered);
+	CHECK(empty >= 20);
+	c0_band_apply_y(&by, 40, t2, y1);
+	c0_band_apply_y_occ(&by, 40, t2, occ, y2);
+	CHECK(!memcmp(y1, y2, sizeof y1));
+	c0_band_free(&bx), c0_band_free(&by);
+}
+
 static void test_psf_factor(void)
 {
 	/* columns of G integrate the whole Gaussian when it lies inside the field */
@@ -606,6 +643,7 @@ int main(void)
 {
 	c0_rng_init(&rng, 42, 0);
 	RUN(test_band_ops);
+	RUN(test_band_occ);
 	RUN(test_psf_factor);
 	RUN(test_dense_identities);
 	RUN(test_covariance);

@@ -165,10 +165,12 @@ void c0_band_apply_x(const struct c0_band *b, int ny, const double *in, double *
 	}
 }
 
-C0_HOT static void scatter_row(const struct c0_band *b, const double *in, double *out)
+C0_HOT static void scatter_row(const struct c0_band *b, const double *in, double *out, unsigned char *occ)
 {
 	const int w = b->w;
 	memset(out, 0, sizeof *out * (size_t)b->m);
+	if (occ)
+		memset(occ, 0, (size_t)C0_BAND_STRIPS(b->m));
 	for (int k = 0; k < b->n; k++) {
 		if (in[k] == 0)
 			continue;
@@ -176,14 +178,22 @@ C0_HOT static void scatter_row(const struct c0_band *b, const double *in, double
 		double *o = out + b->start[k];
 		for (int u = 0; u < w; u++)
 			o[u] += v * r[u];
+		for (int s = b->start[k] / C0_BAND_STRIP; occ && s <= (b->start[k] + w - 1) / C0_BAND_STRIP; s++)
+			occ[s] = 1;
 	}
+}
+
+void c0_band_apply_x_sym_sparse_occ(const struct c0_band *b, int ny, const double *in, double *out, unsigned char *occ)
+{
+	const size_t ns = (size_t)C0_BAND_STRIPS(b->m);
+#pragma omp parallel for schedule(static) if ((long)ny * b->m * b->w > 100000)
+	for (int y = 0; y < ny; y++)
+		scatter_row(b, in + (size_t)y * b->n, out + (size_t)y * b->m, occ ? occ + y * ns : NULL);
 }
 
 void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *in, double *out)
 {
-#pragma omp parallel for schedule(static) if ((long)ny * b->m * b->w > 100000)
-	for (int y = 0; y < ny; y++)
-		scatter_row(b, in + (size_t)y * b->n, out + (size_t)y * b->m);
+	c0_band_apply_x_sym_sparse_occ(b, ny, in, out, NULL);
 }
 
 /* The product along the slow axis on 16 columns from x: each output row
@@ -191,11 +201,27 @@ void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *i
  * chains); each column sums over k in order, as the scalar tail does. The
  * columns' strip of the input (all rows) stays in cache for every output
  * row, as apply_x's interleaved blocks do, without copying it. */
-C0_HOT static void strip_product(const struct c0_band *b, int nx, int x, const double *in, double *out)
+C0_HOT static void strip_product(const struct c0_band *b, int nx, int x, const double *in, const int *cnt, const int *rows,
+				  double *out)
 {
 	for (int i = 0; i < b->m; i++) {
 		const double *r = b->v + (size_t)i * b->w, *s = in + (size_t)b->start[i] * nx + x;
 		double *o = out + (size_t)i * nx + x;
+		if (cnt && x + 16 <= nx) {
+			/* only the occupied rows of the band, in order */
+			const int j0 = cnt[b->start[i]], j1 = cnt[b->start[i] + b->w];
+			c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
+			for (int j = j0; j < j1; j++) {
+				const int k = rows[j];
+				const double *sk = in + (size_t)k * nx + x, rk = r[k - b->start[i]];
+				memcpy(&v0, sk, sizeof v0), memcpy(&v1, sk + 4, sizeof v1);
+				memcpy(&v2, sk + 8, sizeof v2), memcpy(&v3, sk + 12, sizeof v3);
+				a0 += rk * v0, a1 += rk * v1, a2 += rk * v2, a3 += rk * v3;
+			}
+			memcpy(o, &a0, sizeof a0), memcpy(o + 4, &a1, sizeof a1);
+			memcpy(o + 8, &a2, sizeof a2), memcpy(o + 12, &a3, sizeof a3);
+			continue;
+		}
 		if (x + 16 <= nx) {
 			c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
 			for (int k = 0; k < b->w; k++) {
@@ -217,11 +243,33 @@ C0_HOT static void strip_product(const struct c0_band *b, int nx, int x, const d
 	}
 }
 
+void c0_band_apply_y_occ(const struct c0_band *b, int nx, const double *in, const unsigned char *occ, double *out)
+{
+	const int ns = C0_BAND_STRIPS(nx);
+#pragma omp parallel if ((long)nx * b->m * b->w > 100000)
+	{
+		/* cnt[k]: occupied rows before row k in this strip */
+		int *cnt = occ ? malloc(sizeof *cnt * (2 * (size_t)b->n + 1)) : NULL, *rows = cnt ? cnt + b->n + 1 : NULL;
+#pragma omp for schedule(static)
+		for (int s = 0; s < ns; s++) {
+			if (cnt) {
+				cnt[0] = 0;
+				for (int k = 0; k < b->n; k++) {
+					const int on = occ[(size_t)k * ns + s] != 0;
+					rows[cnt[k]] = k;
+					cnt[k + 1] = cnt[k] + on;
+				}
+			}
+			/* (no memory for the counts: every strip in full) */
+			strip_product(b, nx, s * C0_BAND_STRIP, in, cnt, rows, out);
+		}
+		free(cnt);
+	}
+}
+
 void c0_band_apply_y(const struct c0_band *b, int nx, const double *in, double *out)
 {
-#pragma omp parallel for schedule(static) if ((long)nx * b->m * b->w > 100000)
-	for (int x = 0; x < nx; x += 16)
-		strip_product(b, nx, x, in, out);
+	c0_band_apply_y_occ(b, nx, in, NULL, out);
 }
 
 double c0_band_lambda_max(const struct c0_band *b, int iters)

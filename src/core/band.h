@@ -28,6 +28,18 @@ void c0_band_apply_x(const struct c0_band *b, int ny, const double *in, double *
 void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *in, double *out);
 /* out[i][x] = sum_k B[i][k] in[k][x]; in is n x nx, out is m x nx */
 void c0_band_apply_y(const struct c0_band *b, int nx, const double *in, double *out);
+
+/* Occupancy of a row-major image by strips of C0_BAND_STRIP columns:
+ * occ[y * C0_BAND_STRIPS(nx) + s] = 0 says that row y is exactly zero in
+ * columns [s C0_BAND_STRIP, (s + 1) C0_BAND_STRIP). */
+#define C0_BAND_STRIP 16
+#define C0_BAND_STRIPS(nx) (((nx) + C0_BAND_STRIP - 1) / C0_BAND_STRIP)
+/* apply_x_sym_sparse that also writes out's occupancy (ny x STRIPS(m)) */
+void c0_band_apply_x_sym_sparse_occ(const struct c0_band *b, int ny, const double *in, double *out, unsigned char *occ);
+/* apply_y given in's occupancy: an output strip whose band rows are all
+ * zero there is written as zeros without its sums (the same numbers: a sum
+ * of zero products is +0) */
+void c0_band_apply_y_occ(const struct c0_band *b, int nx, const double *in, const unsigned char *occ, double *out);
 /* Largest eigenvalue of a symmetric nonnegative band (power iteration from
  * the all-ones vector, close to the Perron vector). */
 double c0_band_lambda_max(const struct c0_band *b, int iters);

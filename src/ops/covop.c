@@ -99,7 +99,8 @@ int c0_covop_init(struct c0_covop *op, int Ny, int Nx, int r, double sigma, int 
 	op->n = c0_alloc((size_t)op->Ly * op->Lx, sizeof *op->n);
 	op->tmp = c0_alloc((size_t)op->Ly * op->Lx, sizeof *op->tmp);
 	op->tmp2 = c0_alloc((size_t)op->Ly * op->Lx, sizeof *op->tmp2);
-	if (!st && (!op->n || !op->tmp || !op->tmp2))
+	op->occ = c0_alloc((size_t)op->Ly * C0_BAND_STRIPS(op->Lx), 1);
+	if (!st && (!op->n || !op->tmp || !op->tmp2 || !op->occ))
 		st = C0_ENOMEM;
 	if (!st)
 		st = c0_band_transpose(&op->Gy, &op->GyT);
@@ -125,7 +126,7 @@ void c0_covop_free(struct c0_covop *op)
 		if (op->Ky) c0_band_free(&op->Ky[l]), c0_band_free(&op->KyT[l]);
 		if (op->Kx) c0_band_free(&op->Kx[l]), c0_band_free(&op->KxT[l]);
 	}
-	free(op->Ky), free(op->Kx), free(op->KyT), free(op->KxT), free(op->n), free(op->tmp), free(op->tmp2);
+	free(op->Ky), free(op->Kx), free(op->KyT), free(op->KxT), free(op->n), free(op->tmp), free(op->tmp2), free(op->occ);
 	memset(op, 0, sizeof *op);
 }
 
@@ -173,10 +174,14 @@ void c0_covop_normal(struct c0_covop *op, const double *x, double *out)
 #pragma omp parallel for reduction(+ : nz) if (L > 100000)
 	for (size_t i = 0; i < L; i++)
 		nz += x[i] != 0;
-	if (nz < L / 4)
-		c0_band_apply_x_sym_sparse(&op->Hx, op->Ly, x, op->tmp);
-	else
-		c0_band_apply_x(&op->Hx, op->Ly, x, op->tmp);
+	/* a sparse x leaves most strips of X Hx zero (two thirds of the
+	 * output's strips during the support's first iterations): skip them */
+	if (nz < L / 4 && op->occ) {
+		c0_band_apply_x_sym_sparse_occ(&op->Hx, op->Ly, x, op->tmp, op->occ);
+		c0_band_apply_y_occ(&op->Hy, op->Lx, op->tmp, op->occ, out);
+		return;
+	}
+	c0_band_apply_x(&op->Hx, op->Ly, x, op->tmp);
 	c0_band_apply_y(&op->Hy, op->Lx, op->tmp, out);
 }
 

@@ -17,6 +17,7 @@ struct c0_covop {
 	double *n;       /* column norms ||psi_ab||^2 = ||a_ab||, Ly x Lx */
 	double lip;      /* lambda_max(A^T A) = lambda_max(H_y) lambda_max(H_x) */
 	double *tmp, *tmp2;  /* Ly x Lx workspaces */
+	unsigned char *occ;  /* Ly x C0_BAND_STRIPS(Lx): tmp's occupancy (core/band.h) */
 };
 
 /* H's bands drop the entries below C0_COVOP_TRIM of their largest (91 -> 43
