@@ -13,6 +13,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <stdio.h>
+#include <omp.h>
 #include <string.h>
 
 int c0_support_lag(const struct c0_support_conf *c)
@@ -125,8 +126,18 @@ struct wctx {
 	size_t *rg;          /* Ly + 1: row a's groups are grp[rg[a]..rg[a+1]) */
 	size_t *grp;         /* groups of up to 4 adjacent pixels of a run: ws[grp[g]..grp[g + 1]) */
 	double *cw, *nw;     /* C and the column norms at the set's pixels */
-	double *T;           /* Ly x TLD scratch, zero outside the columns in use */
-	int *lo, *hi;        /* Ly: columns [lo, hi) of T's row written by the last call */
+	int nbuf;            /* threads that may share A^T A on the set */
+	struct tbuf *buf;    /* one each */
+};
+
+/* Rows of T = V Hx held by one thread: row base + j in slot j, zero outside
+ * the columns [lo[j], hi[j]) its last scatter wrote. Three bands' worth of
+ * rows: the rows kept are moved down once per two bands of output rows. */
+#define BUF_BANDS 3
+struct tbuf {
+	int rows;
+	double *T;           /* rows x TLD */
+	int *lo, *hi;
 };
 
 /* T's row stride: 3 columns past the grid's, never written, so that a group
@@ -158,16 +169,30 @@ static void ws_index(struct wctx *w)
 static int ws_alloc(struct wctx *w, struct ctx *c)
 {
 	const size_t Ly = (size_t)c->op->Ly, L = Ly * c->op->Lx;
+	/* inside another team (tiles side by side) the set's loops run alone */
+	const int nbuf = omp_in_parallel() ? 1 : omp_get_max_threads();
 	*w = (struct wctx){ c, c0_alloc(L, sizeof(size_t)), 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
 			    c0_alloc(L, sizeof(int)), c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)), NULL, NULL,
-			    c0_alloc(Ly * TLD(c->op->Lx), sizeof(double)), c0_alloc(Ly, sizeof(int)), c0_alloc(Ly, sizeof(int)) };
-	return w->ws && w->rs && w->run && w->col && w->rg && w->grp && w->T && w->lo && w->hi ? C0_OK : C0_ENOMEM;
+			    nbuf, c0_alloc((size_t)nbuf, sizeof(struct tbuf)) };
+	int ok = w->ws && w->rs && w->run && w->col && w->rg && w->grp && w->buf;
+	for (int i = 0; ok && i < nbuf; i++) {
+		struct tbuf *b = &w->buf[i];
+		b->rows = BUF_BANDS * c->op->Hy.w;
+		b->T = c0_alloc((size_t)b->rows * TLD(c->op->Lx), sizeof(double));
+		b->lo = c0_alloc((size_t)b->rows, sizeof(int)), b->hi = c0_alloc((size_t)b->rows, sizeof(int));
+		ok = b->T && b->lo && b->hi;
+		for (int j = 0; ok && j < b->rows; j++)
+			b->lo[j] = c->op->Lx, b->hi[j] = 0;
+	}
+	return ok ? C0_OK : C0_ENOMEM;
 }
 
 static void ws_free(struct wctx *w)
 {
-	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->rg), free(w->grp), free(w->cw), free(w->nw), free(w->T);
-	free(w->lo), free(w->hi);
+	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->rg), free(w->grp), free(w->cw), free(w->nw);
+	for (int i = 0; w->buf && i < w->nbuf; i++)
+		free(w->buf[i].T), free(w->buf[i].lo), free(w->buf[i].hi);
+	free(w->buf);
 }
 
 /* The set := the pixels with in[i], in grid order; xw their values in x,
@@ -216,10 +241,11 @@ static inline void put_group(const struct wctx *w, size_t g, const c0_v4 *ax, do
 	for (size_t k = w->grp[g]; k < w->grp[g + 1]; k++)
 		out[k] = (*ax)[k - w->grp[g]];
 }
-C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy, int a, int Lx, double *out)
+C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy, int a, int Lx, const double *tb,
+				 double *out)
 {
 	const size_t ld = TLD(Lx);
-	const double *h = Hy->v + (size_t)a * Hy->w, *tb = w->T + (size_t)Hy->start[a] * ld;
+	const double *h = Hy->v + (size_t)a * Hy->w;
 	size_t g = w->rg[a];
 	for (; g + 4 <= w->rg[a + 1]; g += 4) {
 		const double *t0 = tb + w->col[w->grp[g]], *t1 = tb + w->col[w->grp[g + 1]];
@@ -245,25 +271,60 @@ C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy,
 	}
 }
 
-/* out = A^T A v on the working set. Row by row (each output and each row of
- * T is one thread's, so the sums do not depend on the thread count), only
- * through the columns of T that some pixel touched. */
+/* Slot j of b (row base + j of T) := row r of T: cleared, then scattered */
+static void buf_scatter(const struct wctx *w, struct tbuf *b, int j, int r, const double *v)
+{
+	const int Lx = w->c->op->Lx;
+	double *t = b->T + (size_t)j * TLD(Lx);
+	if (b->hi[j] > b->lo[j])
+		memset(t + b->lo[j], 0, sizeof *t * (size_t)(b->hi[j] - b->lo[j]));
+	b->lo[j] = Lx, b->hi[j] = 0;
+	ws_row_scatter(w, &w->c->op->Hx, r, v, t, &b->lo[j], &b->hi[j]);
+}
+
+/* Slot j := slot k's row (k > j) */
+static void buf_move(struct tbuf *b, int j, int k, int Lx)
+{
+	double *t = b->T + (size_t)j * TLD(Lx);
+	const double *f = b->T + (size_t)k * TLD(Lx);
+	if (b->hi[j] > b->lo[j])
+		memset(t + b->lo[j], 0, sizeof *t * (size_t)(b->hi[j] - b->lo[j]));
+	if (b->hi[k] > b->lo[k])
+		memcpy(t + b->lo[k], f + b->lo[k], sizeof *t * (size_t)(b->hi[k] - b->lo[k]));
+	b->lo[j] = b->lo[k], b->hi[j] = b->hi[k];
+}
+
+/* out = A^T A v on the working set: T = V Hx row by row, then Hy T at the
+ * set's pixels row by row. Each thread takes a band of output rows and
+ * holds only the rows of T that its next output rows reach (struct tbuf), so
+ * that they stay in cache: the whole T, as large as the grid, went through
+ * memory three times per product (cleared, scattered, gathered). A row of
+ * T is made the same way wherever it is held, and each output from it in
+ * the same order, so the numbers do not depend on the thread count. */
 static void normal_ws(struct wctx *w, const double *v, double *out)
 {
 	const struct c0_covop *op = w->c->op;
+	const struct c0_band *Hy = &op->Hy;
 	const int Ly = op->Ly, Lx = op->Lx;
-	const int par = w->nws > 20000;
-#pragma omp parallel for schedule(dynamic, 16) if (par)
-	for (int a = 0; a < Ly; a++) {
-		double *t = w->T + (size_t)a * TLD(Lx);
-		if (w->hi[a] > w->lo[a])
-			memset(t + w->lo[a], 0, sizeof *t * (size_t)(w->hi[a] - w->lo[a]));
-		w->lo[a] = Lx, w->hi[a] = 0;
-		ws_row_scatter(w, &op->Hx, a, v, t, &w->lo[a], &w->hi[a]);
+	const int par = w->nws > 20000 && w->nbuf > 1;
+#pragma omp parallel num_threads(w->nbuf) if (par)
+	{
+		const int nt = omp_get_num_threads(), id = omp_get_thread_num();
+		const int a0 = (int)((long long)Ly * id / nt), a1 = (int)((long long)Ly * (id + 1) / nt);
+		struct tbuf *b = &w->buf[id];
+		int base = a0 < a1 ? Hy->start[a0] : 0, next = base;   /* slots hold rows [base, next) */
+		for (int a = a0; a < a1; a++) {
+			const int s = Hy->start[a], need = s + Hy->w;
+			if (need - base > b->rows) {    /* slide: rows [s, next) to the first slots */
+				for (int r = s > base ? s : base; r < next; r++)
+					buf_move(b, r - s, r - base, Lx);
+				base = s, next = next > s ? next : s;
+			}
+			for (; next < need; next++)
+				buf_scatter(w, b, next - base, next, v);
+			ws_row_gather(w, Hy, a, Lx, b->T + (size_t)(s - base) * TLD(Lx), out);
+		}
 	}
-#pragma omp parallel for schedule(dynamic, 16) if (par)
-	for (int a = 0; a < Ly; a++)
-		ws_row_gather(w, &op->Hy, a, Lx, out);
 }
 
 static double smooth_ws(void *vctx, const double *xw, double *gw)
