@@ -320,52 +320,91 @@ struct stack_blocks {
 	char msg[256];
 };
 
+/* frames read ahead while the ones before are summed: up to this many bytes a batch */
+#define READ_AHEAD (32 << 20)
+
+/* Frames t0..t1-1 (in f) added to the block means; a block's mean, once
+ * complete, is kept and measured against the block before. */
+static int add_frames(struct stack_blocks *o, struct xcorr *x, double *sum, const float *f, int64_t t0, int64_t t1,
+		      int64_t T, size_t n, struct c0_progress *pr)
+{
+	for (int64_t t = t0; t < t1; t++, f += n) {
+		const int64_t k = t / o->B < o->nb ? t / o->B : o->nb - 1;
+		const int64_t b1 = k * o->B, b2 = k == o->nb - 1 ? T : b1 + o->B;   /* the last block takes the remainder */
+		if (t == b1)
+			memset(sum, 0, n * sizeof *sum);
+		for (size_t i = 0; i < n; i++)
+			sum[i] += f[i];
+		c0_progress_update(pr, (double)t + 1);
+		if (t + 1 < b2)
+			continue;
+		for (size_t i = 0; i < n; i++)
+			sum[i] /= (double)(b2 - b1);
+		if (!(o->bm[k] = malloc(n * sizeof(float))))
+			return c0_fail(C0_ENOMEM, "drift: out of memory for the block means");
+		for (size_t i = 0; i < n; i++)
+			o->bm[k][i] = (float)sum[i];
+		if (k > 0)
+			shift_of(x, sum, &o->sx[k], &o->sy[k]);
+		else
+			spectrum(x, sum);
+		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
+	}
+	return C0_OK;
+}
+
 static int stack_pass(struct c0_frames *r, int64_t B, struct stack_blocks *o)
 {
 	const int H = r->height, W = r->width;
 	const size_t n = (size_t)H * W;
 	const int64_t T = r->count, nb = T / B;
+	int64_t nf = READ_AHEAD / (int64_t)(n * sizeof(float));
+	nf = nf < 1 ? 1 : nf > T ? T : nf;
+	const int64_t nbatch = (T + nf - 1) / nf;
 	struct xcorr x;
-	int st = xcorr_init(&x, H, W);
+	int st = xcorr_init(&x, H, W), rst = C0_OK;
 	double *sum = c0_alloc(n, sizeof *sum);
-	float *frame = c0_alloc(n, sizeof *frame);
+	float *buf = c0_alloc(2 * (size_t)nf * n, sizeof *buf);
 	o->B = B, o->nb = nb;
 	o->bm = c0_alloc((size_t)nb, sizeof *o->bm);
 	o->sx = c0_alloc((size_t)nb, sizeof *o->sx);
 	o->sy = c0_alloc((size_t)nb, sizeof *o->sy);
-	if (!st && (!sum || !frame || !o->bm || !o->sx || !o->sy))
+	if (!st && (!sum || !buf || !o->bm || !o->sx || !o->sy))
 		st = c0_fail(C0_ENOMEM, "drift: out of memory");
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "drift", (double)T);
-	for (int64_t k = 0; k < nb && !st; k++) {
-		/* the last block takes the remainder */
-		int64_t t1 = k * B, t2 = k == nb - 1 ? T : t1 + B;
-		memset(sum, 0, n * sizeof *sum);
-		for (int64_t t = t1; t < t2 && !st; t++) {
-			if (!(st = c0_frames_read(r, t, frame)))
-				for (size_t i = 0; i < n; i++)
-					sum[i] += frame[i];
-			c0_progress_update(&pr, (double)t + 1);
+	/* One thread reads batch i while another adds batch i - 1 (reading and
+	 * adding took about as long each): when this stack is the only one,
+	 * else its thread is one of the stacks'. Each status is written by one
+	 * thread and read by the other between the barriers. */
+	struct c0_first_fail fail = { 0 };
+#pragma omp parallel num_threads(2) if (!omp_in_parallel() && nbatch > 1 && !st)
+	{
+		const int id = omp_get_thread_num(), nt = omp_get_num_threads();
+		for (int64_t i = 0; i <= nbatch; i++) {
+			const int halt = st || rst;
+#pragma omp barrier
+			if (halt)
+				continue;
+			if (id == 0 && i < nbatch) {
+				float *f = buf + (size_t)(i % 2) * nf * n;
+				for (int64_t t = i * nf; t < (i + 1) * nf && t < T && !rst; t++, f += n)
+					rst = c0_frames_read(r, t, f);
+				c0_first_fail_note(&fail, rst);
+			}
+			if (id == nt - 1 && i > 0) {
+				const int64_t t0 = (i - 1) * nf, t1 = i * nf < T ? i * nf : T;
+				st = add_frames(o, &x, sum, buf + (size_t)((i - 1) % 2) * nf * n, t0, t1, T, n, &pr);
+				c0_first_fail_note(&fail, st);
+			}
+#pragma omp barrier
 		}
-		if (st)
-			break;
-		for (size_t i = 0; i < n; i++)
-			sum[i] /= (double)(t2 - t1);
-		if (!(o->bm[k] = malloc(n * sizeof(float)))) {
-			st = c0_fail(C0_ENOMEM, "drift: out of memory for the block means");
-			break;
-		}
-		for (size_t i = 0; i < n; i++)
-			o->bm[k][i] = (float)sum[i];
-		if (k > 0)
-			shift_of(&x, sum, &o->sx[k], &o->sy[k]);
-		else
-			spectrum(&x, sum);
-		memcpy(x.ref, x.sp, x.ns * sizeof *x.ref);
 	}
+	if (fail.code)    /* the message, from the thread that failed */
+		st = c0_first_fail_raise(&fail);
 	c0_progress_end(&pr);
 	xcorr_free(&x);
-	free(sum), free(frame);
+	free(sum), free(buf);
 	if (st)
 		snprintf(o->msg, sizeof o->msg, "%s", c0_errmsg());
 	return st;
