@@ -378,7 +378,7 @@ static int stack_pass(struct c0_frames *r, int64_t B, struct stack_blocks *o)
 	 * else its thread is one of the stacks'. Each status is written by one
 	 * thread and read by the other between the barriers. */
 	struct c0_first_fail fail = { 0 };
-#pragma omp parallel num_threads(2) if (!omp_in_parallel() && nbatch > 1 && !st)
+#pragma omp parallel num_threads(2) if (!omp_in_parallel() && omp_get_max_threads() > 1 && nbatch > 1 && !st)
 	{
 		const int id = omp_get_thread_num(), nt = omp_get_num_threads();
 		for (int64_t i = 0; i <= nbatch; i++) {

@@ -316,7 +316,7 @@ static void normal_ws(struct wctx *w, const double *v, double *out)
 		for (int a = a0; a < a1; a++) {
 			const int s = Hy->start[a], need = s + Hy->w;
 			if (need - base > b->rows) {    /* slide: rows [s, next) to the first slots */
-				for (int r = s > base ? s : base; r < next; r++)
+				for (int r = s; r < next; r++)
 					buf_move(b, r - s, r - base, Lx);
 				base = s, next = next > s ? next : s;
 			}
