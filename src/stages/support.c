@@ -138,6 +138,17 @@ struct tbuf {
 	int rows;
 	double *T;           /* rows x TLD */
 	int *lo, *hi;
+	struct gitem *it;    /* GATHER_ROWS x GATHER_COLS */
+};
+/* The gather goes through blocks of output rows and columns, so that the
+ * part of T it reads stays in the first-level cache. */
+#define GATHER_ROWS 16
+#define GATHER_COLS 96
+/* one group of the set to gather: its column of T from the band's first
+ * row, its band row of Hy, the group */
+struct gitem {
+	const double *t, *h;
+	size_t g;
 };
 
 /* T's row stride: 3 columns past the grid's, never written, so that a group
@@ -177,10 +188,11 @@ static int ws_alloc(struct wctx *w, struct ctx *c)
 	int ok = w->ws && w->rs && w->run && w->col && w->rg && w->grp && w->buf;
 	for (int i = 0; ok && i < nbuf; i++) {
 		struct tbuf *b = &w->buf[i];
-		b->rows = BUF_BANDS * c->op->Hy.w;
+		b->rows = BUF_BANDS * c->op->Hy.w + GATHER_ROWS;
 		b->T = c0_alloc((size_t)b->rows * TLD(c->op->Lx), sizeof(double));
 		b->lo = c0_alloc((size_t)b->rows, sizeof(int)), b->hi = c0_alloc((size_t)b->rows, sizeof(int));
-		ok = b->T && b->lo && b->hi;
+		b->it = c0_alloc(GATHER_ROWS * GATHER_COLS, sizeof *b->it);
+		ok = b->T && b->lo && b->hi && b->it;
 		for (int j = 0; ok && j < b->rows; j++)
 			b->lo[j] = c->op->Lx, b->hi[j] = 0;
 	}
@@ -191,7 +203,7 @@ static void ws_free(struct wctx *w)
 {
 	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->rg), free(w->grp), free(w->cw), free(w->nw);
 	for (int i = 0; w->buf && i < w->nbuf; i++)
-		free(w->buf[i].T), free(w->buf[i].lo), free(w->buf[i].hi);
+		free(w->buf[i].T), free(w->buf[i].lo), free(w->buf[i].hi), free(w->buf[i].it);
 	free(w->buf);
 }
 
@@ -241,33 +253,29 @@ static inline void put_group(const struct wctx *w, size_t g, const c0_v4 *ax, do
 	for (size_t k = w->grp[g]; k < w->grp[g + 1]; k++)
 		out[k] = (*ax)[k - w->grp[g]];
 }
-C0_HOT static void ws_row_gather(const struct wctx *w, const struct c0_band *Hy, int a, int Lx, const double *tb,
-				 double *out)
+C0_HOT static void ws_gather(const struct wctx *w, int hw, size_t ld, const struct gitem *it, int n, double *out)
 {
-	const size_t ld = TLD(Lx);
-	const double *h = Hy->v + (size_t)a * Hy->w;
-	size_t g = w->rg[a];
-	for (; g + 4 <= w->rg[a + 1]; g += 4) {
-		const double *t0 = tb + w->col[w->grp[g]], *t1 = tb + w->col[w->grp[g + 1]];
-		const double *t2 = tb + w->col[w->grp[g + 2]], *t3 = tb + w->col[w->grp[g + 3]];
+	int i = 0;
+	for (; i + 4 <= n; i += 4) {
+		const double *t0 = it[i].t, *t1 = it[i + 1].t, *t2 = it[i + 2].t, *t3 = it[i + 3].t;
+		const double *h0 = it[i].h, *h1 = it[i + 1].h, *h2 = it[i + 2].h, *h3 = it[i + 3].h;
 		c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
-		for (int u = 0; u < Hy->w; u++) {
+		for (int u = 0; u < hw; u++) {
 			const size_t o = (size_t)u * ld;
 			memcpy(&v0, t0 + o, sizeof v0), memcpy(&v1, t1 + o, sizeof v1);
 			memcpy(&v2, t2 + o, sizeof v2), memcpy(&v3, t3 + o, sizeof v3);
-			a0 += h[u] * v0, a1 += h[u] * v1, a2 += h[u] * v2, a3 += h[u] * v3;
+			a0 += h0[u] * v0, a1 += h1[u] * v1, a2 += h2[u] * v2, a3 += h3[u] * v3;
 		}
-		put_group(w, g, &a0, out), put_group(w, g + 1, &a1, out);
-		put_group(w, g + 2, &a2, out), put_group(w, g + 3, &a3, out);
+		put_group(w, it[i].g, &a0, out), put_group(w, it[i + 1].g, &a1, out);
+		put_group(w, it[i + 2].g, &a2, out), put_group(w, it[i + 3].g, &a3, out);
 	}
-	for (; g < w->rg[a + 1]; g++) {
-		const double *t = tb + w->col[w->grp[g]];
+	for (; i < n; i++) {
 		c0_v4 ax = { 0, 0, 0, 0 }, tu;
-		for (int u = 0; u < Hy->w; u++) {
-			memcpy(&tu, t + (size_t)u * ld, sizeof tu);
-			ax += h[u] * tu;
+		for (int u = 0; u < hw; u++) {
+			memcpy(&tu, it[i].t + (size_t)u * ld, sizeof tu);
+			ax += it[i].h[u] * tu;
 		}
-		put_group(w, g, &ax, out);
+		put_group(w, it[i].g, &ax, out);
 	}
 }
 
@@ -312,9 +320,11 @@ static void normal_ws(struct wctx *w, const double *v, double *out)
 		const int nt = omp_get_num_threads(), id = omp_get_thread_num();
 		const int a0 = (int)((long long)Ly * id / nt), a1 = (int)((long long)Ly * (id + 1) / nt);
 		struct tbuf *b = &w->buf[id];
+		const size_t ld = TLD(Lx);
 		int base = a0 < a1 ? Hy->start[a0] : 0, next = base;   /* slots hold rows [base, next) */
-		for (int a = a0; a < a1; a++) {
-			const int s = Hy->start[a], need = s + Hy->w;
+		for (int a = a0; a < a1; a += GATHER_ROWS) {
+			const int ae = a + GATHER_ROWS < a1 ? a + GATHER_ROWS : a1;
+			const int s = Hy->start[a], need = Hy->start[ae - 1] + Hy->w;
 			if (need - base > b->rows) {    /* slide: rows [s, next) to the first slots */
 				for (int r = s; r < next; r++)
 					buf_move(b, r - s, r - base, Lx);
@@ -322,7 +332,19 @@ static void normal_ws(struct wctx *w, const double *v, double *out)
 			}
 			for (; next < need; next++)
 				buf_scatter(w, b, next - base, next, v);
-			ws_row_gather(w, Hy, a, Lx, b->T + (size_t)(s - base) * TLD(Lx), out);
+			size_t cur[GATHER_ROWS];
+			for (int r = a; r < ae; r++)
+				cur[r - a] = w->rg[r];
+			for (int c0 = 0; c0 < Lx; c0 += GATHER_COLS) {
+				int n = 0;
+				for (int r = a; r < ae; r++) {
+					const double *tb = b->T + (size_t)(Hy->start[r] - base) * ld, *h = Hy->v + (size_t)r * Hy->w;
+					size_t *g = &cur[r - a];
+					for (; *g < w->rg[r + 1] && w->col[w->grp[*g]] < c0 + GATHER_COLS; ++*g)
+						b->it[n++] = (struct gitem){ tb + w->col[w->grp[*g]], h, *g };
+				}
+				ws_gather(w, Hy->w, ld, b->it, n, out);
+			}
 		}
 	}
 }
