@@ -132,7 +132,8 @@ struct wctx {
 
 /* Rows of T = V Hx held by one thread: row base + j in slot j, zero outside
  * the columns [lo[j], hi[j]) its last scatter wrote. Three bands' worth of
- * rows: the rows kept are moved down once per two bands of output rows. */
+ * rows and a gather block's: the rows kept are moved down about once per
+ * two bands of output rows. */
 #define BUF_BANDS 3
 struct tbuf {
 	int rows;
@@ -243,8 +244,8 @@ C0_HOT static void ws_row_scatter(const struct wctx *w, const struct c0_band *Hx
 	}
 }
 
-/* out = Hy T at the set's pixels of row a: a column dot product per pixel,
- * a group of 4 adjacent pixels of a run in one vector, and four groups side
+/* out = Hy T at the groups it[0..n): a column dot product per pixel, a
+ * group of 4 adjacent pixels of a run in one vector, and four groups side
  * by side, whose sums are independent chains: one chain of Hy->w dependent
  * additions is bound by the addition's latency. Each lane sums in the
  * order of a scalar loop over u, so the grouping does not change a bit. */
