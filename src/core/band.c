@@ -201,13 +201,14 @@ void c0_band_apply_x_sym_sparse(const struct c0_band *b, int ny, const double *i
  * chains); each column sums over k in order, as the scalar tail does. The
  * columns' strip of the input (all rows) stays in cache for every output
  * row, as apply_x's interleaved blocks do, without copying it. */
+_Static_assert(C0_BAND_STRIP == 16, "strip_product sums a strip in four vectors of 4");
 C0_HOT static void strip_product(const struct c0_band *b, int nx, int x, const double *in, const int *cnt, const int *rows,
 				  double *out)
 {
 	for (int i = 0; i < b->m; i++) {
 		const double *r = b->v + (size_t)i * b->w, *s = in + (size_t)b->start[i] * nx + x;
 		double *o = out + (size_t)i * nx + x;
-		if (cnt && x + 16 <= nx) {
+		if (cnt && x + C0_BAND_STRIP <= nx) {
 			/* only the occupied rows of the band, in order */
 			const int j0 = cnt[b->start[i]], j1 = cnt[b->start[i] + b->w];
 			c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
@@ -222,7 +223,7 @@ C0_HOT static void strip_product(const struct c0_band *b, int nx, int x, const d
 			memcpy(o + 8, &a2, sizeof a2), memcpy(o + 12, &a3, sizeof a3);
 			continue;
 		}
-		if (x + 16 <= nx) {
+		if (x + C0_BAND_STRIP <= nx) {
 			c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
 			for (int k = 0; k < b->w; k++) {
 				const double *sk = s + (size_t)k * nx;

@@ -176,7 +176,7 @@ void c0_covop_normal(struct c0_covop *op, const double *x, double *out)
 		nz += x[i] != 0;
 	/* a sparse x leaves most strips of X Hx zero (two thirds of the
 	 * output's strips during the support's first iterations): skip them */
-	if (nz < L / 4 && op->occ) {
+	if (nz < L / 4) {
 		c0_band_apply_x_sym_sparse_occ(&op->Hx, op->Ly, x, op->tmp, op->occ);
 		c0_band_apply_y_occ(&op->Hy, op->Lx, op->tmp, op->occ, out);
 		return;
