@@ -58,7 +58,8 @@ struct c0_run_conf {
 	int nsupport_stacks;   /* 0: the stack with the smallest angle (the first in 2D mode) */
 	enum c0_penalty penalty; /* l1 */
 	double lambda;         /* 0: regularisation relative to lambda_max; 0: automatic, from the noise of the
-			        * interleaved frame halves (max(1e-2 lambda_max, 4 noise sds) for l1) */
+			        * interleaved frame halves (max(2e-2 q90, 4 noise sds) for l1, q90 the correlation
+			        * image's 90th percentile above the noise: docs/guide.md) */
 	int lag;               /* 0: covariance lag radius in pixels; 0: ceil(6 sigma / pixel) */
 	int iterations;        /* -1: maximum FISTA iterations (per reweighting for cel0); -1: the solver's,
 				* 2000 for fista and cel0 (part of the estimator: docs/parameters.md), 10000
@@ -66,7 +67,9 @@ struct c0_run_conf {
 	enum c0_support_solver support_solver; /* fista: l1 by FISTA on a working set that changes when FISTA
 				* has converged on it, the whole grid's step; pruned: the set re-made every 100
 				* iterations, its own step, the momentum kept (converges; see docs/parameters.md) */
-	double tol;            /* 1e-5: FISTA stops when the iterate's relative change is below this */
+	double tol;            /* -1: FISTA stops when the iterate's relative change is below this; -1: the
+				* solver's, 0 for fista on l1 (every iteration up to the cap, part of the
+				* estimator), 1e-5 for pruned and cel0 */
 	int reweightings;      /* 10: CEL0 reweighting steps */
 	int drift;             /* 1: estimate lateral drift from block means of all stacks (in order) and undo
 			        * it before the covariance and the means ("on"); 0: "off" */
@@ -121,7 +124,7 @@ struct c0_run_conf {
 	int baseline;          /* 0: 1 also reconstructs the standard MA-TIRF volume from the background-corrected means */
 };
 
-#define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = 1e-5, \
+#define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
 	.reweightings = 10, .drift = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 20, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
 	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = 3e-2, .sparsity = 3e-2, \

@@ -5,11 +5,14 @@
  * D = (A^T R_A - A^T R_B) / 2 has the noise of C = A^T R (all frames) and no
  * signal: its robust sd (1.4826 MAD over the fine pixels) is sigma_C. A
  * pixel enters the l1 support where its correlation exceeds the threshold
- *   t = max(rel0 * lambda_max, kappa * sigma_C),
- * i.e. lambda relative to lambda_max as measured best on our simulations
- * (rel0), but never within kappa noise sds of zero, where pure noise would
+ *   t = max(rho * q90, kappa * sigma_C),
+ * q90 the 90th percentile of the correlation image C - s0 n over the pixels
+ * above kappa * sigma_C: a fraction of the bright structure's typical level
+ * (lambda_max, the brightest pixel, follows one bright spot: where the
+ * emitters' brightness spreads widely a fixed fraction of it lost the dim
+ * ones), and never within kappa noise sds of zero, where pure noise would
  * enter (the background specks of real, noisier stacks). CEL0 gets the same
- * threshold on its l0 scale, lowered as measured: lambda = 0.03 t^2 / (2 ||a||^2)
+ * threshold on its l0 scale, lowered as measured: lambda = gamma t^2 / (2 ||a||^2)
  * (median column norm).
  * Measured in docs/parameters.md, with why held-out cross-validation and
  * the discrepancy principle were not kept. */
@@ -19,8 +22,8 @@
 struct c0_lambda_result {
 	double chosen_rel;    /* lambda / lambda_max for the solve on all frames */
 	double noise_rel;     /* sigma_C / lambda_max (l1 scale) */
-	double floor_rel;     /* rel0 */
-	double kappa;
+	double signal_rel;    /* q90 / lambda_max (l1 scale) */
+	double rho, kappa;
 	int noise_bound;      /* 1 when kappa sigma_C set the threshold */
 	int noise_tiles;      /* tiles whose interiors gave sigma_C (0: the whole image, one tile) */
 	double seconds;
@@ -39,8 +42,11 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 /* The tiled path (stages/support.c), where the band of the whole image is
  * kept for all frames, and the halves only for some tiles' windows.
  * A tile's lambda_max on the l1 and the l0 scale (lmax[0], lmax[1]) as its
- * solve finds it (normalisation norm). */
-int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, double lmax[2]);
+ * solve finds it (normalisation norm); with hist, the correlation image over
+ * its interior (camera pixels iy, ix, ih, iw inside the window) is added to
+ * hist's third part. */
+int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, int iy, int ix, int ih,
+		       int iw, double lmax[2], double *hist);
 /* One half's correlation image *C = A^T R (fine grid of its window), so
  * that the two halves' bands need not be held at once; with n, also the
  * column norms ||a||^2 there (both allocated). */
@@ -48,10 +54,11 @@ int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *ha
 /* A tile's halves (even, odd frames; their correlation images ca, cb and
  * the column norms n on the fine grid of a window W camera pixels wide):
  * |C_a - C_b| / 2 and the column norms over its interior (camera pixels iy,
- * ix, ih, iw inside the window) added to hist (2 x C0_LAMBDA_BINS counts in
- * fixed log bins, so that sums over tiles and ranks are exact and their
- * medians do not depend on who computed what). */
+ * ix, ih, iw inside the window) added to hist's first two parts. hist:
+ * C0_LAMBDA_HIST counts in fixed log bins, so that sums over tiles and ranks
+ * are exact and their quantiles do not depend on who computed what. */
 #define C0_LAMBDA_BINS 14000
+#define C0_LAMBDA_HIST (3 * C0_LAMBDA_BINS)
 void c0_lambda_tile_noise(const struct c0_support_conf *c, const double *ca, const double *cb, const double *n, int W,
 			  double norm, int iy, int ix, int ih, int iw, double *hist);
 /* The rule from the summed histograms and the image's lambda_max (l1, l0 scale). */

@@ -220,13 +220,15 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		if (s->lambda_auto) {
 			const struct c0_lambda_result *v = &s->cv;
 			cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
-			cJSON_AddStringToObject(l, "rule", "max(floor_relative lambda_max, kappa sigma_C); sigma_C: noise sd of the "
-						"correlation image, from the difference of the interleaved frame halves");
+			cJSON_AddStringToObject(l, "rule", "max(rho q90, kappa sigma_C); sigma_C: noise sd of the correlation "
+						"image, from the difference of the interleaved frame halves; q90: its 90th "
+						"percentile over the pixels above kappa sigma_C");
 			cJSON_AddNumberToObject(l, "chosen_relative", v->chosen_rel);
-			cJSON_AddNumberToObject(l, "floor_relative", v->floor_rel);
+			cJSON_AddNumberToObject(l, "rho", v->rho);
+			cJSON_AddNumberToObject(l, "signal_relative", v->signal_rel);
 			cJSON_AddNumberToObject(l, "kappa", v->kappa);
 			cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
-			cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "floor");
+			cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
 			/* tiles: sigma_C from a subset of the tiles' interiors (stages/support.c) */
 			cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 			cJSON_AddNumberToObject(l, "seconds", v->seconds);
@@ -260,7 +262,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	cJSON_AddNumberToObject(p, "srf", c->srf);
 	cJSON_AddStringToObject(p, "penalty", c->penalty == C0_PENALTY_L1 ? "l1" : "cel0");
 	cJSON_AddNumberToObject(p, "max_iterations", c->fista.maxit);
-	cJSON_AddNumberToObject(p, "tol", c->fista.tol);
+	cJSON_AddNumberToObject(p, "tol", c0_support_tol(c));
 	r->pixel_nm = c->pixel_nm, r->srf = c->srf;
 	r->Ly = r->sres[0].Ly, r->Lx = r->sres[0].Lx;
 	const size_t L = (size_t)r->Ly * r->Lx;

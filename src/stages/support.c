@@ -26,6 +26,13 @@ double c0_support_default_lambda(enum c0_penalty p)
 	return p == C0_PENALTY_CEL0 ? 3e-5 : 1e-2;
 }
 
+double c0_support_tol(const struct c0_support_conf *c)
+{
+	if (c->fista.tol >= 0)
+		return c->fista.tol;
+	return c->penalty == C0_PENALTY_L1 && c->solver == C0_SUPPORT_FISTA ? 0 : C0_SUPPORT_TOL;
+}
+
 static double lambda_rel(const struct c0_support_conf *c)
 {
 	return c->lambda_rel > 0 ? c->lambda_rel : c0_support_default_lambda(c->penalty);
@@ -40,8 +47,10 @@ int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t fram
 		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
 		return c0_fail(C0_EINVAL, "lambda %g: must be in (0, 1) (relative to lambda_max)", c->lambda_rel);
-	if (c->fista.maxit < 1 || !(c->fista.tol > 0 && isfinite(c->fista.tol)))
-		return c0_fail(C0_EINVAL, "iterations %d / tol %g: must be positive", c->fista.maxit, c->fista.tol);
+	if (c->fista.maxit < 1)
+		return c0_fail(C0_EINVAL, "iterations %d: must be positive", c->fista.maxit);
+	if (!(c->fista.tol >= 0 && c->fista.tol < 1) && c->fista.tol != -1)
+		return c0_fail(C0_EINVAL, "tol %g: must be in [0, 1) (0: every iteration), or -1 for the solver's", c->fista.tol);
 	if (c->penalty == C0_PENALTY_CEL0 && c->cel0_outer < 1)
 		return c0_fail(C0_EINVAL, "reweightings %d: must be at least 1", c->cel0_outer);
 	if (c->lag < 0 || c->lag > 1000)
@@ -602,13 +611,15 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	res->lambda = mask ? 0 : g ? g->lam : lambda_rel(c) * lmax;
 	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
 	ctx.lam = res->lambda;
+	/* the noise solve (lambda = 0 on a mask) converges as before */
+	struct c0_fista_conf fc = { c->fista.maxit, mask && c->fista.tol < 0 ? C0_SUPPORT_TOL : c0_support_tol(c) };
 	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
 		if (mask)
-			st = solve_masked(&ctx, &c->fista, op.lip, mask, x, &info);
+			st = solve_masked(&ctx, &fc, op.lip, mask, x, &info);
 		else if (c->penalty == C0_PENALTY_L1)
-			st = solve_l1(&ctx, &c->fista, op.lip, c->solver == C0_SUPPORT_PRUNED, x, &info);
+			st = solve_l1(&ctx, &fc, op.lip, c->solver == C0_SUPPORT_PRUNED, x, &info);
 		else
-			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &c->fista, c->cel0_outer, c->fista.tol, &info);
+			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &fc, c->cel0_outer, fc.tol, &info);
 	}
 	if (st)
 		goto out;
@@ -973,9 +984,9 @@ static void spread(const struct c0_tiling *tl, const int *cand, int nc, double p
 	}
 }
 
-/* Every tile's lambda_max on both scales (lm: 2 per tile); with hist, the
- * subset's halves (the even frames from all and the odd ones) add the noise
- * of the correlation image to it (stages/lambda.h). */
+/* Every tile's lambda_max on both scales (lm: 2 per tile); with hist, every
+ * tile adds its correlation image, and the subset's halves (the even frames
+ * from all and the odd ones) its noise (stages/lambda.h). */
 static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
 			   int k0, int k1, struct c0_cov_acc **odd, double norm, double *lm, double *hist)
 {
@@ -988,10 +999,10 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 		const struct c0_tile *t = &tl->t[k];
 		struct c0_cov all, ev, od;
 		struct c0_cov_acc *o = hist ? odd[k - k0] : NULL;
-		double *h = o ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *h) : NULL;
-		int st = o && !h ? C0_ENOMEM : c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &all);
+		double *h = hist ? c0_alloc(C0_LAMBDA_HIST, sizeof *h) : NULL;
+		int st = hist && !h ? C0_ENOMEM : c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &all);
 		if (!st) {
-			st = c0_lambda_tile_max(c, &all, norm, lm + 2 * (size_t)k);
+			st = c0_lambda_tile_max(c, &all, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, lm + 2 * (size_t)k, h);
 			c0_cov_free(&all);
 		}
 		/* one half's band at a time: each gives its correlation image */
@@ -1010,7 +1021,7 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 		if (!st && h) {
 			/* counts: the sum is exact in any order */
 #pragma omp critical(c0_support_noise)
-			for (int i = 0; i < 2 * C0_LAMBDA_BINS; i++)
+			for (int i = 0; i < C0_LAMBDA_HIST; i++)
 				hist[i] += h[i];
 		}
 		free(h);
@@ -1222,7 +1233,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 			norm = fmax(norm, c0_cov_acc_variance(acc, y - ya, x));
 	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
 	double *lm = c0_alloc(2 * nt, sizeof *lm), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
-	double *hist = automatic ? c0_alloc(2 * C0_LAMBDA_BINS, sizeof *hist) : NULL;
+	double *hist = automatic ? c0_alloc(C0_LAMBDA_HIST, sizeof *hist) : NULL;
 	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = c0_cov_lag_count(d), res->frames = in->count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
@@ -1245,7 +1256,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		res->lambda_max = c->penalty == C0_PENALTY_L1 ? l1 : l0;
 	}
 	if (!st && automatic) {
-		c0_comm_sum(hist, 2 * C0_LAMBDA_BINS);
+		c0_comm_sum(hist, C0_LAMBDA_HIST);
 		if (!(l1 > 0))
 			st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
 		else

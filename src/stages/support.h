@@ -25,7 +25,7 @@ struct c0_support_conf {
 	double lambda_rel;         /* lambda / lambda_max; 0: automatic (stages/lambda.h) when the stack is
 				    * streamed, else the penalty's fixed default (c0_support_default_lambda) */
 	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
-	struct c0_fista_conf fista;/* 2000 iterations, tol 1e-5 */
+	struct c0_fista_conf fista;/* 2000 iterations; tol -1: the solver's (c0_support_tol) */
 	int cel0_outer;            /* 10 reweightings */
 	enum c0_support_solver solver; /* l1: fista (a set fixed until FISTA converges on it) or pruned */
 	int frc;                   /* 1: also solve each half of the frames (on its own, at most 300
@@ -34,12 +34,19 @@ struct c0_support_conf {
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, 1e-5 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL }
 /* The iteration caps: fista's is part of the estimator (its capped iterate
  * matched the simulated truth better than the minimiser, docs/parameters.md);
  * pruned's is a safety net (it stops on converging, 3300-5300 at 256 tiles). */
 #define C0_FISTA_MAXIT 2000
 #define C0_PRUNED_MAXIT 10000
+/* The tolerance a solve uses: c->fista.tol, or when that is -1 the
+ * solver's own: 0 for fista on l1 (every iteration up to the cap: a stop on
+ * the relative change came at 1100-1800 iterations and moved with lambda by
+ * 20 % of the support, docs/parameters.md), C0_SUPPORT_TOL for pruned and
+ * CEL0, which stop on converging. */
+#define C0_SUPPORT_TOL 1e-5
+double c0_support_tol(const struct c0_support_conf *c);
 /* Default tile side (docs/parameters.md): tiles are solved side by side and
  * overlap by two covariance lags on each side. */
 #define C0_SUPPORT_TILE 256
