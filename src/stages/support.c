@@ -548,6 +548,8 @@ int c0_support_noise_solve(const struct c0_support_conf *c, const struct c0_cov 
 {
 	struct c0_support_conf cc = *c;
 	cc.penalty = C0_PENALTY_L1;
+	if (cc.fista.tol < 0)    /* lambda = 0 on a mask: it converges, as before */
+		cc.fista.tol = C0_SUPPORT_TOL;
 	return solve(&cc, cov, mask, NULL, NULL, res);
 }
 
@@ -611,8 +613,7 @@ static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, cons
 	res->lambda = mask ? 0 : g ? g->lam : lambda_rel(c) * lmax;
 	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
 	ctx.lam = res->lambda;
-	/* the noise solve (lambda = 0 on a mask) converges as before */
-	struct c0_fista_conf fc = { c->fista.maxit, mask && c->fista.tol < 0 ? C0_SUPPORT_TOL : c0_support_tol(c) };
+	struct c0_fista_conf fc = { c->fista.maxit, c0_support_tol(c) };
 	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
 		if (mask)
 			st = solve_masked(&ctx, &fc, op.lip, mask, x, &info);

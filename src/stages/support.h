@@ -44,7 +44,7 @@ struct c0_support_conf {
  * solver's own: 0 for fista on l1 (every iteration up to the cap: a stop on
  * the relative change came at 1100-1800 iterations and moved with lambda by
  * 20 % of the support, docs/parameters.md), C0_SUPPORT_TOL for pruned and
- * CEL0, which stop on converging. */
+ * CEL0, which stop on converging (and for c0_support_noise_solve). */
 #define C0_SUPPORT_TOL 1e-5
 double c0_support_tol(const struct c0_support_conf *c);
 /* Default tile side (docs/parameters.md): tiles are solved side by side and
