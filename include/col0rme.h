@@ -64,9 +64,9 @@ struct c0_run_conf {
 	int iterations;        /* -1: maximum FISTA iterations (per reweighting for cel0); -1: the solver's,
 				* 2000 for fista and cel0 (part of the estimator: docs/parameters.md), 10000
 				* for pruned (a safety cap: it stops on converging) */
-	enum c0_support_solver support_solver; /* fista: l1 by FISTA on a working set that changes when FISTA
-				* has converged on it, the whole grid's step; pruned: the set re-made every 100
-				* iterations, its own step, the momentum kept (converges; see docs/parameters.md) */
+	enum c0_support_solver support_solver; /* fista: l1 by FISTA on a working set re-made every 100
+				* iterations (the momentum kept), the whole grid's step; pruned: the same with
+				* the set's own step (converges; see docs/parameters.md) */
 	double tol;            /* -1: FISTA stops when the iterate's relative change is below this; -1: the
 				* solver's, 0 for fista on l1 (every iteration up to the cap, part of the
 				* estimator), 1e-5 for pruned and cel0 */

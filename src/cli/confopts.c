@@ -29,7 +29,7 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "drift", { "drift", 0, C0_OPT_STRING, &m->drift, "on|off", "estimate lateral drift from block means and undo it before the covariance and the means", NULL, 0, NULL } },
 		{ "no_drift", { "no-drift", 0, C0_OPT_FLAG, &m->no_drift, NULL, "the same as --drift off", NULL, 0, NULL } },
 		{ "frc", { "frc", 0, C0_OPT_INT, &c->frc, "0|1", "solve each half of the frames too, for the FRC resolution and the localisation precision", NULL, 0, NULL } },
-		{ "support_solver", { "support-solver", 0, C0_OPT_STRING, &m->support_solver, "fista|pruned", "l1 support solver: FISTA on a working set fixed until it converges (whole grid's step), or re-made every 100 iterations (its own step, momentum kept; converges, see the guide)", NULL, 0, NULL } },
+		{ "support_solver", { "support-solver", 0, C0_OPT_STRING, &m->support_solver, "fista|pruned", "l1 support solver, both FISTA on a working set re-made every 100 iterations (momentum kept): with the whole grid's step, or with the set's own step (converges, see the guide)", NULL, 0, NULL } },
 		{ "iterations", { "iterations", 0, C0_OPT_INT, &c->iterations, "N", "maximum FISTA iterations (per reweighting for cel0)", "2000, or 10000 with pruned", 0, NULL } },
 		{ "tol", { "tol", 0, C0_OPT_DOUBLE, &c->tol, "F", "stop when the relative change of the iterate falls below this", "0 with fista on l1 (every iteration: the capped iterate is the estimator), 1e-5 with pruned and cel0", 0, NULL } },
 		{ "reweightings", { "reweightings", 0, C0_OPT_INT, &c->reweightings, "N", "CEL0 reweighting steps", NULL, 0, NULL } },

@@ -44,7 +44,7 @@ static const struct param params[] = {
 	NUM(lag, P_INT, "covariance lag radius in pixels (0: ceil(6 sigma / pixel))"),
 	NUM(iterations, P_INT, "maximum FISTA iterations, per reweighting for cel0 (-1: 2000, or 10000 for pruned)"),
 	{ "support_solver", P_ENUM, F(support_solver), 0, 0, "fista|pruned",
-	  "l1 support solver: FISTA on a working set fixed until it converges (fista), or re-made every 100 iterations (pruned)" },
+	  "l1 support solver: FISTA on a working set re-made every 100 iterations, with the whole grid's step (fista) or the set's own (pruned)" },
 	NUM(tol, P_DOUBLE, "FISTA stops when the iterate's relative change falls below this (-1: 0 for fista on l1, every iteration; 1e-5 for pruned and cel0)"),
 	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
 	{ "drift", P_ENUM, F(drift), 0, 0, "off|on", "estimate lateral drift from block means and undo it before the covariance and the means (on)" },
