@@ -15,9 +15,9 @@
  * structure's typical level, which one very bright spot does not move as it
  * moves lambda_max), never below KAPPA noise sds. On the simulated panel
  * (brightness spreads 0.3 to 1, densities, dim, bright, short, drifting) it
- * is within 0.03 of a sweep's best on 13 of 14 members (the sparsest 0.06
- * short); the fixed 1e-2 lambda_max before it lost 0.07-0.2 where the
- * brightness spreads widely. KAPPA = 4 takes the MusiJ stacks'
+ * is within 0.03 of a sweep's best on 12 of 14 members (the sparsest 0.052
+ * short, spread 1 dense 0.036); the fixed 1e-2 lambda_max lost 0.07-0.2
+ * where the brightness spreads widely. KAPPA = 4 takes the MusiJ stacks'
  * far-from-structure share below 10 %. */
 static const double RHO = 2e-2, QUANT = 0.9, KAPPA = 4;
 /* CEL0 does not shrink what it keeps, and is best with a lower entry
@@ -82,10 +82,15 @@ void c0_lambda_max(const double *C, double norm, double s0, const double *n, siz
 #define HB_LO (-12)
 #define HB_PER (C0_LAMBDA_BINS / 14)
 
-static void bin(double *h, double v)
+static int bin_of(double v)
 {
 	const double u = v > 0 ? (log10(v) - HB_LO) * HB_PER : -1;
-	h[u < 0 ? 0 : u >= C0_LAMBDA_BINS ? C0_LAMBDA_BINS - 1 : (int)u]++;
+	return u < 0 ? 0 : u >= C0_LAMBDA_BINS ? C0_LAMBDA_BINS - 1 : (int)u;
+}
+
+static void bin(double *h, double v)
+{
+	h[bin_of(v)]++;
 }
 
 static double hmedian(const double *h)
@@ -105,8 +110,7 @@ static double hmedian(const double *h)
  * (0 when none is above tau) */
 static double hquantile_above(const double *h, double tau, double q)
 {
-	const double u = tau > 0 ? (log10(tau) - HB_LO) * HB_PER : 0;
-	const int kt = u < 0 ? 0 : u >= C0_LAMBDA_BINS ? C0_LAMBDA_BINS - 1 : (int)u;
+	const int kt = bin_of(tau);
 	double all = 0, cum = 0;
 	for (int k = kt; k < C0_LAMBDA_BINS; k++)
 		all += h[k];

@@ -27,7 +27,7 @@ struct c0_support_conf {
 	int lag;                   /* covariance lag radius in pixels; 0: ceil(6 sigma / p) */
 	struct c0_fista_conf fista;/* 2000 iterations; tol -1: the solver's (c0_support_tol) */
 	int cel0_outer;            /* 10 reweightings */
-	enum c0_support_solver solver; /* l1: fista (a set fixed until FISTA converges on it) or pruned */
+	enum c0_support_solver solver; /* l1: fista (the whole grid's step) or pruned (the working set's) */
 	int frc;                   /* 1: also solve each half of the frames (on its own, at most 300
 				    * iterations) for the FRC resolution and the localisation precision */
 	int tile;                  /* tile side in camera pixels; 0: C0_SUPPORT_TILE (or the image when smaller) */
