@@ -34,6 +34,12 @@ PANEL = {
     "spread 1, sparse": ["--brightness-cv", "1.0", "--density", "15", "--filaments", "3"],
     "short blinks": ["--tau-on", "10", "--tau-off", "300"],
     "background 200": ["--background", "200"],
+    # added after the fcf8527 table (docs/parameters.md, *Off the panel*)
+    "slow blinks": ["--tau-on", "100", "--tau-off", "1000"],
+    "pixel 160, fwhm 300": ["--pixel-size", "160", "--fwhm", "300"],
+    "gain 3, offset 500, snr 5": ["--gain", "3", "--offset", "500", "--snr", "5"],
+    "depth 0-400": ["--z-range", "0,400"],
+    "no bleaching": ["--tau-bleach", "0"],
 }
 if os.environ.get("MEMBERS"):
     PANEL = {k: PANEL[k] for k in os.environ["MEMBERS"].split(",")}
@@ -56,7 +62,8 @@ def ji(sim, out):
 def solve(job):
     sim, lam = job
     out = sim + "_out_" + lam
-    run([BIN, "support", "-o", out, "--force", "--fwhm", "229", "--penalty", PEN, "--threads", "1", *EXTRA,
+    fwhm = str(json.load(open(sim + "/sim.json"))["parameters"]["fwhm_nm"])
+    run([BIN, "support", "-o", out, "--force", "--fwhm", fwhm, "--penalty", PEN, "--threads", "1", *EXTRA,
          sim + "/stack_q01.tif"] + ([] if lam == "auto" else ["--lambda", lam]))
     rep = json.load(open(out + "/report.json"))["support"][0]
     return ji(sim, out), rep["lambda_relative"]
