@@ -248,6 +248,7 @@ static void simulate(const char *sub, int size, int frames, double drift_x, doub
 
 static int tile_px;                    /* 0: one tile */
 static double sigma_abs, lambda_abs;   /* of the last support_ji: sigma_C and lambda in camera units */
+static struct c0_lambda_result last_cv;   /* and its automatic lambda's inputs */
 
 static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel, double *chosen)
 {
@@ -265,6 +266,7 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 	if (chosen)
 		*chosen = res.lambda / res.lambda_max;
 	sigma_abs = res.cv.noise_rel * res.lambda_max * res.norm, lambda_abs = res.lambda * res.norm;
+	last_cv = res.cv;
 	snprintf(p, sizeof p, "%s/%s/truth_support.tif", dir, sub);
 	struct c0_tiff_info in;
 	float *t;
@@ -370,12 +372,31 @@ static void test_auto_lambda_spread(void)
  * the one-tile path's up to the pooled vs all-frames covariance and the
  * histogram's bins; the two paths' solves (pooled covariance on one tile,
  * all frames' on tiles, tiles cut at the iteration cap) differ a little */
+/* The criterion curve: shares of pixels that fall as lambda grows, none of
+ * the correlation image above lambda_max but its top bin, and at the chosen
+ * lambda more of the signal than of the halves' noise above it */
+static void check_curve(const struct c0_lambda_result *v)
+{
+	const double *s = v->curve_signal, *z = v->curve_noise;
+	const int top = C0_LAMBDA_CURVE - 1;
+	int k = 0;
+	while (k < top && c0_lambda_curve_rel(k) < v->chosen_rel)
+		k++;
+	for (int m = 1; m < C0_LAMBDA_CURVE; m++)
+		CHECK_MSG(s[m] <= s[m - 1] && z[m] <= z[m - 1], "curve rises at %d", m);
+	CHECK_MSG(s[top] <= 1e-3 && s[0] > s[k], "signal share %g at lambda_max, %g at 1e-4", s[top], s[0]);
+	CHECK_MSG(z[k] < 0.5 * s[k] && s[k] > 0, "at %g lambda_max: noise share %g, signal %g", c0_lambda_curve_rel(k),
+		  z[k], s[k]);
+}
+
 static void test_auto_lambda_tiles(void)
 {
 	const int n = quick ? 32 : 48;
 	double c1, ct;
 	tile_px = 0;
 	double j1 = support_ji("still", NULL, 0, &c1), s1 = sigma_abs, l1 = lambda_abs;
+	const struct c0_lambda_result v1 = last_cv;
+	check_curve(&v1);
 	for (int tile = n / 2; tile >= n / 4 && tile >= 13; tile /= 2) {
 		tile_px = tile;
 		double jt = support_ji("still", NULL, 0, &ct);
@@ -383,6 +404,13 @@ static void test_auto_lambda_tiles(void)
 			"JI %.3f vs %.3f\n", tile, sigma_abs, s1, lambda_abs, l1, ct, c1, jt, j1);
 		CHECK_MSG(fabs(sigma_abs / s1 - 1) <= 0.01, "sigma_C, tile %d: %g vs %g", tile, sigma_abs, s1);
 		CHECK_MSG(fabs(lambda_abs / l1 - 1) <= 0.02, "lambda, tile %d: %g vs %g", tile, lambda_abs, l1);
+		check_curve(&last_cv);
+		double worst = 0;
+		for (int k = 0; k < C0_LAMBDA_CURVE; k++)
+			worst = fmax(worst, fmax(fabs(last_cv.curve_signal[k] - v1.curve_signal[k]),
+						 fabs(last_cv.curve_noise[k] - v1.curve_noise[k])));
+		fprintf(stderr, "  criterion curve: largest difference to one tile's %.4f\n", worst);
+		CHECK_MSG(worst <= 0.02, "curve, tile %d: %g apart", tile, worst);
 		if (!quick)
 			CHECK_MSG(fabs(jt - j1) <= 0.03, "Jaccard, tile %d: %.3f vs %.3f", tile, jt, j1);
 	}

@@ -108,6 +108,35 @@ static double hmedian(const double *h)
 	return 0;
 }
 
+double c0_lambda_curve_rel(int k)
+{
+	return pow(10, -4 + k / 8.0);
+}
+
+/* The share of the counts of h above v (the bin that holds v split linearly
+ * in log v, as the quantiles read it) */
+static double share_above(const double *h, double v)
+{
+	const double u = v > 0 ? (log10(v) - HB_LO) * HB_PER : 0;
+	const int kv = bin_of(v);
+	double all = 0, above = 0;
+	for (int k = 0; k < C0_LAMBDA_BINS; k++) {
+		all += h[k];
+		if (k > kv)
+			above += h[k];
+	}
+	above += h[kv] * fmin(1, fmax(0, kv + 1 - u));
+	return all > 0 ? above / all : 0;
+}
+
+static void curve(const double *signal, const double *noise, double lmax, struct c0_lambda_result *out)
+{
+	for (int k = 0; k < C0_LAMBDA_CURVE; k++) {
+		out->curve_signal[k] = share_above(signal, lmax * c0_lambda_curve_rel(k));
+		out->curve_noise[k] = share_above(noise, lmax * c0_lambda_curve_rel(k));
+	}
+}
+
 /* The value below which a fraction q of the counts of h above tau lie
  * (0 when none is above tau) */
 static double hquantile_above(const double *h, double tau, double q)
@@ -164,19 +193,20 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 		st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
 		goto out;
 	}
-	const double sig = 1.4826 * median(d, L);
-	/* the signal: ca - s0 n, as lambda_max reads it, binned as on tiles */
-	double *h = c0_alloc(C0_LAMBDA_BINS, sizeof *h);
+	/* the signal: ca - s0 n, as lambda_max reads it, and the noise, binned as on tiles */
+	double *h = c0_alloc(2 * C0_LAMBDA_BINS, sizeof *h), *hn = h + C0_LAMBDA_BINS;
 	if (!h) {
 		st = C0_ENOMEM;
 		goto out;
 	}
 	for (size_t i = 0; i < L; i++)
-		bin(h, ca[i] - s0 * op.n[i]);
+		bin(h, ca[i] - s0 * op.n[i]), bin(hn, d[i]);
+	const double sig = 1.4826 * median(d, L);
 	const double sq = hquantile_above(h, KAPPA * sig, QUANT);
-	free(h);
 	memcpy(d, op.n, L * sizeof *d);
 	choose(c, sig, sq, lmax, lmax0, median(d, L), out);
+	curve(h, hn, lmax, out);
+	free(h);
 out:
 	free(R), free(ca), free(cb), free(d);
 	c0_covop_free(&op);
@@ -256,4 +286,5 @@ void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist,
 	const double sig = 1.4826 * hmedian(hist);
 	choose(c, sig, hquantile_above(hist + 2 * C0_LAMBDA_BINS, KAPPA * sig, QUANT), lmax, lmax0,
 	       hmedian(hist + C0_LAMBDA_BINS), out);
+	curve(hist + 2 * C0_LAMBDA_BINS, hist, lmax, out);
 }

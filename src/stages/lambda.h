@@ -19,6 +19,14 @@
 #pragma once
 #include "ops/covariance.h"
 
+/* The criterion curve: at lambda / lambda_max = c0_lambda_curve_rel(k) (l1 scale),
+ * 10^(-4 + k / 8) for k < C0_LAMBDA_CURVE, the share of the fine pixels
+ * whose correlation C - s0 n (signal) and whose halves' noise image
+ * |C_A - C_B| / 2 (noise) lie above lambda (on tiles: over the interiors
+ * that gave q90 and sigma_C). */
+#define C0_LAMBDA_CURVE 33
+double c0_lambda_curve_rel(int k);
+
 struct c0_lambda_result {
 	double chosen_rel;    /* lambda / lambda_max for the solve on all frames */
 	double noise_rel;     /* sigma_C / lambda_max (l1 scale) */
@@ -27,6 +35,7 @@ struct c0_lambda_result {
 	int noise_bound;      /* 1 when kappa sigma_C set the threshold */
 	int noise_tiles;      /* tiles whose interiors gave sigma_C (0: the whole image, one tile) */
 	double seconds;
+	double curve_signal[C0_LAMBDA_CURVE], curve_noise[C0_LAMBDA_CURVE];
 };
 
 /* lambda_max on the l1 and the l0 scale (lm[0], lm[1]) of the gradient at

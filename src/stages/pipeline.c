@@ -232,6 +232,16 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 			/* tiles: sigma_C from a subset of the tiles' interiors (stages/support.c) */
 			cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 			cJSON_AddNumberToObject(l, "seconds", v->seconds);
+			cJSON *cu = cJSON_AddObjectToObject(l, "curve");
+			cJSON_AddStringToObject(cu, "what", "share of the fine pixels above lambda (l1 scale, CEL0's threshold "
+						"t): of the correlation image (signal) and of the halves' noise image "
+						"|C_A - C_B|/2 (noise)");
+			double rel[C0_LAMBDA_CURVE];
+			for (int m = 0; m < C0_LAMBDA_CURVE; m++)
+				rel[m] = c0_lambda_curve_rel(m);
+			c0_report_add_array(cu, "lambda_relative", rel, C0_LAMBDA_CURVE);
+			c0_report_add_array(cu, "signal_above", v->curve_signal, C0_LAMBDA_CURVE);
+			c0_report_add_array(cu, "noise_above", v->curve_noise, C0_LAMBDA_CURVE);
 		}
 		if (s->frc.n) {
 			const double fine = c->pixel_nm / c->srf;

@@ -93,6 +93,13 @@ with tempfile.TemporaryDirectory() as tmp:
     sig = [r["lambda_auto"]["noise_relative"] * r["lambda_max"] * r["normalisation"] for r in (s1, st) if "lambda_auto" in r]
     print("automatic lambda: relative %.4g (tiles) vs %.4g (one tile), sigma_C %s" % (st["lambda_relative"], s1["lambda_relative"], sig))
     check(len(sig) == 2 and abs(sig[1] / sig[0] - 1) <= 0.01, "sigma_C on tiles vs one tile: %r" % sig)
+    # the criterion curve in the report, the same on tiles
+    cu = [r["lambda_auto"].get("curve", {}) for r in (s1, st) if "lambda_auto" in r]
+    lens = [len(c.get(k, [])) for c in cu for k in ("lambda_relative", "signal_above", "noise_above")]
+    check(len(cu) == 2 and lens == [33] * 6, "criterion curves: %r" % lens)
+    gap = max(abs(a - b) for k in ("signal_above", "noise_above") for a, b in zip(cu[0][k], cu[1][k])) if lens == [33] * 6 else 1
+    print("criterion curve: tiles vs one tile, largest difference %.4f" % gap)
+    check(gap <= 0.02, "criterion curve on tiles vs one tile: %.4f apart" % gap)
     # the localisation precision from the halves of the subset tiles (no FRC on tiles)
     p1, pt = s1.get("precision_nm", -1), st.get("precision_nm", -1)
     print("localisation precision: %.2f nm (tiles) vs %.2f nm (one tile)" % (pt, p1))
