@@ -112,6 +112,7 @@ struct c0_run_conf {
 	double background_smooth; /* 100: its smoothness weight, px^2 */
 	double psf_fwhm_nm;    /* 0: joint deconvolution by a Gaussian PSF of this FWHM; 0: none */
 	double depth_pool_nm;  /* -1: window over which intensities are summed for each pixel's depth; -1: 0.75 fwhm_nm, 0: off */
+	double depth_pool_range_nm; /* -1: only pixels whose first depth guess is this close to the centre's are summed; -1: 50, 0: all */
 	/* photobleaching across the stacks (3D mode) */
 	enum c0_bleaching bleach; /* estimate: the fade from the stacks' frame sums, each intensity divided by its factor; off */
 	double bleach_factors[C0_MAX_STACKS]; /* known factors (each stack's mean population relative to the start) */
@@ -128,7 +129,8 @@ struct c0_run_conf {
 	.reweightings = 10, .drift = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 20, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
 	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = 3e-2, .sparsity = 3e-2, \
-	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1 }
+	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1, \
+	.depth_pool_range_nm = -1 }
 
 void c0_run_conf_init(struct c0_run_conf *c);
 /* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),

@@ -7,6 +7,7 @@
 #include "core/rng.h"
 #include "core/err.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -49,6 +50,67 @@ static void test_pool_window(void)
 	CHECK_CLOSE(f[1], 2 * 3.0 / 3, 1e-6);
 	CHECK_CLOSE(f[2], 0, 0);
 	CHECK_CLOSE(f[7], 8 * 6.0 / 4, 1e-6);
+}
+
+/* The guided window against the slow obvious sum (a neighbour counts when
+ * it is on the mask and its guide within range of the centre's), the plain
+ * window when the range spans every guide; the single-depth fit returns the
+ * bin whose weights made the intensities. */
+static void test_pool_guided(void)
+{
+	enum { NY = 9, NX = 13, NQ = 3, NP = NY * NX };
+	float x[NQ][NP], out[NQ][NP], plain[NP], guide[NP];
+	uint8_t m[NP];
+	for (int i = 0; i < NP; i++) {
+		for (int q = 0; q < NQ; q++)
+			x[q][i] = (float)c0_rng_normal(&rng);
+		m[i] = c0_rng_uniform(&rng) < 0.5, guide[i] = (float)(20 * (int)(10 * c0_rng_uniform(&rng)));
+	}
+	const float *xs[NQ] = { x[0], x[1], x[2] };
+	float *os[NQ] = { out[0], out[1], out[2] };
+	for (int h = 1; h <= 3; h++)
+		for (int k = 0; k < 3; k++) {
+			const double range = (double[]){ 10, 50, 1e9 }[k];
+			CHECK(c0_pool_guided(xs, NQ, m, guide, range, NY, NX, h, os) == C0_OK);
+			double err = 0;
+			for (int q = 0; q < NQ; q++)
+				for (int y = 0; y < NY; y++)
+					for (int xx = 0; xx < NX; xx++) {
+						const int p = y * NX + xx;
+						double s = 0;
+						for (int dy = -h; dy <= h; dy++)
+							for (int dx = -h; dx <= h; dx++) {
+								int yy = y + dy, x2 = xx + dx, o = yy * NX + x2;
+								if (yy >= 0 && yy < NY && x2 >= 0 && x2 < NX && m[o] &&
+								    fabs(guide[o] - guide[p]) <= range)
+									s += x[q][o];
+							}
+						err = fmax(err, fabs((m[p] ? s : 0) - out[q][p]));
+					}
+			CHECK_MSG(err < 1e-5, "h %d, range %g: max error %g", h, range, err);
+			if (range > 1e3) {
+				CHECK(c0_pool_window(x[1], m, NY, NX, h, plain) == C0_OK);
+				for (int i = 0; i < NP; i++)
+					err = fmax(err, fabs(plain[i] - out[1][i]));
+				CHECK_MSG(err < 1e-5, "h %d: guided with every guide in range vs plain %g", h, err);
+			}
+		}
+	/* single depth: x = a W[.][j] (one pixel per bin, a > 0), and a pixel off the mask */
+	enum { NZ = 6 };
+	double W[NQ * NZ];
+	for (int q = 0; q < NQ; q++)
+		for (int j = 0; j < NZ; j++)
+			W[q * NZ + j] = (1 + q) * exp(-(0.2 + 0.3 * q) * j);
+	float y[NQ][NZ + 1], z[NZ + 1];
+	uint8_t on[NZ + 1];
+	for (int j = 0; j <= NZ; j++)
+		for (int q = 0; q < NQ; q++)
+			y[q][j] = j < NZ ? (float)((2 + j) * W[q * NZ + j]) : 1, on[j] = j < NZ;
+	const float *ys[NQ] = { y[0], y[1], y[2] };
+	c0_depth_single(W, NQ, NZ, 100, 20, ys, on, NZ + 1, z);
+	for (int j = 0; j < NZ; j++)
+		CHECK_MSG(z[j] == (float)(100 + (j + 0.5) * 20), "bin %d: depth %g", j, z[j]);
+	CHECK(z[NZ] == 0);
 }
 
 static void test_depth_error(void)
@@ -109,6 +171,7 @@ int main(void)
 {
 	c0_rng_init(&rng, 23, 0);
 	RUN(test_pool_window);
+	RUN(test_pool_guided);
 	RUN(test_depth_error);
 	RUN(test_depthcode);
 	return CHECK_DONE();

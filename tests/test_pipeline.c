@@ -3,6 +3,7 @@
  * stages' defaults; bad parameters are refused naming the parameter. */
 #define _XOPEN_SOURCE 700
 #include "check.h"
+#include "core/err.h"
 #include "col0rme.h"
 #include "stages/pipeline.h"
 #include "stages/depthpool.h"
@@ -46,7 +47,10 @@ static void test_conf(void)
 	      s.matirf.dz_nm == md.dz_nm && s.matirf.reg == md.reg && s.matirf.kappa == md.kappa && s.matirf.wz == md.wz &&
 	      s.matirf.sparsity == md.sparsity && s.matirf.pdhg.maxit == md.pdhg.maxit && s.matirf.pdhg.tol == md.pdhg.tol &&
 	      s.matirf.pdhg.relax == md.pdhg.relax && s.matirf.fused == md.fused);
-	CHECK(s.pool_nm == C0_DEPTH_POOL_FWHM * 229);
+	CHECK(s.pool_nm == C0_DEPTH_POOL_FWHM * 229 && s.pool_range_nm == C0_DEPTH_POOL_RANGE_NM);
+	c.depth_pool_range_nm = -2;
+	CHECK(c0_run_conf_stages(&c, 100, &s) == C0_EINVAL && strstr(c0_errmsg(), "depth_pool_range_nm"));
+	c.depth_pool_range_nm = -1;
 	/* set by name */
 	CHECK(c0_run_conf_set(&c, "lambda", "1e-3") == C0_OK && c.lambda == 1e-3);
 	CHECK(c0_run_conf_set(&c, "angles", "62,64,66") == C0_OK && c.nangles == 3 && c.angles[2] == 66);

@@ -44,6 +44,7 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "graph_radius", { "graph-radius", 0, C0_OPT_DOUBLE, &c->graph_radius, "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", NULL, 0, NULL } },
 		{ "noise_variance", { "noise-variance", 0, C0_OPT_DOUBLES, c->noise_variance, "V,...", "per-stack noise variance (camera units^2)", "estimated on the support", C0_MAX_STACKS, &c->nnoise_variance } },
 		{ "depth_pool_nm", { "depth-pool", 0, C0_OPT_DOUBLE, &c->depth_pool_nm, "NM", "window over which intensities are summed for each pixel's depth (0: off)", "0.75 FWHM", 0, NULL } },
+		{ "depth_pool_range_nm", { "depth-pool-range", 0, C0_OPT_DOUBLE, &c->depth_pool_range_nm, "NM", "only window pixels whose first depth guess is within NM of the centre's are summed (0: all)", "50", 0, NULL } },
 		{ "bleach", { "bleach", 0, C0_OPT_STRING, &m->bleach, "estimate|off", "photobleaching across the stacks: estimate the fade and divide each stack's intensity by its factor before MA-TIRF, or off", NULL, 0, NULL } },
 		{ "bleach_factors", { "bleach-factors", 0, C0_OPT_DOUBLES, c->bleach_factors, "F,...", "known bleaching factors: each stack's mean population relative to the start of the acquisition", "estimated", C0_MAX_STACKS, &c->nbleach_factors } },
 		{ "acquisition", { "acquisition", 0, C0_OPT_STRING, &m->acquisition, "sequential|interleaved", "how the stacks were recorded: one after another, or frame by frame in turn", NULL, 0, NULL } },

@@ -2,6 +2,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 int c0_pool_window(const float *x, const uint8_t *mask, int ny, int nx, int h, float *out)
@@ -40,5 +41,55 @@ void c0_pool_rescale(float *f, int nz, int ny, int nx, int nq, const float *cons
 		double s = b > 0 ? a / b : 0;
 		for (int j = 0; j < nz; j++)
 			f[j * np + p] = (float)(f[j * np + p] * s);
+	}
+}
+
+int c0_pool_guided(const float *const *x, int nq, const uint8_t *mask, const float *guide, double range, int ny,
+		   int nx, int h, float *const *out)
+{
+	enum { QMAX = 64 };
+	if (nq > QMAX)
+		return c0_fail(C0_EINVAL, "depth pooling: %d angles (at most %d)", nq, QMAX);
+#pragma omp parallel for schedule(static)
+	for (int y = 0; y < ny; y++)
+		for (int xx = 0; xx < nx; xx++) {
+			const size_t p = (size_t)y * nx + xx;
+			double acc[QMAX] = { 0 };
+			if (!mask[p]) {
+				for (int q = 0; q < nq; q++)
+					out[q][p] = 0;
+				continue;
+			}
+			for (int j = y - h < 0 ? 0 : y - h; j <= y + h && j < ny; j++)
+				for (int i = xx - h < 0 ? 0 : xx - h; i <= xx + h && i < nx; i++) {
+					const size_t o = (size_t)j * nx + i;
+					if (mask[o] && fabs(guide[o] - guide[p]) <= range)
+						for (int q = 0; q < nq; q++)
+							acc[q] += x[q][o];
+				}
+			for (int q = 0; q < nq; q++)
+				out[q][p] = (float)acc[q];
+		}
+	return C0_OK;
+}
+
+void c0_depth_single(const double *W, int nq, int nz, double z0, double dz, const float *const *x, const uint8_t *mask,
+		     size_t np, float *out)
+{
+#pragma omp parallel for schedule(static)
+	for (size_t p = 0; p < np; p++) {
+		out[p] = 0;
+		if (!mask[p])
+			continue;
+		/* ||x - a w_j||^2 at the best a >= 0 is ||x||^2 - (x.w_j)^2 / ||w_j||^2 when x.w_j > 0 */
+		double best = 0;
+		for (int j = 0; j < nz; j++) {
+			double xw = 0, ww = 0;
+			for (int q = 0; q < nq; q++)
+				xw += x[q][p] * W[q * nz + j], ww += W[q * nz + j] * W[q * nz + j];
+			const double gain = xw > 0 && ww > 0 ? xw * xw / ww : 0;
+			if (gain > best)
+				best = gain, out[p] = (float)(z0 + (j + 0.5) * dz);
+		}
 	}
 }

@@ -701,6 +701,11 @@ static double objective(struct ctx *c, const float *u, float *work)
 static int solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		 const float *const *x, int ny, int nx, double mx0, int coarse, float *yout, struct c0_matirf_result *res);
 
+int c0_matirf_nz(const struct c0_matirf_conf *c)
+{
+	return (int)ceil((c->z1_nm - c->z0_nm) / c->dz_nm - 1e-9);
+}
+
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		    const float *const *x, int ny, int nx, struct c0_matirf_result *res)
 {
@@ -776,7 +781,7 @@ static int solve(const struct c0_matirf_conf *c, int nq, const double *angles, c
 	int st = c0_matirf_check(c, nq, angles);
 	if (st)
 		return st;
-	const int nz = (int)ceil((c->z1_nm - c->z0_nm) / c->dz_nm - 1e-9);
+	const int nz = c0_matirf_nz(c);
 	const size_t np = (size_t)ny * nx;
 	double W[MAXQ * 512], col[512];
 	if ((st = c0_tirf_weights(&c->tirf, nq, angles, gain, nz, c->z0_nm, c->dz_nm, W)))

@@ -59,6 +59,8 @@ struct c0_matirf_result {
 };
 
 int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles);
+/* The number of depth bins [z0, z1) of width dz. */
+int c0_matirf_nz(const struct c0_matirf_conf *c);
 /* x: nq images of ny x nx; gain: nq per-angle gains or NULL. */
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		    const float *const *x, int ny, int nx, struct c0_matirf_result *res);

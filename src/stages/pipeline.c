@@ -553,19 +553,44 @@ static int support_stacks(const struct c0_run_conf *c, const int *only, int n, s
 	return C0_OK;
 }
 
+/* The guide of the depth pooling: each support pixel's depth from its own
+ * intensities summed over a (2 hg + 1)^2 window, one depth per pixel fitted
+ * against the model's bin weights (no volume, no regulariser). */
+static int depth_guide(const struct c0_run_conf *ct, const struct c0_matirf_conf *m, const uint8_t *mask,
+		       const float *const *own, int Ly, int Lx, int hg, float *guide)
+{
+	const int nq = ct->nangles, nz = c0_matirf_nz(m);
+	const size_t L = (size_t)Ly * Lx;
+	float *g[C0_MAX_STACKS] = { 0 };
+	double *W = c0_alloc((size_t)nq * nz, sizeof *W);
+	int st = W ? c0_tirf_weights(&m->tirf, nq, ct->angles, ct->ngains ? ct->gains : NULL, nz, m->z0_nm, m->dz_nm, W)
+		   : C0_ENOMEM;
+	for (int i = 0; !st && hg > 0 && i < nq; i++)
+		st = (g[i] = c0_alloc(L, sizeof(float))) ? c0_pool_window(own[i], mask, Ly, Lx, hg, g[i]) : C0_ENOMEM;
+	if (!st)
+		c0_depth_single(W, nq, nz, m->z0_nm, m->dz_nm, hg > 0 ? (const float *const *)g : own, mask, L, guide);
+	for (int i = 0; i < nq; i++)
+		free(g[i]);
+	free(W);
+	return st;
+}
+
 /* The volume from the intensities, each pooled over a window of about
- * pool_nm (odd, in fine pixels) on the support. */
+ * pool_nm (odd, in fine pixels) on the support, over the pixels whose guide
+ * depth is within pool_range_nm of the centre's (0: all). */
 static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *tirf, const struct c0_stage_confs *s)
 {
 	const int nq = ct->nangles, Ly = r->Ly, Lx = r->Lx;
 	const size_t L = (size_t)Ly * Lx, Nc = r->ires[0].Ny * (size_t)r->ires[0].Nx;
-	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 };
+	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 }, *guide = NULL;
 	const double fine = s->support.pixel_nm / s->support.srf;
-	int h = (int)lround((s->pool_nm / fine - 1) / 2), st = C0_OK;
+	const int h = (int)lround((s->pool_nm / fine - 1) / 2), guided = h > 0 && s->pool_range_nm > 0;
+	const int hg = guided ? (int)lround((C0_DEPTH_GUIDE_FWHM * s->support.fwhm_nm / fine - 1) / 2) : 0;
+	int st = C0_OK;
 	for (int i = 0; !st && i < nq; i++) {
 		const int q = tirf[i];
 		const float g = (float)(1 / r->bleach_factor[q]);
-		if (!(own[i] = malloc(L * sizeof(float)))) {
+		if (!(own[i] = malloc(L * sizeof(float))) || (h > 0 && !(pooled[i] = malloc(L * sizeof(float))))) {
 			st = C0_ENOMEM;
 			break;
 		}
@@ -574,16 +599,26 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 		if (ct->baseline && !(st = (base[i] = malloc(Nc * sizeof(float))) ? C0_OK : C0_ENOMEM))
 			for (size_t p = 0; p < Nc; p++)
 				base[i][p] = r->corrected[q][p] * g;
-		if (st || h <= 0)
-			continue;
-		pooled[i] = malloc(L * sizeof(float));
-		st = pooled[i] ? c0_pool_window(own[i], r->mask, Ly, Lx, h, pooled[i]) : C0_ENOMEM;
+		if (!st && h > 0 && !guided)
+			st = c0_pool_window(own[i], r->mask, Ly, Lx, h, pooled[i]);
 	}
+	if (!st && guided) {
+		st = (guide = malloc(L * sizeof(float))) ? depth_guide(ct, &s->matirf, r->mask, (const float *const *)own, Ly, Lx,
+								      hg, guide)
+							 : C0_ENOMEM;
+		if (!st)
+			st = c0_pool_guided((const float *const *)own, nq, r->mask, guide, s->pool_range_nm, Ly, Lx, h, pooled);
+	}
+	free(guide);
 	if (!st)
 		st = c0_step_matirf(r, ct, &s->matirf, h > 0 ? (const float *const *)pooled : (const float *const *)own,
 				    h > 0 ? (const float *const *)own : NULL, Ly, Lx, fine, 0);
-	if (!st)
-		cJSON_AddNumberToObject(cJSON_GetObjectItem(r->rep, "matirf"), "depth_pool_window_px", h > 0 ? 2 * h + 1 : 0);
+	if (!st) {
+		cJSON *j = cJSON_GetObjectItem(r->rep, "matirf");
+		cJSON_AddNumberToObject(j, "depth_pool_window_px", h > 0 ? 2 * h + 1 : 0);
+		cJSON_AddNumberToObject(j, "depth_pool_range_nm", guided ? s->pool_range_nm : 0);
+		cJSON_AddNumberToObject(j, "depth_guide_window_px", guided ? 2 * hg + 1 : 0);
+	}
 	if (!st && ct->baseline)
 		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
 				    s->support.pixel_nm, 1);
@@ -714,8 +749,10 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	cJSON_AddNumberToObject(p, "fine_pixel_nm", s.support.pixel_nm / s.support.srf);
 	cJSON_AddNumberToObject(p, "fwhm_nm", s.support.fwhm_nm);
 	cJSON_AddNumberToObject(p, "srf", s.support.srf);
-	if (three_d)
+	if (three_d) {
 		cJSON_AddNumberToObject(p, "depth_pool_nm", s.pool_nm);
+		cJSON_AddNumberToObject(p, "depth_pool_range_nm", s.pool_range_nm);
+	}
 	double s1[C0_MAX_STACKS];
 	for (int k = 0; k < r->nsup; k++)
 		s1[k] = r->sup[k] + 1;

@@ -18,6 +18,7 @@ struct c0_stage_confs {
 	struct c0_intensity_conf intensity;
 	struct c0_matirf_conf matirf;
 	double pool_nm;              /* depth pooling window (nm), 0: off */
+	double pool_range_nm;        /* and its guide's depth range (nm), 0: the whole window */
 	struct c0_psf_fit psf;       /* with psf_fitted: the fit of psf_image */
 	double psf_pixel_nm;         /* its calibration, 0 when it has none */
 	int psf_fitted;

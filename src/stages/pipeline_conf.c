@@ -81,6 +81,7 @@ static const struct param params[] = {
 	NUM(background_smooth, P_DOUBLE, "smoothness weight of the estimated background, px^2 (100)"),
 	NUM(psf_fwhm_nm, P_DOUBLE, "joint deconvolution by a Gaussian PSF of this FWHM, nm, standard MA-TIRF path (0: none)"),
 	NUM(depth_pool_nm, P_DOUBLE, "window over which intensities are summed for each pixel's depth, nm (-1: 0.75 fwhm_nm, 0: off)"),
+	NUM(depth_pool_range_nm, P_DOUBLE, "only window pixels whose first depth guess is this close to the centre's are summed, nm (-1: 50, 0: all)"),
 	{ "bleach", P_ENUM, F(bleach), 0, 0, "estimate|off", "photobleaching across the stacks: estimate and correct the fade, or off (estimate; 3D mode)" },
 	LIST(bleach_factors, P_DOUBLES, "known bleaching factors, each stack's mean population relative to the start (none: estimated)"),
 	{ "acquisition", P_ENUM, F(acquisition), 0, 0, "sequential|interleaved",
@@ -233,6 +234,9 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	}
 	if (!(c->depth_pool_nm >= -1 && c->depth_pool_nm <= 100 * fwhm))
 		return c0_fail(C0_EINVAL, "depth_pool_nm %g: must be a window in nm (0: off, -1: the default, %g FWHM)", c->depth_pool_nm, C0_DEPTH_POOL_FWHM);
+	if (!(c->depth_pool_range_nm >= -1 && isfinite(c->depth_pool_range_nm)))
+		return c0_fail(C0_EINVAL, "depth_pool_range_nm %g: must be a depth difference in nm (0: every pixel of the window, -1: the default, %d)",
+			       c->depth_pool_range_nm, C0_DEPTH_POOL_RANGE_NM);
 	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
 					       .fista = { c->iterations != -1 ? c->iterations
@@ -248,6 +252,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE };
 	c0_run_conf_matirf(c, &s->matirf);
 	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
+	s->pool_range_nm = c->depth_pool_range_nm < 0 ? C0_DEPTH_POOL_RANGE_NM : c->depth_pool_range_nm;
 	if ((unsigned)c->discrepancy > C0_DISCREPANCY_PLAIN || (unsigned)c->bleach > C0_BLEACHING_OFF ||
 	    (unsigned)c->acquisition > C0_ACQ_INTERLEAVED)
 		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,

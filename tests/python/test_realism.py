@@ -81,6 +81,21 @@ def test_depth(tmp):
                 check(b0 > 8, "seed %d: without the correction the fade reads as depth (signed %+.1f > 8 nm)" % (seed, b0))
 
 
+def test_close_pairs(tmp):
+    """filament partners 90 nm away and 100 nm deeper: the guided depth pooling
+    keeps each pixel's window to its own structure, the plain window (range 0)
+    pulls the two depths together (docs/parameters.md)"""
+    data, sim, stacks = simulate(tmp, "close3", "--seed", "3", "--pairs", "--pair-sep", "90")
+    _, d = run(tmp, "close3_run", data, sim, stacks)
+    _, d0 = run(tmp, "close3_plain", data, sim, stacks, "--depth-pool-range", "0")
+    if d is None or d0 is None:
+        return
+    med, med0 = d["median_abs_error_nm"], d0["median_abs_error_nm"]
+    print("pairs 90 nm apart: median depth error %.1f nm guided, %.1f nm plain window" % (med, med0), file=sys.stderr)
+    check(med <= 20, "pairs 90 nm apart: median depth error %.1f <= 20 nm" % med)
+    check(med0 >= med + 8, "pairs 90 nm apart: the plain window %.1f nm, the guided %.1f nm" % (med0, med))
+
+
 def test_support_only(tmp):
     """an epi stack below the critical angle joins the support and stays out of the volume"""
     ang = [55, 61.48, 63.37, 65.39, 67.58, 70]
@@ -201,4 +216,5 @@ with tempfile.TemporaryDirectory() as tmp:
     test_support_only(tmp)
     if MODE == "full":
         test_depth(tmp)
+        test_close_pairs(tmp)
 done()
