@@ -367,11 +367,6 @@ static void test_auto_lambda_spread(void)
 	CHECK(j >= 0.5);
 }
 
-/* tiles (4 or 16) choose lambda by the same rule: sigma_C from the halves
- * of every tile's interior (these small images fit the subset whole) equals
- * the one-tile path's up to the pooled vs all-frames covariance and the
- * histogram's bins; the two paths' solves (pooled covariance on one tile,
- * all frames' on tiles, tiles cut at the iteration cap) differ a little */
 /* The criterion curve: shares of pixels that fall as lambda grows, none of
  * the correlation image above lambda_max but its top bin, and at the chosen
  * lambda more of the signal than of the halves' noise above it */
@@ -389,6 +384,11 @@ static void check_curve(const struct c0_lambda_result *v)
 		  z[k], s[k]);
 }
 
+/* tiles (4 or 16) choose lambda by the same rule: sigma_C from the halves
+ * of every tile's interior (these small images fit the subset whole) equals
+ * the one-tile path's up to the pooled vs all-frames covariance and the
+ * histogram's bins; the two paths' solves (pooled covariance on one tile,
+ * all frames' on tiles, tiles cut at the iteration cap) differ a little */
 static void test_auto_lambda_tiles(void)
 {
 	const int n = quick ? 32 : 48;

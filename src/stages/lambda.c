@@ -84,9 +84,15 @@ void c0_lambda_max(const double *C, double norm, double s0, const double *n, siz
 #define HB_LO (-12)
 #define HB_PER (C0_LAMBDA_BINS / 14)
 
+/* v's position on the bins' axis (-1 for v <= 0) and the bin that holds it */
+static double bin_pos(double v)
+{
+	return v > 0 ? (log10(v) - HB_LO) * HB_PER : -1;
+}
+
 static int bin_of(double v)
 {
-	const double u = v > 0 ? (log10(v) - HB_LO) * HB_PER : -1;
+	const double u = bin_pos(v);
 	return u < 0 ? 0 : u >= C0_LAMBDA_BINS ? C0_LAMBDA_BINS - 1 : (int)u;
 }
 
@@ -113,27 +119,26 @@ double c0_lambda_curve_rel(int k)
 	return pow(10, -4 + k / 8.0);
 }
 
-/* The share of the counts of h above v (the bin that holds v split linearly
- * in log v, as the quantiles read it) */
-static double share_above(const double *h, double v)
+/* The share of the all counts of h that lie above v (the bin that holds v
+ * split linearly in log v, as the quantiles read it) */
+static double share_above(const double *h, double all, double v)
 {
-	const double u = v > 0 ? (log10(v) - HB_LO) * HB_PER : 0;
 	const int kv = bin_of(v);
-	double all = 0, above = 0;
-	for (int k = 0; k < C0_LAMBDA_BINS; k++) {
-		all += h[k];
-		if (k > kv)
-			above += h[k];
-	}
-	above += h[kv] * fmin(1, fmax(0, kv + 1 - u));
+	double above = h[kv] * fmin(1, fmax(0, kv + 1 - bin_pos(v)));
+	for (int k = kv + 1; k < C0_LAMBDA_BINS; k++)
+		above += h[k];
 	return all > 0 ? above / all : 0;
 }
 
 static void curve(const double *signal, const double *noise, double lmax, struct c0_lambda_result *out)
 {
+	double ns = 0, nn = 0;
+	for (int k = 0; k < C0_LAMBDA_BINS; k++)
+		ns += signal[k], nn += noise[k];
 	for (int k = 0; k < C0_LAMBDA_CURVE; k++) {
-		out->curve_signal[k] = share_above(signal, lmax * c0_lambda_curve_rel(k));
-		out->curve_noise[k] = share_above(noise, lmax * c0_lambda_curve_rel(k));
+		const double lam = lmax * c0_lambda_curve_rel(k);
+		out->curve_signal[k] = share_above(signal, ns, lam);
+		out->curve_noise[k] = share_above(noise, nn, lam);
 	}
 }
 
