@@ -603,6 +603,78 @@ static void test_solver_converges(void)
 	c0_cov_free(&cov);
 }
 
+/* The pixel guard (ops/covariance.h): a model covariance Psi diag(x) Psi^T
+ * plus noise on the diagonal, for sparse and for dense emitters, keeps every
+ * variance; a pixel with noise of its own is set to the slow formula's
+ * S + N, inside, on the edge and at a corner. */
+static void test_pixel_guard(void)
+{
+	enum { W = 16, H = 12, RR = 4 };
+	struct c0_support_conf sc = C0_SUPPORT_DEFAULTS;
+	sc.pixel_nm = 100, sc.fwhm_nm = 229, sc.srf = RR;
+	const double g = c0_support_guard_ratio(&sc), s2 = 50;
+	CHECK(g > 0.5 && g < 0.7);
+	struct c0_covop op;
+	CHECK(c0_covop_init(&op, H, W, RR, c0_psf_sigma_px(sc.fwhm_nm, sc.pixel_nm), 3) == C0_OK);
+	const size_t n = (size_t)W * H, L = n * RR * RR;
+	double *x = calloc(L, sizeof *x), *v0 = malloc(n * sizeof *v0);
+	for (int dense = 0; dense < 2; dense++) {
+		for (size_t a = 0; a < L; a++)
+			x[a] = dense || c0_rng_uniform(&rng) < 0.02 ? 1e4 * c0_rng_uniform(&rng) : 0;
+		struct c0_cov_acc *acc;
+		struct c0_cov cov;
+		c0_cov_acc_new(W, H, 3, &acc);
+		float f[W * H];
+		for (int t = 0; t < 3; t++) {
+			for (size_t i = 0; i < n; i++)
+				f[i] = (float)c0_rng_uniform(&rng);
+			c0_cov_acc_add(acc, f);
+		}
+		CHECK(c0_cov_acc_finish(acc, &cov) == C0_OK);
+		cov.frames = 500;
+		c0_covop_forward(&op, &cov, x, cov.r);
+		for (size_t i = 0; i < n; i++)
+			cov.r[i] += s2;
+		memcpy(v0, cov.r, n * sizeof *v0);
+		size_t set;
+		CHECK(c0_cov_guard(&cov, g, &set) == C0_OK);
+		CHECK_MSG(set == 0 && !memcmp(v0, cov.r, n * sizeof *v0), "%s emitters: %zu variances set", dense ? "dense" : "sparse", set);
+		/* noise of their own: inside, on the top edge, at the bottom-right corner */
+		const size_t hot[3] = { 5 * W + 7, 4, n - 1 };
+		for (int k = 0; k < 3; k++)
+			cov.r[hot[k]] += 5 * cov.r[hot[k]] + 40 * s2;
+		memcpy(v0, cov.r, n * sizeof *v0);
+		CHECK(c0_cov_guard(&cov, g, &set) == C0_OK && set == 3);
+		for (int k = 0; k < 3; k++) {
+			const int y = (int)(hot[k] / W), xx = (int)(hot[k] % W);
+			/* the slow way: each neighbour's covariance read at its own lag */
+			double S = 0, nb[4];
+			int m = 0;
+			for (int l = 0; l < cov.nlag; l++)
+				for (int sgn = -1; sgn <= 1; sgn += 2) {
+					const int dy = sgn * cov.dy[l], dx = sgn * cov.dx[l];
+					if (dy * dy + dx * dx != 1 || y + dy < 0 || y + dy >= H || xx + dx < 0 || xx + dx >= W)
+						continue;
+					/* the pair is stored at the upper-left pixel of the two */
+					const size_t at = sgn > 0 ? hot[k] : (size_t)(y + dy) * W + xx + dx;
+					S += cov.r[(size_t)l * n + at], nb[m++] = v0[(size_t)(y + dy) * W + xx + dx];
+				}
+			for (int i = 0; i < m; i++)
+				for (int j = i + 1; j < m; j++)
+					if (nb[j] < nb[i]) {
+						double t = nb[i];
+						nb[i] = nb[j], nb[j] = t;
+					}
+			const double N = m % 2 ? nb[m / 2] : (nb[m / 2 - 1] + nb[m / 2]) / 2;
+			CHECK_REL(cov.r[hot[k]], S / m / g + N, 1e-12);
+			CHECK(m == (k == 0 ? 4 : k == 1 ? 3 : 2));
+		}
+		c0_cov_free(&cov);
+	}
+	free(x), free(v0);
+	c0_covop_free(&op);
+}
+
 /* one angle, 500 frames, fixed seed: the support matches the truth */
 static void test_accuracy(void)
 {
@@ -652,6 +724,7 @@ int main(void)
 	RUN(test_dense_identities);
 	RUN(test_covariance);
 	RUN(test_covariance_operator);
+	RUN(test_pixel_guard);
 	RUN(test_first_fail);
 	RUN(test_wrong_inputs);
 	RUN(test_noise_variance);

@@ -57,6 +57,8 @@ static void report(const struct c0_sim_conf *c, const struct c0_sim_result *r, c
 	cJSON_AddNumberToObject(p, "offset_adu", c->offset);
 	cJSON_AddNumberToObject(p, "gain_adu_per_photon", c->gain);
 	cJSON_AddNumberToObject(p, "snr_db_target", c->snr_db);
+	cJSON_AddNumberToObject(p, "hot_pixel_fraction", c->hot_fraction);
+	cJSON_AddNumberToObject(p, "hot_pixel_sd_adu", c->hot_sd);
 	cJSON_AddStringToObject(p, "snr_definition", "10 log10(var(noise-free ADU over pixels and frames) / read_noise^2), per angle");
 	cJSON *e = cJSON_AddObjectToObject(rep, "estimates");
 	cJSON_AddNumberToObject(e, "emitters", r->nemitters);
@@ -100,7 +102,7 @@ static const struct c0_cli_name NAMES[] = {
 	{ "background", "--background" }, { "gain", "--gain" }, { "read_noise", "--read-noise" }, { "offset", "--offset" },
 	{ "z_min_nm", "--z-range min" }, { "z_max_nm", "--z-range max" }, { "filaments", "--filaments" },
 	{ "density_per_um", "--density" }, { "persistence_nm", "--persistence" }, { "emitters_csv", "--emitters" },
-	{ "drift_nm", "--drift-nm" }, { "srf", "--srf" }, { NULL, NULL },
+	{ "drift_nm", "--drift-nm" }, { "hot_pixels", "--hot-pixels" }, { "srf", "--srf" }, { NULL, NULL },
 };
 
 static int fail(void)
@@ -116,7 +118,8 @@ int cmd_simulate(int argc, char **argv)
 	int force = 0, verbose = 0, nangles = c.nangles, nz = 2, ndrift = 0;
 	const char *order = "sequential";
 	long long seed = (long long)c.seed;
-	double zr[2] = { c.z_min_nm, c.z_max_nm };
+	double zr[2] = { c.z_min_nm, c.z_max_nm }, hot[2] = { c.hot_fraction, c.hot_sd };
+	int nhot = 0;
 	const struct c0_opt opts[] = {
 		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "seed", 0, C0_OPT_LONG, &seed, "N", "random seed (same seed, same bytes)", NULL, 0, NULL },
@@ -155,6 +158,7 @@ int cmd_simulate(int argc, char **argv)
 		{ "gain", 0, C0_OPT_DOUBLE, &c.gain, "G", "ADU per photon", NULL, 0, NULL },
 		{ "read-noise", 0, C0_OPT_DOUBLE, &c.read_noise, "ADU", "Gaussian read noise sd (used with --snr 0)", NULL, 0, NULL },
 		{ "snr", 0, C0_OPT_DOUBLE, &c.snr_db, "DB", "set the read noise to reach this SNR (0: use --read-noise)", NULL, 0, NULL },
+		{ "hot-pixels", 0, C0_OPT_DOUBLES, hot, "SHARE[,SD]", "a fixed share of pixels (sCMOS) with extra Gaussian read noise of sd SD ADU (30 unless given)", "0", 2, &nhot },
 		{ "drift-nm", 0, C0_OPT_DOUBLES, c.drift_nm, "X,Y", "stage drift over the whole acquisition (all angles in order): displacement at the last frame", "0,0", 2, &ndrift },
 		{ "drift-walk", 0, C0_OPT_FLAG, &c.drift_walk, NULL, "drift as a Gaussian random walk (per-axis step sd |X|/sqrt(frames), |Y|/...) instead of linear", NULL, 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
@@ -175,6 +179,7 @@ int cmd_simulate(int argc, char **argv)
 	c.z_min_nm = zr[0];
 	c.z_max_nm = nz > 1 ? zr[1] : zr[0];
 	c.nangles = nangles;
+	c.hot_fraction = hot[0], c.hot_sd = hot[1];
 	if (ndrift == 1)
 		return c0_fail(C0_EINVAL, "--drift-nm: expected X,Y in nm"), fail();
 	static const char *orders[] = { "sequential", "interleaved", "restart" };

@@ -28,6 +28,7 @@ static int rows(struct c0_conf_cli *m, struct row *r)
 		{ "lambda", { "lambda", 0, C0_OPT_DOUBLE, &c->lambda, "F", "support regularisation relative to lambda_max (the smallest that gives an empty support)", "automatic: max(2e-2 of the correlation's 90th percentile, 4 noise sds) for l1 (see the guide)", 0, NULL } },
 		{ "drift", { "drift", 0, C0_OPT_STRING, &m->drift, "on|off", "estimate lateral drift from block means and undo it before the covariance and the means", NULL, 0, NULL } },
 		{ "no_drift", { "no-drift", 0, C0_OPT_FLAG, &m->no_drift, NULL, "the same as --drift off", NULL, 0, NULL } },
+		{ "pixel_guard", { "pixel-guard", 0, C0_OPT_STRING, &m->pixel_guard, "on|off", "clip each pixel's variance to what its covariances with its neighbours allow (noisy sCMOS pixels)", NULL, 0, NULL } },
 		{ "frc", { "frc", 0, C0_OPT_INT, &c->frc, "0|1", "solve each half of the frames too, for the FRC resolution and the localisation precision", NULL, 0, NULL } },
 		{ "support_solver", { "support-solver", 0, C0_OPT_STRING, &m->support_solver, "fista|pruned", "l1 support solver, both FISTA on a working set re-made every 100 iterations (momentum kept): with the whole grid's step, or with the set's own step (converges, see the guide)", NULL, 0, NULL } },
 		{ "iterations", { "iterations", 0, C0_OPT_INT, &c->iterations, "N", "maximum FISTA iterations (per reweighting for cel0)", "2000, or 10000 with pruned", 0, NULL } },
@@ -82,7 +83,7 @@ void c0_conf_cli_init(struct c0_conf_cli *m)
 	c0_run_conf_init(&m->c);
 	m->penalty = "l1", m->support_solver = "fista", m->background = "smooth", m->reg = "tv", m->solver = "auto", m->nz = 0, m->pixel_given = 0, m->channel = 0;
 	m->discrepancy = "relative", m->bleach = "estimate", m->acquisition = "sequential";
-	m->drift = "on", m->no_drift = 0;
+	m->drift = "on", m->no_drift = 0, m->pixel_guard = "on";
 }
 
 int c0_conf_cli_opts(struct c0_conf_cli *m, const char *const *params, struct c0_opt *o)
@@ -127,6 +128,8 @@ int c0_conf_cli_finish(struct c0_conf_cli *m)
 		st = c0_run_conf_set(&m->c, "acquisition", m->acquisition);
 	if (!st)
 		st = c0_run_conf_set(&m->c, "drift", m->no_drift ? "off" : m->drift);
+	if (!st)
+		st = c0_run_conf_set(&m->c, "pixel_guard", m->pixel_guard);
 	if (!st && m->nz && m->nz != 3)
 		st = c0_fail(C0_EINVAL, "z_range_nm: expected MIN,MAX,STEP in nm");
 	return st;

@@ -13,6 +13,7 @@ struct c0_conf_cli {
 	const char *discrepancy, *bleach, *acquisition;
 	const char *drift;                       /* on|off */
 	int no_drift;                            /* --no-drift: drift off */
+	const char *pixel_guard;                 /* on|off */
 	int nz;                                  /* values given to --z-range */
 	int pixel_given;                         /* --pixel-size was given (then it must be positive) */
 	int channel;                             /* --channel: 0 reads every channel of a multi-channel file */

@@ -24,6 +24,7 @@ struct c0_cov_acc {
 	float *blk;         /* up to `block` frames, shifted */
 	int nb, block;
 	int dropped;        /* rows [0, dropped) of sum are given back */
+	double guard;       /* c0_cov_acc_set_guard's g; 0: none */
 };
 
 /* lag (dy, dx) is stored: in the disk of radius d, and in the half that
@@ -247,6 +248,75 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++)
 			c->mean[(size_t)y * w + x] += a->shift[(size_t)(y0 + y) * a->W + x0 + x];
+	int st = a->guard > 0 ? c0_cov_guard(c, a->guard, NULL) : C0_OK;
+	if (st)
+		c0_cov_free(c);
+	return st;
+}
+
+void c0_cov_acc_set_guard(struct c0_cov_acc *a, double g) { a->guard = g; }
+
+static int lag_index(const struct c0_cov *c, int dy, int dx)
+{
+	for (int l = 0; l < c->nlag; l++)
+		if (c->dy[l] == dy && c->dx[l] == dx)
+			return l;
+	return -1;
+}
+
+/* the median of m <= 4 values (the mean of the middle two for an even m) */
+static double median4(double *v, int m)
+{
+	for (int i = 1; i < m; i++)
+		for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
+			double t = v[j];
+			v[j] = v[j - 1], v[j - 1] = t;
+		}
+	return m % 2 ? v[m / 2] : (v[m / 2 - 1] + v[m / 2]) / 2;
+}
+
+int c0_cov_guard(struct c0_cov *c, double g, size_t *set)
+{
+	const int w = c->W, h = c->H, lr = lag_index(c, 0, 1), ld = lag_index(c, 1, 0);
+	const size_t n = (size_t)w * h;
+	if (set)
+		*set = 0;
+	if (!(g > 0) || lr < 0 || ld < 0 || c->frames < 3)
+		return C0_OK;
+	double *v = c->r, *fill = c0_alloc(n, sizeof *fill);
+	if (!fill)
+		return c0_fail(C0_ENOMEM, "covariance: out of memory for the pixel guard of a %dx%d window", w, h);
+	const double *cr = c->r + (size_t)lr * n, *cd = c->r + (size_t)ld * n;
+	const double margin = 1 + C0_COV_GUARD_Z * sqrt(2.0 / ((double)c->frames - 2));
+	/* every value from the variances as measured (NAN: kept), then the setting;
+	 * a variance that overflowed stays so: the callers refuse it */
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			const size_t i = (size_t)y * w + x;
+			double s = 0, nb[4];
+			int m = 0;
+			if (x + 1 < w)
+				s += cr[i], nb[m++] = v[i + 1];
+			if (x > 0)
+				s += cr[i - 1], nb[m++] = v[i - 1];
+			if (y + 1 < h)
+				s += cd[i], nb[m++] = v[i + w];
+			if (y > 0)
+				s += cd[i - w], nb[m++] = v[i - w];
+			fill[i] = NAN;
+			if (!m || !isfinite(v[i]))
+				continue;
+			const double sig = fmax(0, s / m) / g, noise = fmax(0, median4(nb, m));
+			if (v[i] > sig + margin * noise)
+				fill[i] = sig + noise;
+		}
+	size_t k = 0;
+	for (size_t i = 0; i < n; i++)
+		if (!isnan(fill[i]))
+			v[i] = fill[i], k++;
+	free(fill);
+	if (set)
+		*set = k;
 	return C0_OK;
 }
 
@@ -341,7 +411,10 @@ int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y
 		for (int x = 0; x < w; x++)
 			c->mean[(size_t)y * w + x] += all->shift[(size_t)(y0 + y) * all->W + x0 + x];
 	free(s1), free(dl), free(tr);
-	return C0_OK;
+	int st = all->guard > 0 ? c0_cov_guard(c, all->guard, NULL) : C0_OK;
+	if (st)
+		c0_cov_free(c);
+	return st;
 }
 
 int c0_cov_acc_finish(struct c0_cov_acc *a, struct c0_cov *out)

@@ -39,6 +39,17 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
  * alone (odd's size): the same sums as an accumulator of the even frames,
  * up to the float sums' rounding. Both are kept. */
 int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y0, int x0, struct c0_cov *out);
+/* Windows cut from a then guard each pixel's variance (lag 0) against noise
+ * of its own (sCMOS random-telegraph or hot pixels), which the model's single
+ * noise variance would not explain. Over its 4 neighbours j in the window, a
+ * point source's variance in the pixel is at most S = mean_j R_ij / g (g from
+ * the PSF, at most 1), and its noise about N = median_j R_jj; a variance above
+ * S + N (1 + C0_COV_GUARD_Z sqrt(2 / (T - 2))), beyond the sampling error of
+ * T frames, is set to S + N. g = 0: no guard (the default). */
+#define C0_COV_GUARD_Z 4.0
+void c0_cov_acc_set_guard(struct c0_cov_acc *a, double g);
+/* The same on a finished covariance; *set (or NULL): how many variances it set. */
+int c0_cov_guard(struct c0_cov *c, double g, size_t *set);
 /* Temporal variance of one pixel so far. */
 double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x);
 int64_t c0_cov_acc_frames(const struct c0_cov_acc *a);

@@ -175,10 +175,18 @@ void c0_sim_camera(const struct c0_sim_conf *c, int q, int t, double read_noise,
 {
 	struct c0_rng r;
 	c0_rng_init(&r, c->seed, STREAM(3, q, t));
+	/* the noisy pixels: the same in every frame and stack (one draw per pixel
+	 * from a stream of their own), their noise from another: the rest of the
+	 * frame is the same as without them */
+	struct c0_rng hot, hn;
+	c0_rng_init(&hot, c->seed, STREAM(5, 0, 0));
+	c0_rng_init(&hn, c->seed, STREAM(6, q, t));
 	for (int i = 0; i < c->width * c->height; i++) {
 		double v = c->gain * (double)c0_rng_poisson(&r, ph[i]) + c->offset;
 		if (read_noise > 0)
 			v += read_noise * c0_rng_normal(&r);
+		if (c->hot_fraction > 0 && c0_rng_uniform(&hot) < c->hot_fraction)
+			v += c->hot_sd * c0_rng_normal(&hn);
 		v = nearbyint(v);
 		adu[i] = (float)(v < 0 ? 0 : v > 65535 ? 65535 : v);
 	}

@@ -4,6 +4,8 @@
  *   photons(pixel, t) = sum_e B_e * E_q(z_e) * on_e,q(t) * PSF_e(pixel) + bg_q(pixel)
  *   E_q(z) = I0(alpha_q)/I0(alpha_1) * exp(-p(alpha_q) z)       (tirf.h physics)
  *   ADU = gain * Poisson(photons) + offset + Normal(0, read_noise^2), rounded to uint16
+ * plus, on a fixed random share hot_fraction of the pixels (sCMOS pixels with
+ * random-telegraph or high read noise), Normal(0, hot_sd^2) more.
  * on_e,q(t) is the fraction of frame t the emitter spends on (two-state
  * telegraph process integrated within the frame) and zero once bleached.
  * Bleaching follows the cumulative ON time. The angles are acquired one
@@ -65,6 +67,8 @@ struct c0_sim_conf {
 	double gain;               /* 1 ADU per photon */
 	double read_noise;         /* ADU sd; used when snr_db <= 0 */
 	double snr_db;             /* 14.75 */
+	double hot_fraction;       /* 0: share of pixels with extra read noise */
+	double hot_sd;             /* 30 ADU: that noise's sd */
 	/* stage drift over the whole acquisition (the angles one after another) */
 	double drift_nm[2];        /* 0,0: x, y displacement of the sample at the last frame */
 	int drift_walk;            /* 0: linear; 1: Gaussian random walk (per-axis step sd |drift|/sqrt(frames)) */

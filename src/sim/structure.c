@@ -31,7 +31,7 @@ void c0_sim_defaults(struct c0_sim_conf *c)
 		.tirf = C0_TIRF_DEFAULTS, .filaments = 5, .persistence_nm = 4000, .density_per_um = 60,
 		.z_min_nm = 0, .z_max_nm = 400, .pair_sep_nm = 120, .pair_dz_nm = 100, .tau_on_ms = 20, .tau_off_ms = 40, .tau_bleach_s = 35, .fps = 100,
 		.brightness = 300, .brightness_cv = 0.3, .background = 40, .offset = 100, .gain = 1,
-		.read_noise = 0, .snr_db = 14.75,
+		.read_noise = 0, .snr_db = 14.75, .hot_fraction = 0, .hot_sd = 30,
 	};
 	c0_sim_default_angles(c, 5);
 }
@@ -75,11 +75,14 @@ int c0_sim_check(const struct c0_sim_conf *c)
 		return c0_fail(C0_EINVAL, "brightness, brightness_cv and background: must be >= 0");
 	if (!(c->gain > 0) || !(c->read_noise >= 0) || !(c->offset >= 0))
 		return c0_fail(C0_EINVAL, "gain: must be positive; read_noise and offset: >= 0");
+	if (!(c->hot_fraction >= 0 && c->hot_fraction <= 1) || !(c->hot_sd >= 0))
+		return c0_fail(C0_EINVAL, "hot_pixels %g,%g: need a share of pixels in [0, 1] and a noise sd >= 0 (ADU)", c->hot_fraction,
+			       c->hot_sd);
 	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
 		return c0_fail(C0_EINVAL, "z_min_nm %g / z_max_nm %g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
 	/* every real parameter finite: infinity passes the >= 0 tests above */
 	const double all[] = { c->tau_on_ms, c->tau_off_ms, c->tau_bleach_s, c->fps, c->brightness, c->brightness_cv,
-			       c->background, c->offset, c->gain, c->read_noise, c->snr_db, c->z_min_nm, c->z_max_nm,
+			       c->background, c->offset, c->gain, c->read_noise, c->snr_db, c->hot_sd, c->z_min_nm, c->z_max_nm,
 			       c->persistence_nm, c->density_per_um };
 	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
 		if (!isfinite(all[i]))

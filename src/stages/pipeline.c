@@ -273,6 +273,9 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	cJSON_AddStringToObject(p, "penalty", c->penalty == C0_PENALTY_L1 ? "l1" : "cel0");
 	cJSON_AddNumberToObject(p, "max_iterations", c->fista.maxit);
 	cJSON_AddNumberToObject(p, "tol", c0_support_tol(c));
+	cJSON_AddStringToObject(p, "pixel_guard", c->guard ? "on" : "off");
+	if (c->guard)   /* g of ops/covariance.h's c0_cov_guard */
+		cJSON_AddNumberToObject(p, "pixel_guard_ratio", c0_support_guard_ratio(c));
 	r->pixel_nm = c->pixel_nm, r->srf = c->srf;
 	r->Ly = r->sres[0].Ly, r->Lx = r->sres[0].Lx;
 	const size_t L = (size_t)r->Ly * r->Lx;

@@ -48,6 +48,7 @@ static const struct param params[] = {
 	NUM(tol, P_DOUBLE, "FISTA stops when the iterate's relative change falls below this (-1: 0 for fista on l1, every iteration; 1e-5 for pruned and cel0)"),
 	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
 	{ "drift", P_ENUM, F(drift), 0, 0, "off|on", "estimate lateral drift from block means and undo it before the covariance and the means (on)" },
+	{ "pixel_guard", P_ENUM, F(pixel_guard), 0, 0, "off|on", "clip each pixel's temporal variance to what its covariances with its neighbours allow, against pixels with noise of their own (on)" },
 	NUM(frc, P_FLAG, "1: also solve each half of the frames for the FRC resolution and the localisation precision (1)"),
 	NUM(tile, P_INT, "support and intensity tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
 	{ "background", P_ENUM, F(background), 0, 0, "none|constant|smooth", "background model (smooth)" },
@@ -244,7 +245,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 							  c->tol },
 					       .cel0_outer = c->reweightings,
 					       .solver = c->support_solver,
-					       .frc = c->frc, .tile = c->tile };
+					       .frc = c->frc, .tile = c->tile, .guard = c->pixel_guard };
 	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,

@@ -33,6 +33,29 @@ double c0_support_tol(const struct c0_support_conf *c)
 	return c->penalty == C0_PENALTY_L1 && c->solver == C0_SUPPORT_FISTA ? 0 : C0_SUPPORT_TOL;
 }
 
+double c0_support_guard_ratio(const struct c0_support_conf *c)
+{
+	const double sigma = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
+	double g = INFINITY, w[3];
+	/* a source inside pixel 0 (others give larger ratios: the pixel is
+	 * then on their Gaussian's flank or tail) */
+	for (int k = 0; k <= 64; k++) {
+		c0_psf_pixel_weights(k / 64.0, sigma, -1, 3, w);
+		if (w[1] > 0)
+			g = fmin(g, (w[0] + w[2]) / (2 * w[1]));
+	}
+	return g < 1 ? g : 1;
+}
+
+/* A covariance accumulator for c's streamed stacks: with its pixel guard. */
+static int acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a)
+{
+	int st = c0_cov_acc_new(W, H, d, a);
+	if (!st && c->guard)
+		c0_cov_acc_set_guard(*a, c0_support_guard_ratio(c));
+	return st;
+}
+
 static double lambda_rel(const struct c0_support_conf *c)
 {
 	return c->lambda_rel > 0 ? c->lambda_rel : c0_support_default_lambda(c->penalty);
@@ -648,7 +671,7 @@ static int stream_cov(const struct c0_support_conf *c, struct c0_frames *in, int
 	double t0 = c0_now();
 	struct c0_cov_acc *acc[2] = { NULL, NULL };
 	for (int k = 0; k < nacc && !st; k++)
-		st = c0_cov_acc_new(in->width, in->height, c0_support_lag(c), &acc[k]);
+		st = acc_new(c, in->width, in->height, c0_support_lag(c), &acc[k]);
 	float *frame = st ? NULL : c0_alloc((size_t)in->width * in->height, sizeof *frame);
 	if (!st && !frame)
 		st = C0_ENOMEM;
@@ -734,7 +757,7 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
 		return st;
 	struct c0_cov_acc *acc = NULL;
-	st = c0_cov_acc_new(W, H, d, &acc);
+	st = acc_new(c, W, H, d, &acc);
 	float *frame = st ? NULL : c0_alloc((size_t)W * H, sizeof *frame);
 	if (!st && !frame)
 		st = C0_ENOMEM;
@@ -1167,13 +1190,13 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	else if (halves)
 		spread(&tl, NULL, tl.n, SUBSET_PX, sub);
 	if (!st && rows > 0) {
-		st = c0_cov_acc_new(W, rows, d, &acc);
+		st = acc_new(c, W, rows, d, &acc);
 		if (!st)
 			st = c0_cov_acc_set_block(acc, block);
 		size_t wmax = 0;
 		for (int k = k0; k < k1 && !st; k++) {
 			const struct c0_tile *t = &tl.t[k];
-			if (sub[k] && !(st = c0_cov_acc_new(t->w, t->h, d, &odd[k - k0])))
+			if (sub[k] && !(st = acc_new(c, t->w, t->h, d, &odd[k - k0])))
 				st = c0_cov_acc_set_block(odd[k - k0], block);
 			wmax = sub[k] && (size_t)t->w * t->h > wmax ? (size_t)t->w * t->h : wmax;
 		}

@@ -33,8 +33,14 @@ struct c0_support_conf {
 	int tile;                  /* tile side in camera pixels; 0: C0_SUPPORT_TILE (or the image when smaller) */
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
+	int guard;                 /* 1: streamed covariances clip each pixel's variance (c0_cov_guard
+				    * with c0_support_guard_ratio) */
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL }
+#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1 }
+/* g of c0_cov_guard for this PSF: the smallest mean ratio of a point
+ * source's signal in a pixel's 4 neighbours to its signal in the pixel,
+ * over positions in and around the pixel (0.6 at 229 nm / 100 nm). */
+double c0_support_guard_ratio(const struct c0_support_conf *c);
 /* The iteration caps: fista's is part of the estimator (its capped iterate
  * matched the simulated truth better than the minimiser, docs/parameters.md);
  * pruned's is a safety net (it stops on converging, 3300-5300 at 256 tiles). */

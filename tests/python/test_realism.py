@@ -96,6 +96,30 @@ def test_close_pairs(tmp):
     check(med0 >= med + 8, "pairs 90 nm apart: the plain window %.1f nm, the guided %.1f nm" % (med0, med))
 
 
+def test_noisy_pixels(tmp):
+    """3 % of the pixels with noise of their own (sCMOS, sd 40 ADU): the pixel
+    guard keeps the support near the clean stack's; without it the noisy
+    pixels' variance reads as emitters (docs/parameters.md)"""
+    one = ["--seed", "6", "--angles", "65", "--z-range", "0,200"]
+    clean, _, cs = simulate(tmp, "clean6", *one)
+    data, sim, stacks = simulate(tmp, "hot6", *one, "--hot-pixels", "0.03,40")
+    var = [tifffile.imread(f).astype(np.float64).var(axis=0) for f in (stacks[0], cs[0])]
+    share = float((var[0] - var[1] > 800).mean())   # the noisy pixels add 1600 ADU^2
+    check(0.02 <= share <= 0.04, "simulate: %.3f of the pixels noisy (0.03 asked)" % share)
+    ji = {}
+    for name, stack, extra in (("clean", cs[0], []), ("guard", stacks[0], []), ("off", stacks[0], ["--pixel-guard", "off"])):
+        out = os.path.join(tmp, "hot_" + name)
+        p = cli("support", "--fwhm", "229", "-o", out, *extra, stack)
+        check(p.returncode == 0, "support %s: %s" % (name, p.stderr))
+        e = cli("eval", "--support", os.path.join(out, "support.tif"), "--support-truth",
+                os.path.join(data, "truth_support.tif"), "--margin", "12")
+        ji[name] = json.loads(e.stdout)["support"]["jaccard"] if e.returncode == 0 else 0
+    print("noisy pixels: Jaccard %.3f clean, %.3f guarded, %.3f without the guard" % (ji["clean"], ji["guard"], ji["off"]),
+          file=sys.stderr)
+    check(ji["guard"] >= ji["clean"] - 0.05, "noisy pixels: guarded %.3f within 0.05 of clean %.3f" % (ji["guard"], ji["clean"]))
+    check(ji["off"] <= ji["guard"] - 0.1, "noisy pixels: without the guard %.3f, guarded %.3f" % (ji["off"], ji["guard"]))
+
+
 def test_support_only(tmp):
     """an epi stack below the critical angle joins the support and stays out of the volume"""
     ang = [55, 61.48, 63.37, 65.39, 67.58, 70]
@@ -135,9 +159,11 @@ def test_bad_inputs(tmp):
     check(refused(cli(*base, "--bleach", "0.9,x", *stacks), "--bleach"), "bad factors")
     check(refused(cli(*base, "--bleach-factors", "1,0.9", *stacks), "--bleach-factors", "2 factors for 3"), "factor count")
     check(refused(cli(*base, "--bleach-factors", "1,0.9,0", *stacks), "--bleach-factors", "factor 3"), "zero factor")
+    check(refused(cli(*base, "--pixel-guard", "maybe", *stacks), "--pixel-guard", "maybe"), "unknown pixel guard")
     check(not os.path.exists(out), "nothing written for refused runs")
     check(refused(cli("simulate", "-o", out, "--gaps", "1,2,3", "--angles", "62,66,68"), "--gaps"), "simulate: gap count")
     check(refused(cli("simulate", "-o", out, "--bleach-order", "shuffled"), "--bleach-order"), "simulate: unknown order")
+    check(refused(cli("simulate", "-o", out, "--hot-pixels", "1.5"), "--hot-pixels"), "simulate: a share above 1")
     check(not os.path.exists(out), "nothing written by refused simulations")
 
 
@@ -217,4 +243,5 @@ with tempfile.TemporaryDirectory() as tmp:
     if MODE == "full":
         test_depth(tmp)
         test_close_pairs(tmp)
+        test_noisy_pixels(tmp)
 done()
