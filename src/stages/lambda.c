@@ -10,17 +10,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* docs/parameters.md: the threshold is RHO times the QUANT quantile of the
- * correlation image over the pixels above the noise floor (the bright
- * structure's typical level, which one very bright spot does not move as it
- * moves lambda_max), never below KAPPA noise sds. On the simulated panel
- * (brightness spreads 0.3 to 1, densities, depths, dim, bright, short, slow,
- * drifting, camera settings) it is within 0.03 of a sweep's best on 16 of
- * 19 members (the sparsest 0.052 short, spread 1 dense 0.036, depths 0-400 nm
- * at 65 degrees 0.052: the best lambda follows one emitter's variance, which
- * the covariance cannot tell from the density); the fixed 1e-2 lambda_max
- * lost 0.07-0.2 where the brightness spreads widely. KAPPA = 4 takes the
- * MusiJ stacks' far-from-structure share below 10 %. */
+/* docs/parameters.md: the first step's threshold is RHO times the QUANT
+ * quantile of the correlation image over the pixels above the noise floor
+ * (the bright structure's typical level, which one very bright spot does
+ * not move as it moves lambda_max), never below KAPPA noise sds. It follows
+ * the emitters' density, the best lambda one emitter's variance: on the
+ * simulated panel it was within 0.03 of a sweep's best on 16 of 19 members
+ * (sparse 0.048 short, depths 0-400 nm at 65 degrees 0.052), the second step
+ * (lambda.h) on 18 (dense 0.031 short); the fixed 1e-2 lambda_max lost
+ * 0.07-0.2 where the brightness spreads widely. KAPPA = 4 takes the MusiJ
+ * stacks' far-from-structure share below 10 %. */
 static const double RHO = 2e-2, QUANT = 0.9, KAPPA = 4;
 /* CEL0 does not shrink what it keeps, and is best with a lower entry
  * threshold: a fraction of the square of the l1 choice */
@@ -217,6 +216,59 @@ out:
 	c0_covop_free(&op);
 	out->seconds = c0_now() - t0;
 	return st;
+}
+
+int c0_lambda_peaks(const struct c0_support_conf *c, const float *rx, double norm, int Ny, int Nx, int iy, int ix,
+		    int ih, int iw, double *hist)
+{
+	const int r = c->srf, Ly = Ny * r, Lx = Nx * r, N = Ny > Nx ? Ny : Nx;
+	const double sigma = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
+	/* ||psi_a||^2 = ny[ay] nx[ax]: the window's pixels' squared weights, as the solve's G */
+	double *ny = c0_alloc((size_t)Ly, sizeof *ny), *nx = c0_alloc((size_t)Lx, sizeof *nx), *w = c0_alloc((size_t)N, sizeof *w);
+	if (!ny || !nx || !w) {
+		free(ny), free(nx), free(w);
+		return C0_ENOMEM;
+	}
+	for (int a = 0; a < (Ly > Lx ? Ly : Lx); a++) {
+		c0_psf_pixel_weights((a + 0.5) / r, sigma, 0, N, w);
+		double sy = 0, sx = 0;
+		for (int i = 0; i < N; i++)
+			sy += i < Ny ? w[i] * w[i] : 0, sx += i < Nx ? w[i] * w[i] : 0;
+		if (a < Ly)
+			ny[a] = sy;
+		if (a < Lx)
+			nx[a] = sx;
+	}
+	for (int y = iy * r; y < (iy + ih) * r; y++)
+		for (int x = ix * r; x < (ix + iw) * r; x++) {
+			const float v = rx[(size_t)y * Lx + x];
+			int peak = v > 0;
+			for (int dy = -1; peak && dy <= 1; dy++)
+				for (int dx = -1; peak && dx <= 1; dx++) {
+					const int yy = y + dy, xx = x + dx;
+					if ((dy || dx) && yy >= 0 && yy < Ly && xx >= 0 && xx < Lx && rx[(size_t)yy * Lx + xx] > v)
+						peak = 0;
+				}
+			const double n = ny[y] * nx[x];
+			if (peak)
+				bin(hist, v / norm * n * n);
+		}
+	free(ny), free(nx), free(w);
+	return C0_OK;
+}
+
+void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *out)
+{
+	double np = 0;
+	for (int k = 0; k < C0_LAMBDA_BINS; k++)
+		np += hist[k];
+	out->first_rel = out->chosen_rel, out->peaks = np;
+	if (!(np > 0) || !(lmax > 0))
+		return;
+	out->second = 1;
+	out->peak_rel = hmedian(hist) / lmax;
+	out->noise_bound = KAPPA * out->noise_rel >= C0_LAMBDA_PEAK_SHARE * out->peak_rel;
+	out->chosen_rel = fmax(C0_LAMBDA_PEAK_SHARE * out->peak_rel, KAPPA * out->noise_rel);
 }
 
 int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, int iy, int ix, int ih,

@@ -11,9 +11,10 @@
  * (lambda_max, the brightest pixel, follows one bright spot: where the
  * emitters' brightness spreads widely a fixed fraction of it lost the dim
  * ones), and never within kappa noise sds of zero, where pure noise would
- * enter (the background specks of real, noisier stacks). CEL0 gets the same
- * threshold on its l0 scale, lowered as measured: lambda = gamma t^2 / (2 ||a||^2)
- * (median column norm).
+ * enter (the background specks of real, noisier stacks). For l1 that is the
+ * first step: the solve then runs at the second step's lambda (below). CEL0
+ * gets the first step's threshold on its l0 scale, lowered as measured:
+ * lambda = gamma t^2 / (2 ||a||^2) (median column norm).
  * Measured in docs/parameters.md, with why held-out cross-validation and
  * the discrepancy principle were not kept. */
 #pragma once
@@ -34,6 +35,10 @@ struct c0_lambda_result {
 	double rho, kappa;
 	int noise_bound;      /* 1 when kappa sigma_C set the threshold */
 	int noise_tiles;      /* tiles whose interiors gave sigma_C (0: the whole image, one tile) */
+	int second;           /* 1: chosen_rel is the second step's (l1) */
+	double first_rel;     /* the rule's lambda / lambda_max, at which the first solve ran */
+	double peak_rel;      /* median over that solve's peaks of x ||a||^2, / lambda_max */
+	double peaks;         /* how many peaks */
 	double seconds;
 	double curve_signal[C0_LAMBDA_CURVE], curve_noise[C0_LAMBDA_CURVE];
 };
@@ -47,6 +52,24 @@ struct c0_support_conf;
 /* Uses c's optics, lag and penalty. */
 int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		   struct c0_lambda_result *out);
+
+/* The second step (l1): the rule's threshold is a fraction of the
+ * structure's correlation, which sums the emitters under the PSF, so it
+ * follows their density; the best lambda follows one emitter's variance
+ * (docs/parameters.md). A first solve at the rule's lambda resolves the
+ * structure into peaks: fine pixels with x > 0 and no larger x among their
+ * 8 neighbours. At a peak, x ||a||^2 is the correlation an emitter of
+ * variance x gives, and lambda = C0_LAMBDA_PEAK_SHARE times its median over
+ * the peaks, never below kappa sigma_C, is the l1 solve's. */
+#define C0_LAMBDA_PEAK_SHARE 0.28
+/* Adds to hist (C0_LAMBDA_BINS counts) x ||a||^2 of the peaks of a solve's
+ * rx (camera units; x = rx / norm) on the fine grid of a window Ny x Nx
+ * camera pixels, over its interior (camera pixels iy, ix, ih, iw). */
+int c0_lambda_peaks(const struct c0_support_conf *c, const float *rx, double norm, int Ny, int Nx, int iy, int ix,
+		    int ih, int iw, double *hist);
+/* The second step from the peaks' histogram and the first solve's
+ * lambda_max: out->chosen_rel becomes its lambda (kept when there is no peak). */
+void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *out);
 
 /* The tiled path (stages/support.c), where the band of the whole image is
  * kept for all frames, and the halves only for some tiles' windows.

@@ -220,10 +220,21 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		if (s->lambda_auto) {
 			const struct c0_lambda_result *v = &s->cv;
 			cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
-			cJSON_AddStringToObject(l, "rule", "max(rho q90, kappa sigma_C); sigma_C: noise sd of the correlation "
-						"image, from the difference of the interleaved frame halves; q90: its 90th "
-						"percentile over the pixels above kappa sigma_C");
+			cJSON_AddStringToObject(l, "rule", v->second
+						? "max(share median peak, kappa sigma_C) from a first solve at max(rho q90, kappa "
+						  "sigma_C); peak: x ||a||^2 at the first support's local maxima; sigma_C: noise "
+						  "sd of the correlation image, from the difference of the interleaved frame "
+						  "halves; q90: its 90th percentile over the pixels above kappa sigma_C"
+						: "max(rho q90, kappa sigma_C); sigma_C: noise sd of the correlation "
+						  "image, from the difference of the interleaved frame halves; q90: its 90th "
+						  "percentile over the pixels above kappa sigma_C");
 			cJSON_AddNumberToObject(l, "chosen_relative", v->chosen_rel);
+			if (v->second) {
+				cJSON_AddNumberToObject(l, "first_relative", v->first_rel);
+				cJSON_AddNumberToObject(l, "peak_relative", v->peak_rel);
+				cJSON_AddNumberToObject(l, "peaks", v->peaks);
+				cJSON_AddNumberToObject(l, "share", C0_LAMBDA_PEAK_SHARE);
+			}
 			cJSON_AddNumberToObject(l, "rho", v->rho);
 			cJSON_AddNumberToObject(l, "signal_relative", v->signal_rel);
 			cJSON_AddNumberToObject(l, "kappa", v->kappa);

@@ -863,6 +863,28 @@ static int check_norm(const char *name, double norm)
 	return C0_OK;
 }
 
+/* The automatic lambda's second step on one tile (stages/lambda.h): a
+ * solve at the rule's lambda, its peaks, and the lambda of the solve that
+ * counts in cc. */
+static int second_step(struct c0_support_conf *cc, const struct c0_cov *cov, struct c0_support_result *res)
+{
+	const double t0 = c0_now();
+	struct c0_support_result first;
+	memset(&first, 0, sizeof first);
+	double *h = c0_alloc(C0_LAMBDA_BINS, sizeof *h);
+	int st = h ? c0_support_solve(cc, cov, &first) : C0_ENOMEM;
+	if (!st)
+		st = c0_lambda_peaks(cc, first.rx, first.norm, cov->H, cov->W, 0, 0, cov->H, cov->W, h);
+	if (!st) {
+		c0_lambda_second(h, first.lambda_max, &res->cv);
+		cc->lambda_rel = res->cv.chosen_rel;
+	}
+	free(h);
+	c0_support_result_free(&first);
+	res->cv.seconds += c0_now() - t0;
+	return st;
+}
+
 /* One tile and one process: the covariance with its two interleaved halves
  * (automatic lambda, FRC) in one pass of whole frames. */
 static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
@@ -887,6 +909,8 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 	c0_progress_begin(&ps, "support", 1);
 	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel, res->lambda_auto = 1;
+	if (!st && automatic && c->penalty == C0_PENALTY_L1)
+		st = second_step(&cc, &cov, res);
 	if (!st)
 		st = c0_support_solve(&cc, &cov, res);
 	if (!st && c->frc)
@@ -974,6 +998,51 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 	c0_progress_end(&pr);
 	free(fin);
 	return c0_first_fail_raise(&fail);
+}
+
+/* The automatic lambda's second step on tiles (stages/lambda.h): the noise
+ * subset's tiles solved at the rule's lambda (side by side, one per thread),
+ * their interiors' peaks summed over tiles and ranks. Collective. */
+static int tiles_second(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
+			int k0, int k1, const uint8_t *sub, const struct scale *g, double lmax, struct c0_support_result *res)
+{
+	struct c0_first_fail fail = { 0 };
+	struct c0_progress pr;
+	int done = 0;
+	double *hist = c0_alloc(C0_LAMBDA_BINS, sizeof *hist);
+	if (!hist)
+		c0_first_fail_note(&fail, C0_ENOMEM);
+	c0_progress_begin(&pr, "support (lambda, first solve)", k1 - k0);
+#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
+	for (int k = k0; k < k1; k++) {
+		if (!sub[k] || !hist)
+			continue;
+		const struct c0_tile *t = &tl->t[k];
+		struct c0_support_result tr = { 0 };
+		double *h = c0_alloc(C0_LAMBDA_BINS, sizeof *h);
+		int st = h ? tile_solve(c, acc, ya, t, g, &tr) : C0_ENOMEM;
+		if (!st)
+			st = c0_lambda_peaks(c, tr.rx, g->norm, t->h, t->w, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
+		c0_support_result_free(&tr);
+		if (!st) {
+			/* counts: the sum is exact in any order */
+#pragma omp critical(c0_support_peaks)
+			for (int i = 0; i < C0_LAMBDA_BINS; i++)
+				hist[i] += h[i];
+		}
+		free(h);
+		c0_first_fail_note(&fail, st);
+#pragma omp critical(c0_support_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	c0_progress_end(&pr);
+	int st = c0_comm_status(c0_first_fail_raise(&fail));
+	if (!st) {
+		c0_comm_sum(hist, C0_LAMBDA_BINS);
+		c0_lambda_second(hist, lmax, &res->cv);
+	}
+	free(hist);
+	return st;
 }
 
 /* The automatic lambda on tiles needs the odd frames' covariance too; it is
@@ -1282,6 +1351,12 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 		res->cv.seconds = c0_now() - tn;
 	}
 	free(lm), free(hist);
+	if (!st && automatic && c->penalty == C0_PENALTY_L1) {
+		tn = c0_now();
+		st = tiles_second(c, acc, ya, &tl, k0, k1, sub, &(struct scale){ norm, rel * l1 }, l1, res);
+		rel = res->cv.chosen_rel;
+		res->cv.seconds += c0_now() - tn;
+	}
 	if (!st) {
 		res->lambda = rel * res->lambda_max;
 		res->norm = norm;
