@@ -1008,11 +1008,13 @@ static int tiles_second(const struct c0_support_conf *c, struct c0_cov_acc *acc,
 {
 	struct c0_first_fail fail = { 0 };
 	struct c0_progress pr;
-	int done = 0;
+	int done = 0, nsub = 0;
 	double *hist = c0_alloc(C0_LAMBDA_BINS, sizeof *hist);
 	if (!hist)
 		c0_first_fail_note(&fail, C0_ENOMEM);
-	c0_progress_begin(&pr, "support (lambda, first solve)", k1 - k0);
+	for (int k = k0; k < k1; k++)
+		nsub += sub[k];
+	c0_progress_begin(&pr, "support (lambda, first solve)", nsub);
 #pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
 	for (int k = k0; k < k1; k++) {
 		if (!sub[k] || !hist)
