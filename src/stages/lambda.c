@@ -16,10 +16,11 @@
  * not move as it moves lambda_max), never below KAPPA noise sds. It follows
  * the emitters' density, the best lambda one emitter's variance: on the
  * simulated panel it was within 0.03 of a sweep's best on 16 of 19 members
- * (sparse 0.048 short, depths 0-400 nm at 65 degrees 0.052), the second step
- * (lambda.h) on 18 (dense 0.031 short); the fixed 1e-2 lambda_max lost
- * 0.07-0.2 where the brightness spreads widely. KAPPA = 4 takes the MusiJ
- * stacks' far-from-structure share below 10 %. */
+ * (sparse 0.048 short, depths 0-400 nm at 65 degrees 0.052), the second
+ * step (lambda.h) with sigma_C from the lower quartile on 18 (spread 1 dense
+ * 0.032 short); the fixed 1e-2 lambda_max lost 0.07-0.2 where the
+ * brightness spreads widely. KAPPA = 4 takes the MusiJ stacks'
+ * far-from-structure share below 10 %. */
 static const double RHO = 2e-2, QUANT = 0.9, KAPPA = 4;
 /* CEL0 does not shrink what it keeps, and is best with a lower entry
  * threshold: a fraction of the square of the l1 choice */
@@ -158,6 +159,17 @@ static double hquantile_above(const double *h, double tau, double q)
 	return 0;
 }
 
+/* sigma_C from the noise image's histogram: |C_A - C_B| / 2 is half-normal
+ * with sd sigma where the halves differ by noise alone, and its lower
+ * quartile (0.3186 sigma) reads sigma from the background while the
+ * structure, whose own sampling noise is larger, covers under 3/4 of the
+ * field; the median (0.6745 sigma), read before, took the structure's on
+ * dense fields (docs/parameters.md) */
+static double noise_sd(const double *noise)
+{
+	return hquantile_above(noise, 0, 0.25) / 0.3186;
+}
+
 int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		   struct c0_lambda_result *out)
 {
@@ -205,7 +217,7 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	}
 	for (size_t i = 0; i < L; i++)
 		bin(h, ca[i] - s0 * op.n[i]), bin(hn, d[i]);
-	const double sig = 1.4826 * median(d, L);
+	const double sig = noise_sd(hn);
 	const double sq = hquantile_above(h, KAPPA * sig, QUANT);
 	memcpy(d, op.n, L * sizeof *d);
 	choose(c, sig, sq, lmax, lmax0, median(d, L), out);
@@ -340,7 +352,7 @@ void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist,
 			    struct c0_lambda_result *out)
 {
 	memset(out, 0, sizeof *out);
-	const double sig = 1.4826 * hmedian(hist);
+	const double sig = noise_sd(hist);
 	choose(c, sig, hquantile_above(hist + 2 * C0_LAMBDA_BINS, KAPPA * sig, QUANT), lmax, lmax0,
 	       hmedian(hist + C0_LAMBDA_BINS), out);
 	curve(hist + 2 * C0_LAMBDA_BINS, hist, lmax, out);

@@ -3,8 +3,8 @@
  * The frames split into two interleaved halves whose covariances R_A, R_B
  * come from the same streaming pass. Their noise is independent, so
  * D = (A^T R_A - A^T R_B) / 2 has the noise of C = A^T R (all frames) and no
- * signal: its robust sd (1.4826 MAD over the fine pixels) is sigma_C. A
- * pixel enters the l1 support where its correlation exceeds the threshold
+ * signal: its robust sd (from the lower quartile of |D| over the fine pixels)
+ * is sigma_C. A pixel enters the l1 support where its correlation exceeds the threshold
  *   t = max(rho * q90, kappa * sigma_C),
  * q90 the 90th percentile of the correlation image C - s0 n over the pixels
  * above kappa * sigma_C: a fraction of the bright structure's typical level
