@@ -228,7 +228,9 @@ static int quick;   /* C0_QUICK set (the sanitizer build): small stacks, code pa
 
 static double sim_cv;   /* brightness spread; 0: the simulator's */
 static int sim_seed;    /* 0: 5 */
-static int sim_sparse;  /* 1: the panel's sparse member (15 emitters per um on 3 filaments) */
+static int sim_sparse;  /* 1: the panel's sparse member (15 emitters per um on 3 filaments),
+			 * 2: its dense one (150 on 8) */
+static double sim_brightness;   /* 0: the simulator's */
 
 static void simulate(const char *sub, int size, int frames, double drift_x, double drift_y)
 {
@@ -238,7 +240,9 @@ static void simulate(const char *sub, int size, int frames, double drift_x, doub
 		s.brightness_cv = sim_cv;
 	s.seed = sim_seed ? sim_seed : 5, s.nangles = 1, s.angles[0] = 65, s.z_min_nm = 0, s.z_max_nm = 200;
 	if (sim_sparse)
-		s.density_per_um = 15, s.filaments = 3;
+		s.density_per_um = sim_sparse == 1 ? 15 : 150, s.filaments = sim_sparse == 1 ? 3 : 8;
+	if (sim_brightness > 0)
+		s.brightness = sim_brightness;
 	s.width = s.height = size, s.frames = frames, s.drift_nm[0] = drift_x, s.drift_nm[1] = drift_y;
 	char p[512];
 	snprintf(p, sizeof p, "%s/%s", dir, sub);
@@ -433,6 +437,17 @@ static void test_lambda_peaks(void)
 	c0_covop_free(&op);
 }
 
+static const double SWEEP[] = { 4e-2, 2e-2, 1e-2, 5e-3, 2.5e-3, 1.2e-3 };
+
+/* the best Jaccard index of the sweep */
+static double best_of_sweep(const char *sub)
+{
+	double best = 0;
+	for (int k = 0; k < 6; k++)
+		best = fmax(best, support_ji(sub, NULL, SWEEP[k], NULL));
+	return best;
+}
+
 /* The panel's sparse member (seed 5): the first step's lambda follows the
  * few emitters under the PSF and is low; the second step, from the first
  * solve's peaks, raises it (0.408 -> 0.466 measured; the sweep's best 0.494
@@ -444,18 +459,45 @@ static void test_auto_lambda_sparse(void)
 	sim_sparse = 1;
 	simulate("sparse", 48, 500, 0, 0);
 	sim_sparse = 0;
-	double chosen, best = 0;
+	double chosen;
 	const double j = support_ji("sparse", NULL, 0, &chosen);
 	const struct c0_lambda_result v = last_cv;
-	const double j1 = support_ji("sparse", NULL, v.first_rel, NULL);
-	static const double sweep[] = { 4e-2, 2e-2, 1e-2, 5e-3, 2.5e-3, 1.2e-3 };
-	for (int k = 0; k < 6; k++)
-		best = fmax(best, support_ji("sparse", NULL, sweep[k], NULL));
+	const double j1 = support_ji("sparse", NULL, v.first_rel, NULL), best = best_of_sweep("sparse");
 	fprintf(stderr, "sparse: lambda %.3g (first step %.3g, %g peaks): JI %.3f (first step %.3f, best of 6 %.3f)\n", chosen,
 		v.first_rel, v.peaks, j, j1, best);
 	CHECK(v.second && chosen > 1.2 * v.first_rel);
 	CHECK(j >= j1 + 0.03);
 	CHECK(j >= best - 0.05);
+}
+
+/* The issue's other panel members, dense, dim, 200 frames and bright (drift:
+ * test_drift), each within 0.03 of the best of the sweep's 6 lambdas, the
+ * Jaccard indices averaged over seeds 5-7 as in the panel of
+ * docs/parameters.md (which runs with drift correction and the FRC halves;
+ * these solves have neither). One seed's index moves by up to 0.02 between
+ * nearly equal lambdas: dense seed 5 alone is 0.030 short here. */
+static void test_auto_lambda_panel(void)
+{
+	if (quick)
+		return;
+	static const struct { const char *name; int sparse; double brightness; int frames; } m[] = {
+		{ "dense", 2, 0, 500 }, { "dim", 0, 100, 500 }, { "200 frames", 0, 0, 200 }, { "bright", 0, 1000, 500 },
+	};
+	for (int k = 0; k < 4; k++) {
+		double j = 0, best[6] = { 0 }, top = 0;
+		for (int seed = 5; seed <= 7; seed++) {
+			sim_sparse = m[k].sparse, sim_brightness = m[k].brightness, sim_seed = seed;
+			simulate(m[k].name, 48, m[k].frames, 0, 0);
+			sim_sparse = 0, sim_brightness = 0, sim_seed = 0;
+			j += support_ji(m[k].name, NULL, 0, NULL) / 3;
+			for (int l = 0; l < 6; l++)
+				best[l] += support_ji(m[k].name, NULL, SWEEP[l], NULL) / 3;
+		}
+		for (int l = 0; l < 6; l++)
+			top = fmax(top, best[l]);
+		fprintf(stderr, "%s (seeds 5-7): JI %.3f, best of 6 %.3f\n", m[k].name, j, top);
+		CHECK_MSG(j >= top - 0.03, "%s: JI %.3f, best of the sweep %.3f", m[k].name, j, top);
+	}
 }
 
 /* The criterion curve: shares of pixels that fall as lambda grows, none of
@@ -551,6 +593,7 @@ int main(void)
 	RUN(test_auto_lambda_spread);
 	RUN(test_lambda_peaks);
 	RUN(test_auto_lambda_sparse);
+	RUN(test_auto_lambda_panel);
 	RUN(test_auto_lambda_tiles);
 	RUN(test_bad_input);
 	char cmd[600];
