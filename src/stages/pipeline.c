@@ -223,10 +223,10 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 			cJSON_AddStringToObject(l, "rule", v->second
 						? "max(share median peak, kappa sigma_C) from a first solve at max(rho q90, kappa "
 						  "sigma_C); peak: x ||a||^2 at the first support's local maxima; sigma_C: noise "
-						  "sd of the correlation image, from the difference of the interleaved frame "
-						  "halves; q90: its 90th percentile over the pixels above kappa sigma_C"
-						: "max(rho q90, kappa sigma_C); sigma_C: noise sd of the correlation "
-						  "image, from the difference of the interleaved frame halves; q90: its 90th "
+						  "sd of the correlation image, from the lower quartile of the interleaved frame "
+						  "halves' difference; q90: its 90th percentile over the pixels above kappa sigma_C"
+						: "max(rho q90, kappa sigma_C); sigma_C: noise sd of the correlation image, from "
+						  "the lower quartile of the interleaved frame halves' difference; q90: its 90th "
 						  "percentile over the pixels above kappa sigma_C");
 			cJSON_AddNumberToObject(l, "chosen_relative", v->chosen_rel);
 			if (v->second) {
