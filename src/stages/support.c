@@ -1000,6 +1000,24 @@ static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, in
 	return c0_first_fail_raise(&fail);
 }
 
+/* The end of one tile of the automatic lambda's loops, from its thread: its
+ * histogram h (n counts, or NULL) added to hist when its work succeeded and
+ * freed, its status noted, the progress advanced. */
+static void tile_hist_done(double *hist, double *h, int n, int st, struct c0_first_fail *fail, struct c0_progress *pr,
+			   int *done)
+{
+	if (!st && h) {
+		/* counts: the sum is exact in any order */
+#pragma omp critical(c0_support_hist_sum)
+		for (int i = 0; i < n; i++)
+			hist[i] += h[i];
+	}
+	free(h);
+	c0_first_fail_note(fail, st);
+#pragma omp critical(c0_support_progress)
+	c0_progress_update(pr, ++*done);
+}
+
 /* The automatic lambda's second step on tiles (stages/lambda.h): the noise
  * subset's tiles solved at the rule's lambda (side by side, one per thread),
  * their interiors' peaks summed over tiles and ranks. Collective. */
@@ -1026,16 +1044,7 @@ static int tiles_second(const struct c0_support_conf *c, struct c0_cov_acc *acc,
 		if (!st)
 			st = c0_lambda_peaks(c, tr.rx, g->norm, t->h, t->w, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
 		c0_support_result_free(&tr);
-		if (!st) {
-			/* counts: the sum is exact in any order */
-#pragma omp critical(c0_support_peaks)
-			for (int i = 0; i < C0_LAMBDA_BINS; i++)
-				hist[i] += h[i];
-		}
-		free(h);
-		c0_first_fail_note(&fail, st);
-#pragma omp critical(c0_support_progress)
-		c0_progress_update(&pr, ++done);
+		tile_hist_done(hist, h, C0_LAMBDA_BINS, st, &fail, &pr, &done);
 	}
 	c0_progress_end(&pr);
 	int st = c0_comm_status(c0_first_fail_raise(&fail));
@@ -1105,16 +1114,7 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
 				c0_lambda_tile_noise(c, ca, cb, cn, t->w, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
 		}
 		free(ca), free(cb), free(cn);
-		if (!st && h) {
-			/* counts: the sum is exact in any order */
-#pragma omp critical(c0_support_noise)
-			for (int i = 0; i < C0_LAMBDA_HIST; i++)
-				hist[i] += h[i];
-		}
-		free(h);
-		c0_first_fail_note(&fail, st);
-#pragma omp critical(c0_support_progress)
-		c0_progress_update(&pr, ++done);
+		tile_hist_done(hist, h, C0_LAMBDA_HIST, st, &fail, &pr, &done);
 	}
 	c0_progress_end(&pr);
 	return c0_first_fail_raise(&fail);
