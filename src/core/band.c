@@ -116,6 +116,17 @@ int c0_band_trim(struct c0_band *b, double tol)
 	return st;
 }
 
+void c0_band_col_sumsq(const struct c0_band *b, double *out)
+{
+	for (int j = 0; j < b->n; j++)
+		out[j] = 0;
+	for (int i = 0; i < b->m; i++)
+		for (int k = 0; k < b->w; k++) {
+			const double g = b->v[(size_t)i * b->w + k];
+			out[b->start[i] + k] += g * g;
+		}
+}
+
 void c0_band_to_dense(const struct c0_band *b, double *d)
 {
 	memset(d, 0, sizeof *d * (size_t)b->m * b->n);

@@ -78,11 +78,7 @@ static int axis(int N, int r, double sigma, int d, struct c0_band *G, struct c0_
 	if (st)
 		return st;
 	/* ||g_a||^2 = sum_i G(i, a)^2 = K_0^T 1 */
-	for (int i = 0; i < N; i++)
-		for (int k = 0; k < G->w; k++) {
-			double g = G->v[(size_t)i * G->w + k];
-			(*norm)[G->start[i] + k] += g * g;
-		}
+	c0_band_col_sumsq(G, *norm);
 	return C0_OK;
 }
 

@@ -233,23 +233,21 @@ out:
 int c0_lambda_peaks(const struct c0_support_conf *c, const float *rx, double norm, int Ny, int Nx, int iy, int ix,
 		    int ih, int iw, double *hist)
 {
-	const int r = c->srf, Ly = Ny * r, Lx = Nx * r, N = Ny > Nx ? Ny : Nx;
+	const int r = c->srf, Ly = Ny * r, Lx = Nx * r;
 	const double sigma = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
-	/* ||psi_a||^2 = ny[ay] nx[ax]: the window's pixels' squared weights, as the solve's G */
-	double *ny = c0_alloc((size_t)Ly, sizeof *ny), *nx = c0_alloc((size_t)Lx, sizeof *nx), *w = c0_alloc((size_t)N, sizeof *w);
-	if (!ny || !nx || !w) {
-		free(ny), free(nx), free(w);
-		return C0_ENOMEM;
-	}
-	for (int a = 0; a < (Ly > Lx ? Ly : Lx); a++) {
-		c0_psf_pixel_weights((a + 0.5) / r, sigma, 0, N, w);
-		double sy = 0, sx = 0;
-		for (int i = 0; i < N; i++)
-			sy += i < Ny ? w[i] * w[i] : 0, sx += i < Nx ? w[i] * w[i] : 0;
-		if (a < Ly)
-			ny[a] = sy;
-		if (a < Lx)
-			nx[a] = sx;
+	/* ||psi_a||^2 = ny[ay] nx[ax], the window's PSF factors' column norms as
+	 * the solve's (ops/covop.h) */
+	struct c0_band Gy = { 0 }, Gx = { 0 };
+	double *ny = c0_alloc((size_t)Ly, sizeof *ny), *nx = c0_alloc((size_t)Lx, sizeof *nx);
+	int st = ny && nx ? c0_psf_factor(Ny, r, sigma, &Gy) : C0_ENOMEM;
+	if (!st)
+		st = c0_psf_factor(Nx, r, sigma, &Gx);
+	if (!st)
+		c0_band_col_sumsq(&Gy, ny), c0_band_col_sumsq(&Gx, nx);
+	c0_band_free(&Gy), c0_band_free(&Gx);
+	if (st) {
+		free(ny), free(nx);
+		return st;
 	}
 	for (int y = iy * r; y < (iy + ih) * r; y++)
 		for (int x = ix * r; x < (ix + iw) * r; x++) {
@@ -261,11 +259,10 @@ int c0_lambda_peaks(const struct c0_support_conf *c, const float *rx, double nor
 					if ((dy || dx) && yy >= 0 && yy < Ly && xx >= 0 && xx < Lx && rx[(size_t)yy * Lx + xx] > v)
 						peak = 0;
 				}
-			const double n = ny[y] * nx[x];
 			if (peak)
-				bin(hist, v / norm * n * n);
+				bin(hist, v / norm * (ny[y] * nx[x]) * (ny[y] * nx[x]));
 		}
-	free(ny), free(nx), free(w);
+	free(ny), free(nx);
 	return C0_OK;
 }
 
