@@ -5,7 +5,7 @@
 #include "check.h"
 #include "core/err.h"
 #include "col0rme.h"
-#include "stages/pipeline.h"
+#include "app/pipeline.h"
 #include "stages/depthpool.h"
 #include "sim/sim.h"
 #include "io/tiff.h"

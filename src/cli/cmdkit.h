@@ -4,7 +4,7 @@
  * (write the result or roll back, print the error). */
 #pragma once
 #include "cli/confopts.h"
-#include "stages/pipeline.h"
+#include "app/pipeline.h"
 
 struct c0_cli {
 	struct c0_conf_cli m;

@@ -2,7 +2,7 @@
  * heap, single steps, and the simulator in memory, for programs and the
  * Python package. Thin wrappers: the method lives in sim/ and stages/. */
 #include "col0rme.h"
-#include "stages/pipeline.h"
+#include "app/pipeline.h"
 #include "sim/sim.h"
 #include "core/err.h"
 #include "core/mem.h"

@@ -1,6 +1,6 @@
 /* The run configuration: one table gives each parameter's name, type, field
  * and help; setting by name, and turning it into the stages' configs. */
-#include "stages/pipeline.h"
+#include "app/pipeline.h"
 #include "stages/depthpool.h"
 #include "stages/psfimage.h"
 #include "core/err.h"

@@ -1,7 +1,7 @@
 /* Writing a result: the files of `col0rme run` (and of the single steps),
  * each calibrated, through an output directory that is rolled back on
  * failure. */
-#include "stages/pipeline.h"
+#include "app/pipeline.h"
 #include "stages/depthcode.h"
 #include "io/png.h"
 #include "io/tiff.h"

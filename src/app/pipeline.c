@@ -2,7 +2,7 @@
  * background of every stack on the union of their masks, and with angles
  * the MA-TIRF volume from the (pooled) intensities, plus the standard
  * MA-TIRF baseline from the background-corrected means when asked. */
-#include "stages/pipeline.h"
+#include "app/pipeline.h"
 #include "stages/bleach.h"
 #include "stages/depthpool.h"
 #include "stages/splat.h"
