@@ -8,6 +8,7 @@
 #include "stages/intensity.h"
 #include "stages/matirf.h"
 #include "stages/drift.h"
+#include "stages/bleach.h"
 #include "optics/psffit.h"
 #include "io/frames.h"
 #include "io/outdir.h"
@@ -29,6 +30,8 @@ struct c0_stage_confs {
 int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_stage_confs *s);
 /* The MA-TIRF config alone (no optics needed). */
 void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m);
+/* The bleaching step's config from c's acquisition options. */
+void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc);
 /* Angles and gains against nimages, then the MA-TIRF config m. */
 int c0_run_conf_matirf_check(const struct c0_run_conf *c, const struct c0_matirf_conf *m, int nimages);
 

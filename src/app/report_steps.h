@@ -1,0 +1,29 @@
+/* The report's sections: one function per step, each filling its part of
+ * report.json from the step's results (the steps themselves build no JSON). */
+#pragma once
+#include "app/pipeline.h"
+#include "stages/bleach.h"
+
+/* "drift": the trajectory's blocks and noise, in nm at pixel_nm. */
+int c0_report_drift(cJSON *rep, const struct c0_drift *d, double pixel_nm);
+/* "render": the Gaussian and precision of the render step. */
+void c0_report_render(cJSON *rep, double sd_nm, double precision_nm, double fine_nm);
+/* One support stack's entry (lambda rule, FRC, precision). */
+cJSON *c0_report_support_stack(const char *name, const struct c0_support_result *s, const struct c0_support_conf *c);
+/* "support_parameters". */
+void c0_report_support_params(cJSON *rep, const struct c0_support_conf *c);
+/* "intensity" (each stack, frames[] and extra seconds tc[]) and "intensity_parameters". */
+void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_intensity_conf *ic,
+			 const int64_t *frames, const double *tc);
+/* The MA-TIRF section key ("matirf" or "baseline_matirf") of res, and the run's "z_nm". */
+cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+			const struct c0_matirf_result *res);
+/* The matirf command's additions: offset, background, PSF. */
+void c0_report_matirf_raw(cJSON *j, const struct c0_run_conf *c, const struct c0_matirf_result *res);
+/* "bleaching": the mode, order, rate and factors. */
+void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct c0_bleach_result *br, int n);
+/* The run's "parameters": mode, grid, pooling, support stacks, PSF image. */
+void c0_report_run_params(cJSON *rep, const struct c0_run_conf *c, const struct c0_stage_confs *s,
+			  const struct c0_result *r, const int *only, int three_d);
+/* The depth pooling's windows (fine pixels; 0: off) in the MA-TIRF section j. */
+void c0_report_pool(cJSON *j, int window_px, double range_nm, int guide_window_px);

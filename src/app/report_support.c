@@ -1,0 +1,118 @@
+/* The support step's part of report.json: each stack's estimates, its
+ * automatic lambda (rule, curve) and FRC, and the step's parameters. */
+#include "app/report_steps.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <stdlib.h>
+
+static void lambda_auto(cJSON *o, const struct c0_support_result *s)
+{
+	const struct c0_lambda_result *v = &s->cv;
+	cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
+	cJSON_AddStringToObject(l, "rule", v->second
+				? "max(share median peak, kappa sigma_C) from a first solve at max(rho q90, kappa "
+				  "sigma_C); peak: x ||a||^2 at the first support's local maxima; sigma_C: noise "
+				  "sd of the correlation image, from the lower quartile of the interleaved frame "
+				  "halves' difference; q90: its 90th percentile over the pixels above kappa sigma_C"
+				: "max(rho q90, kappa sigma_C); sigma_C: noise sd of the correlation image, from "
+				  "the lower quartile of the interleaved frame halves' difference; q90: its 90th "
+				  "percentile over the pixels above kappa sigma_C");
+	cJSON_AddNumberToObject(l, "chosen_relative", v->chosen_rel);
+	if (v->second) {
+		cJSON_AddNumberToObject(l, "first_relative", v->first_rel);
+		cJSON_AddNumberToObject(l, "peak_relative", v->peak_rel);
+		cJSON_AddNumberToObject(l, "peaks", v->peaks);
+		cJSON_AddNumberToObject(l, "share", C0_LAMBDA_PEAK_SHARE);
+	}
+	cJSON_AddNumberToObject(l, "rho", v->rho);
+	cJSON_AddNumberToObject(l, "signal_relative", v->signal_rel);
+	cJSON_AddNumberToObject(l, "kappa", v->kappa);
+	cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
+	cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
+	/* tiles: sigma_C from a subset of the tiles' interiors (stages/support.c) */
+	cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
+	cJSON_AddNumberToObject(l, "seconds", v->seconds);
+	cJSON *cu = cJSON_AddObjectToObject(l, "curve");
+	cJSON_AddStringToObject(cu, "what", "share of the fine pixels above lambda (l1 scale, CEL0's threshold "
+				"t): of the correlation image (signal) and of the halves' noise image "
+				"|C_A - C_B|/2 (noise)");
+	double rel[C0_LAMBDA_CURVE];
+	for (int m = 0; m < C0_LAMBDA_CURVE; m++)
+		rel[m] = c0_lambda_curve_rel(m);
+	c0_report_add_array(cu, "lambda_relative", rel, C0_LAMBDA_CURVE);
+	c0_report_add_array(cu, "signal_above", v->curve_signal, C0_LAMBDA_CURVE);
+	c0_report_add_array(cu, "noise_above", v->curve_noise, C0_LAMBDA_CURVE);
+}
+
+static int frc(cJSON *o, const struct c0_support_result *s, const struct c0_support_conf *c)
+{
+	const double fine = c->pixel_nm / c->srf;
+	cJSON *fr = cJSON_AddObjectToObject(o, "frc");
+	cJSON_AddStringToObject(fr, "images", "emitter variances of the even and the odd frames (fine grid), Hann window");
+	cJSON_AddNumberToObject(fr, "threshold", 1.0 / 7);
+	cJSON_AddNumberToObject(fr, "resolution_nm", s->frc_nm);
+	if (!(s->frc_nm > 0))
+		cJSON_AddStringToObject(fr, "note", "stays above 1/7 up to the fine grid's Nyquist frequency: the "
+					"resolution is at most 2 fine pixels");
+	double *fq = c0_alloc((size_t)s->frc.n, sizeof *fq);
+	if (!fq)
+		return C0_ENOMEM;
+	for (int m = 0; m < s->frc.n; m++)
+		fq[m] = s->frc.freq[m] / fine;
+	c0_report_add_array(fr, "frequency_per_nm", fq, s->frc.n);
+	free(fq);
+	c0_report_add_array(fr, "correlation", s->frc.corr, s->frc.n);
+	cJSON_AddNumberToObject(fr, "seconds", s->t_frc);
+	return C0_OK;
+}
+
+cJSON *c0_report_support_stack(const char *name, const struct c0_support_result *s, const struct c0_support_conf *c)
+{
+	cJSON *o = cJSON_CreateObject();
+	cJSON_AddStringToObject(o, "stack", name);
+	cJSON_AddNumberToObject(o, "frames", (double)s->frames);
+	cJSON_AddNumberToObject(o, "lag_px", s->lag);
+	cJSON_AddNumberToObject(o, "lags", s->nlag);
+	cJSON_AddNumberToObject(o, "lambda", s->lambda);
+	cJSON_AddNumberToObject(o, "lambda_max", s->lambda_max);
+	cJSON_AddNumberToObject(o, "lambda_relative", s->lambda_max > 0 ? s->lambda / s->lambda_max : 0);
+	cJSON_AddNumberToObject(o, "normalisation", s->norm);
+	cJSON_AddNumberToObject(o, "noise_variance", s->sigma2);
+	cJSON_AddNumberToObject(o, "iterations", s->iters);
+	cJSON_AddBoolToObject(o, "converged", s->converged);
+	cJSON_AddNumberToObject(o, "duality_gap", s->gap);
+	cJSON_AddNumberToObject(o, "tiles", s->tiles);
+	cJSON_AddNumberToObject(o, "tile_px", s->tile);
+	cJSON_AddNumberToObject(o, "support_pixels", s->support_pixels);
+	cJSON_AddNumberToObject(o, "covariance_s", s->t_cov);
+	cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);
+	cJSON_AddNumberToObject(o, "solve_s", s->t_solve);
+	c0_report_add_array(o, "objective", s->hist, s->nhist);
+	cJSON_AddStringToObject(o, "lambda_rule", s->lambda_auto ? "automatic"
+				: c->lambda_rel > 0 ? "given"
+				: "the penalty's fixed default");
+	if (s->lambda_auto)
+		lambda_auto(o, s);
+	if (s->frc.n && frc(o, s, c)) {
+		cJSON_Delete(o);
+		return NULL;
+	}
+	if (c->frc)    /* tiles: the precision without the FRC (stages/support.c) */
+		cJSON_AddNumberToObject(o, "precision_nm", s->precision_nm);
+	return o;
+}
+
+void c0_report_support_params(cJSON *rep, const struct c0_support_conf *c)
+{
+	cJSON *p = cJSON_AddObjectToObject(rep, "support_parameters");
+	cJSON_AddNumberToObject(p, "pixel_size_nm", c->pixel_nm);
+	cJSON_AddNumberToObject(p, "fwhm_nm", c->fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", c->srf);
+	cJSON_AddStringToObject(p, "penalty", c->penalty == C0_PENALTY_L1 ? "l1" : "cel0");
+	cJSON_AddNumberToObject(p, "max_iterations", c->fista.maxit);
+	cJSON_AddNumberToObject(p, "tol", c0_support_tol(c));
+	cJSON_AddStringToObject(p, "pixel_guard", c->guard ? "on" : "off");
+	if (c->guard)   /* g of ops/covariance.h's c0_cov_guard */
+		cJSON_AddNumberToObject(p, "pixel_guard_ratio", c0_support_guard_ratio(c));
+}

@@ -1,0 +1,137 @@
+/* The result of a run: its arrays, its report, and the accessors of the
+ * public API (include/col0rme.h). */
+#include "app/pipeline.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+int c0_result_new(const char *command, int n, const char *const *names, const int *is_file, struct c0_result **out)
+{
+	*out = NULL;
+	if (n < 1 || n > C0_MAX_STACKS)
+		return c0_fail(C0_EINVAL, "stacks: %d given, expected 1..%d", n, C0_MAX_STACKS);
+	struct c0_result *r = c0_alloc(1, sizeof *r);
+	if (!r || !(r->names = c0_alloc((size_t)n, sizeof *r->names)) || !(r->rep = c0_report_new(command, 0, NULL))) {
+		c0_result_free(r);
+		return C0_ENOMEM;
+	}
+	r->n = n;
+	for (int i = 0; i < n; i++) {
+		snprintf(r->names[i], sizeof r->names[i], "%s", names[i]);
+		r->paths[i] = is_file[i] ? r->names[i] : NULL;
+	}
+	r->timings = cJSON_AddObjectToObject(r->rep, "timings_s");
+	*out = r;
+	return C0_OK;
+}
+
+void c0_result_set_argv(struct c0_result *r, int argc, char **argv)
+{
+	cJSON *a = cJSON_CreateArray();
+	for (int i = 0; i < argc; i++)
+		cJSON_AddItemToArray(a, cJSON_CreateString(argv[i]));
+	cJSON_ReplaceItemInObject(r->rep, "argv", a);
+}
+
+void c0_result_free(struct c0_result *r)
+{
+	if (!r)
+		return;
+	for (int k = 0; r->sres && k < r->nsup; k++)
+		c0_support_result_free(&r->sres[k]);
+	for (int q = 0; q < r->n; q++) {
+		if (r->ires)
+			c0_intensity_result_free(&r->ires[q]);
+		if (r->corrected)
+			free(r->corrected[q]);
+	}
+	free(r->sres), free(r->ires), free(r->corrected), free(r->mask), free(r->names), free(r->json);
+	c0_drift_free(r->drift), free(r->render);
+	c0_matirf_result_free(&r->vol), c0_matirf_result_free(&r->base);
+	cJSON_Delete(r->rep);
+	free(r);
+}
+
+int c0_result_nstacks(const struct c0_result *r)
+{
+	return r->n;
+}
+
+static void dims(int *h, int *w, int hv, int wv)
+{
+	if (h)
+		*h = hv;
+	if (w)
+		*w = wv;
+}
+
+const uint8_t *c0_result_support(const struct c0_result *r, int *h, int *w)
+{
+	dims(h, w, r->Ly, r->Lx);
+	return r->mask;
+}
+
+const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *w)
+{
+	if (!r->ires || q < 0 || q >= r->n)
+		return NULL;
+	dims(h, w, r->ires[q].Ly, r->ires[q].Lx);
+	return r->ires[q].x;
+}
+
+const float *c0_result_background(const struct c0_result *r, int q, int *h, int *w)
+{
+	if (!r->ires || q < 0 || q >= r->n)
+		return NULL;
+	dims(h, w, r->ires[q].Ny, r->ires[q].Nx);
+	return r->ires[q].b;
+}
+
+static const float *vol(const struct c0_matirf_result *v, int *nz, int *h, int *w)
+{
+	if (nz)
+		*nz = v->nz;
+	dims(h, w, v->ny, v->nx);
+	return v->f;
+}
+
+const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w)
+{
+	return vol(&r->vol, nz, h, w);
+}
+
+const float *c0_result_baseline_volume(const struct c0_result *r, int *nz, int *h, int *w)
+{
+	return vol(&r->base, nz, h, w);
+}
+
+const float *c0_result_depth(const struct c0_result *r, int *h, int *w)
+{
+	dims(h, w, r->vol.ny, r->vol.nx);
+	return r->vol.depth;
+}
+
+const float *c0_result_render(const struct c0_result *r, int q, int *h, int *w)
+{
+	if (!r->render || q < 0 || q >= r->n)
+		return NULL;
+	dims(h, w, r->Ly, r->Lx);
+	return r->render + (size_t)q * r->Ly * r->Lx;
+}
+
+const double *c0_result_z_nm(const struct c0_result *r, int *nz)
+{
+	if (nz)
+		*nz = r->vol.nz;
+	return r->vol.z_nm;
+}
+
+const char *c0_result_report_json(const struct c0_result *r)
+{
+	struct c0_result *m = (struct c0_result *)r;   /* the text is a cache of the report */
+	if (!m->json)
+		m->json = cJSON_Print(r->rep);
+	return m->json;
+}

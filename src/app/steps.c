@@ -1,0 +1,303 @@
+/* The steps of a run, each from its inputs in a c0_result to its outputs
+ * there and its section of the report (app/report_steps.h). */
+#include "app/pipeline.h"
+#include "app/report_steps.h"
+#include "stages/depthpool.h"
+#include "stages/splat.h"
+#include "optics/psf.h"
+#include "core/clock.h"
+#include "core/err.h"
+#include "core/mem.h"
+#include "core/progress.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n)
+{
+	double t = c0_now();
+	const struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
+	int st = c0_drift_estimate(&dc, f, n, &r->drift);
+	if (st)
+		return st;
+	for (int q = 0; q < n; q++)
+		r->hooks[q] = c0_drift_hook(r->drift, q);
+	const double px = r->pixel_nm > 0 ? r->pixel_nm : f[0].pixel_nm;
+	if ((st = c0_report_drift(r->rep, r->drift, px)))
+		return st;
+	cJSON_AddNumberToObject(r->timings, "drift", c0_now() - t);
+	return C0_OK;
+}
+
+int c0_step_render(struct c0_result *r)
+{
+	const double fine = r->pixel_nm / r->srf;
+	double prec = -1;
+	for (int k = 0; r->sres && k < r->nsup; k++)
+		prec = fmax(prec, r->sres[k].precision_nm);
+	const double sd = fmax(prec, 0.5 * fine);
+	const size_t L = (size_t)r->Ly * r->Lx;
+	if (!(r->render = c0_alloc(L * (size_t)r->n, sizeof *r->render)))
+		return C0_ENOMEM;
+	for (int q = 0; q < r->n; q++) {
+		int st = c0_splat(r->ires[q].x, r->Ly, r->Lx, sd / fine, r->render + q * L);
+		if (st)
+			return st;
+	}
+	r->render_sd_nm = sd;
+	c0_report_render(r->rep, sd, prec, fine);
+	return C0_OK;
+}
+
+/* The union of the support stacks' masks into r->mask. */
+static int support_union(struct c0_result *r)
+{
+	r->Ly = r->sres[0].Ly, r->Lx = r->sres[0].Lx;
+	const size_t L = (size_t)r->Ly * r->Lx;
+	if (!(r->mask = c0_alloc(L, 1)))
+		return C0_ENOMEM;
+	int count = 0;
+	for (size_t i = 0; i < L; i++) {
+		for (int k = 0; k < r->nsup; k++)
+			r->mask[i] |= r->sres[k].mask[i];
+		count += r->mask[i];
+	}
+	cJSON_AddNumberToObject(r->rep, "support_pixels_union", count);
+	return C0_OK;
+}
+
+int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struct c0_frames *f)
+{
+	struct c0_support_conf cc = *c0;
+	cJSON *arr = cJSON_AddArrayToObject(r->rep, "support");
+	if (!(r->sres = c0_alloc((size_t)r->nsup, sizeof *r->sres)))
+		return C0_ENOMEM;
+	double t = c0_now();
+	for (int k = 0; k < r->nsup; k++) {
+		int i = r->sup[k];
+		cc.frame_fn = r->drift ? c0_drift_frame_fn : NULL, cc.frame_ctx = r->hooks[i];
+		int st = c0_support_stack(&cc, &f[i], &r->sres[k]);
+		if (st)
+			return st;
+		cJSON *o = c0_report_support_stack(r->names[i], &r->sres[k], &cc);
+		if (!o)
+			return C0_ENOMEM;
+		cJSON_AddItemToArray(arr, o);
+	}
+	c0_report_support_params(r->rep, &cc);
+	r->pixel_nm = cc.pixel_nm, r->srf = cc.srf;
+	int st = support_union(r);
+	if (!st)
+		cJSON_AddNumberToObject(r->timings, "support", c0_now() - t);
+	return st;
+}
+
+/* One stack's mean and noise variance: from the support step when that ran
+ * on it, else one streaming pass (the covariance on the support's tiles
+ * when the noise variance has to be estimated, else just the mean). */
+static int intensity_read(const struct c0_support_conf *sc0, void *hook, struct c0_frames *f, const uint8_t *mask,
+			  double *s2, const struct c0_support_result *known, double **own, int64_t *frames, double *seconds)
+{
+	struct c0_support_conf scc = *sc0;
+	scc.frame_fn = hook ? c0_drift_frame_fn : NULL, scc.frame_ctx = hook;
+	*own = NULL;
+	if (known) {
+		*frames = known->frames, *s2 = known->sigma2, *seconds = 0;
+		return C0_OK;
+	}
+	if (*s2 > 0)
+		return c0_stack_mean(&scc, f, own, frames, seconds);
+	return c0_stack_noise(&scc, f, mask, own, frames, s2, seconds);
+}
+
+static int intensity_solve(const struct c0_intensity_conf *ic, const double *mean, int H, int W, int64_t frames,
+			   const uint8_t *mask, double s2, struct c0_intensity_result *res, float **corrected)
+{
+	int st = c0_intensity_solve(ic, mean, H, W, frames, mask, s2, res);
+	if (!st && corrected) {
+		size_t nc = (size_t)H * W;
+		if (!(*corrected = malloc(nc * sizeof **corrected)))
+			st = C0_ENOMEM;
+		for (size_t p = 0; !st && p < nc; p++)
+			(*corrected)[p] = (float)(mean[p] - res->b[p]);
+	}
+	return st;
+}
+
+/* Every stack's mean and noise variance side by side (each reads its own
+ * file), then the solves: side by side when each is one tile, else one
+ * stack after the other with its tiles side by side (5 stacks on 2 threads
+ * would leave one thread idle for the last). msg: per-stack error texts
+ * (error messages are per thread). */
+static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
+			  struct c0_frames *f, const double *sigma2, int corrected,
+			  const struct c0_support_result *const *known, int64_t *frames, double *tc, int *sts, char (*msg)[256])
+{
+	const int n = r->n;
+	double *own[C0_MAX_STACKS] = { 0 }, s2[C0_MAX_STACKS];
+	const int H = f[0].height, W = f[0].width, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
+	struct c0_progress pr;
+	int done = 0;
+	c0_progress_begin(&pr, "intensity (stacks)", 2 * n);
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
+	for (int i = 0; i < n; i++) {
+		s2[i] = sigma2 ? sigma2[i] : 0;
+		sts[i] = intensity_read(sc, r->drift ? r->hooks[i] : NULL, &f[i], r->mask, &s2[i], known[i], &own[i], &frames[i], &tc[i]);
+		if (sts[i])
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+#pragma omp critical(c0_intensity_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	int bad = 0;
+	for (int i = 0; i < n; i++)
+		bad |= sts[i];
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile && !bad)
+	for (int i = 0; i < n; i++) {
+		if (bad)
+			continue;
+		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], &r->ires[i],
+					 corrected ? &r->corrected[i] : NULL);
+		if (sts[i])
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+#pragma omp critical(c0_intensity_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	c0_progress_end(&pr);
+	for (int i = 0; i < n; i++)
+		free(own[i]);
+}
+
+int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
+		      struct c0_frames *f, const double *sigma2, int corrected)
+{
+	const int n = r->n;
+	const struct c0_support_result *known[C0_MAX_STACKS] = { 0 };
+	for (int k = 0; r->sres && k < r->nsup; k++)
+		known[r->sup[k]] = &r->sres[k];
+	if (f[0].height * sc->srf != r->Ly || f[0].width * sc->srf != r->Lx)
+		return c0_fail(C0_EINVAL, "%s: %dx%d pixels at srf %d do not match the %dx%d support", f[0].name, f[0].width,
+			       f[0].height, sc->srf, r->Lx, r->Ly);
+	int64_t frames[C0_MAX_STACKS];
+	double tc[C0_MAX_STACKS], t = c0_now();
+	int sts[C0_MAX_STACKS];
+	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
+	r->ires = c0_alloc((size_t)n, sizeof *r->ires);
+	if (corrected)
+		r->corrected = c0_alloc((size_t)n, sizeof *r->corrected);
+	if (!msg || !r->ires || (corrected && !r->corrected)) {
+		free(msg);
+		return C0_ENOMEM;
+	}
+	intensity_all(r, ic, sc, f, sigma2, corrected, known, frames, tc, sts, msg);
+	for (int i = 0; i < n; i++)
+		if (sts[i]) {
+			int st = c0_fail(sts[i], "%s", msg[i]);
+			free(msg);
+			return st;
+		}
+	free(msg);
+	r->pixel_nm = ic->pixel_nm, r->srf = ic->srf;
+	c0_report_intensity(r->rep, r, ic, frames, tc);
+	cJSON_AddNumberToObject(r->timings, "intensity", c0_now() - t);
+	return C0_OK;
+}
+
+int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline)
+{
+	struct c0_matirf_result *res = baseline ? &r->base : &r->vol;
+	const char *key = baseline ? "baseline_matirf" : "matirf";
+	const int nq = c->nangles;
+	double t = c0_now();
+	int st = c0_matirf_solve(m, nq, c->angles, c->ngains ? c->gains : NULL, img, ny, nx, res);
+	if (st)
+		return st;
+	if (own) {
+		c0_pool_rescale(res->f, res->nz, ny, nx, nq, own, img);
+		for (size_t p = 0; p < (size_t)ny * nx; p++) {
+			double s = 0;
+			for (int j = 0; j < res->nz; j++)
+				s += res->f[j * (size_t)ny * nx + p];
+			res->total[p] = (float)s;
+		}
+	}
+	if (!baseline)
+		r->vol_pixel_nm = pixel_nm;
+	r->z0_nm = m->z0_nm, r->dz_nm = m->dz_nm;
+	c0_report_matirf(r->rep, key, c, m, res);
+	cJSON_AddNumberToObject(r->timings, key, c0_now() - t);
+	return C0_OK;
+}
+
+int c0_step_matirf_raw(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+		       const float *const *img, int ny, int nx, double pixel_nm)
+{
+	const int nq = c->nangles;
+	const size_t np = (size_t)ny * nx;
+	struct c0_matirf_conf mm = *m;
+	if (c->psf_fwhm_nm != 0) {
+		if (!(c->psf_fwhm_nm > 0) || !(pixel_nm > 0))
+			return c0_fail(C0_EINVAL, "psf_fwhm_nm %g: needs a positive FWHM and the pixel size (pixel_nm or the TIFF calibration)",
+				       c->psf_fwhm_nm);
+		mm.psf_sigma_px = c0_psf_sigma_px(c->psf_fwhm_nm, pixel_nm);
+	}
+	if (c->estimate_background) {
+		if (!(c->background_smooth > 0))
+			return c0_fail(C0_EINVAL, "background_smooth %g: must be > 0", c->background_smooth);
+		mm.bg_smooth = c->background_smooth;
+	}
+	float *x[C0_MAX_STACKS] = { 0 };
+	int st = C0_OK;
+	for (int q = 0; q < nq && !st; q++)
+		if (!(x[q] = c0_alloc(np, sizeof **x)))
+			st = C0_ENOMEM;
+		else
+			memcpy(x[q], img[q], np * sizeof **x);
+	if (!st)
+		st = c0_matirf_subtract(x, nq, np, c->offset, "offset");
+	if (!st)
+		st = c0_matirf_subtract(x, nq, np, c->matirf_background, "matirf_background");
+	if (!st)
+		st = c0_step_matirf(r, c, &mm, (const float *const *)x, NULL, ny, nx, pixel_nm, 0);
+	for (int q = 0; q < nq; q++)
+		free(x[q]);
+	if (st)
+		return st;
+	c0_report_matirf_raw(cJSON_GetObjectItem(r->rep, "matirf"), c, &r->vol);
+	return C0_OK;
+}
+
+void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
+{
+	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF : C0_BLEACH_ESTIMATE,
+				       .interleaved = c->acquisition == C0_ACQ_INTERLEAVED, .norder = c->nacquisition_order,
+				       .ngaps = c->ngaps_frames, .nfactors = c->nbleach_factors };
+	for (int i = 0; i < c->nacquisition_order && i < C0_BLEACH_MAX; i++)
+		bc->order[i] = c->acquisition_order[i] - 1;
+	for (int i = 0; i < c->ngaps_frames && i < C0_BLEACH_MAX; i++)
+		bc->gap_frames[i] = c->gaps_frames[i];
+	for (int i = 0; i < c->nbleach_factors && i < C0_BLEACH_MAX; i++)
+		bc->factor[i] = c->bleach_factors[i];
+}
+
+int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f)
+{
+	const int n = r->n;
+	double t = c0_now(), B[C0_MAX_STACKS] = { 0 };
+	struct c0_bleach_conf bc;
+	c0_run_conf_bleach(c, &bc);
+	for (int q = 0; q < n; q++)
+		for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
+			B[q] += r->ires[q].b[i];
+	struct c0_bleach_result br;
+	int st = c0_bleach_run(&bc, n, f, B, &br);
+	if (st)
+		return st;
+	for (int q = 0; q < n; q++)
+		r->bleach_factor[q] = br.factor[q];
+	c0_report_bleach(r->rep, &bc, &br, n);
+	cJSON_AddNumberToObject(r->timings, "bleaching", c0_now() - t);
+	return C0_OK;
+}
