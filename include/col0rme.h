@@ -44,87 +44,80 @@ enum c0_acquisition { C0_ACQ_SEQUENTIAL, C0_ACQ_INTERLEAVED };       /* "sequent
 #define C0_MAX_STACKS 64
 
 /* Every parameter of the method. Each field's name is its parameter name
- * (c0_run_conf_set, messages); the comment gives its default. */
+ * (c0_run_conf_set, messages, Python keywords). What each does, its default
+ * and its command-line option are in one table, listed by
+ * c0_run_conf_param() and in docs/params.md (`col0rme params`); the
+ * defaults' values are C0_RUN_CONF_DEFAULTS. A list field x has its length
+ * in nx. */
 struct c0_run_conf {
 	/* optics and grid */
-	double pixel_nm;       /* 0: camera pixel size in the sample; 0: the first stack's (c0_stack.pixel_nm, else its TIFF calibration) */
-	double fwhm_nm;        /* 0: PSF full width at half maximum; 0: from psf_image, else 0.51 emission_nm / na */
-	const char *psf_image; /* NULL: a measured PSF image (TIFF, planes averaged) whose fitted Gaussian FWHM is used */
-	double emission_nm;    /* 0: emission wavelength (with na, when fwhm_nm is 0) */
-	double na;             /* 0: numerical aperture of the objective (with emission_nm) */
-	int srf;               /* 4: super-resolution factor, fine pixel = pixel_nm / srf */
+	double pixel_nm;
+	double fwhm_nm;
+	const char *psf_image;
+	double emission_nm;
+	double na;
+	int srf;
 	/* support (sparse covariance) */
-	int support_stacks[C0_MAX_STACKS]; /* 1-based numbers of the stacks whose supports are joined */
-	int nsupport_stacks;   /* 0: the stack with the smallest angle (the first in 2D mode) */
-	enum c0_penalty penalty; /* l1 */
-	double lambda;         /* 0: regularisation relative to lambda_max; 0: automatic, from the noise of the
-			        * interleaved frame halves (max(2e-2 q90, 4 noise sds) for l1, q90 the correlation
-			        * image's 90th percentile above the noise: docs/guide.md) */
-	int lag;               /* 0: covariance lag radius in pixels; 0: ceil(6 sigma / pixel) */
-	int iterations;        /* -1: maximum FISTA iterations (per reweighting for cel0); -1: the solver's,
-				* 2000 for fista and cel0 (part of the estimator: docs/parameters.md), 10000
-				* for pruned (a safety cap: it stops on converging) */
-	enum c0_support_solver support_solver; /* fista: l1 by FISTA on a working set re-made every 100
-				* iterations (the momentum kept), the whole grid's step; pruned: the same with
-				* the set's own step (converges; see docs/parameters.md) */
-	double tol;            /* -1: FISTA stops when the iterate's relative change is below this; -1: the
-				* solver's, 0 for fista on l1 (every iteration up to the cap, part of the
-				* estimator), 1e-5 for pruned and cel0 */
-	int reweightings;      /* 10: CEL0 reweighting steps */
-	int drift;             /* 1: estimate lateral drift from block means of all stacks (in order) and undo
-			        * it before the covariance and the means ("on"); 0: "off" */
-	int pixel_guard;       /* 1: clip each pixel's variance to what its neighbours' covariances allow
-			        * (noisy sCMOS pixels, docs/parameters.md) ("on"); 0: "off" */
-	int frc;               /* 1: solve each half of the frames too, for the FRC resolution and the
-			        * localisation precision (render.tif) */
-	int tile;              /* 0: support tile side in camera pixels (tiles overlap by two lags); 0: 256, or the image when smaller */
+	int support_stacks[C0_MAX_STACKS];
+	int nsupport_stacks;
+	enum c0_penalty penalty;
+	double lambda;
+	int lag;
+	int iterations;
+	enum c0_support_solver support_solver;
+	double tol;
+	int reweightings;
+	int drift;
+	int pixel_guard;
+	int frc;
+	int tile;
 	/* intensity and background per stack */
-	enum c0_background background; /* smooth */
-	double beta;           /* 20: background smoothness weight (coarse grid) */
-	double nu;             /* 1: discrepancy factor, residual^2 = nu^2 H W sigma2 / T; 0: sqrt(T) */
-	double mu;             /* 0: smoothness weight by the discrepancy principle; > 0: fixed */
-	enum c0_discrepancy discrepancy; /* relative: residual^2 = floor^2 + nu^2 H W sigma2 / T, floor = the residual at mu = 1e-3; plain: without the floor */
-	double cg_tol;         /* 1e-3: CG relative residual */
-	int cg_iterations;     /* 500: CG steps per active-set round */
-	double graph_radius;   /* 2.25: smoothness couples support pixels up to this far apart (fine pixels, 1..4) */
-	double noise_variance[C0_MAX_STACKS]; /* per-stack noise variance (camera units^2) */
-	int nnoise_variance;   /* 0: estimated on the support */
+	enum c0_background background;
+	double beta;
+	double nu;
+	double mu;
+	enum c0_discrepancy discrepancy;
+	double cg_tol;
+	int cg_iterations;
+	double graph_radius;
+	double noise_variance[C0_MAX_STACKS];
+	int nnoise_variance;
 	/* MA-TIRF axial reconstruction (3D mode when angles are given) */
-	double angles[C0_MAX_STACKS]; /* incidence angle in the glass of each stack (deg), same order */
-	int nangles;           /* 0: 2D COL0RME (support and intensities only) */
-	double gains[C0_MAX_STACKS]; /* per-angle gain calibration (multiplies I0) */
-	int ngains;            /* 0: 1 for every angle */
-	double n_glass;        /* 1.518: refractive index of the coverslip and immersion */
-	double n_sample;       /* 1.33: refractive index of the sample */
-	double wavelength_nm;  /* 488: excitation wavelength in vacuum */
-	double s_fraction;     /* 0.75: share of s-polarised excitation in I0 */
-	double z_range_nm[3];  /* 0, 400, 20: depth bins min, max, step */
-	enum c0_reg reg;       /* tv: regulariser, total variation or Hessian-Schatten */
-	double kappa;          /* 3e-2: regularisation weight (images scaled to a maximum of 1) */
-	double sparsity;       /* 3e-2: weight of the l1 term that keeps few depths per pixel */
-	double axial_weight;   /* 0: axial weight of the regulariser relative to lateral */
-	int matirf_iterations; /* 3000: maximum primal-dual iterations */
-	double matirf_tol;     /* 0: primal-dual stopping tolerance; 0: the solver's, 1e-3 exact, 1e-4 diag, apg 5e-4 (TV) 1e-3 (Hessian) */
-	enum c0_matirf_solver matirf_solver; /* (auto: apg) exact: per-pixel exact data steps; diag: diagonal steps; apg: exact's steps, the per-pixel prox by projected gradient */
-	int matirf_coarse;     /* -1: levels of the warm start from 2x2-binned images (apg and exact with TV); -1: 2 with apg, else 0 */
+	double angles[C0_MAX_STACKS];
+	int nangles;
+	double gains[C0_MAX_STACKS];
+	int ngains;
+	double n_glass;
+	double n_sample;
+	double wavelength_nm;
+	double s_fraction;
+	double z_range_nm[3];
+	enum c0_reg reg;
+	double kappa;
+	double sparsity;
+	double axial_weight;
+	int matirf_iterations;
+	double matirf_tol;
+	enum c0_matirf_solver matirf_solver;
+	int matirf_coarse;
 	/* the standard MA-TIRF path on raw images (c0_run_matirf, `col0rme matirf`) */
-	double offset;         /* 0: camera offset subtracted from every image */
-	double matirf_background; /* 0: constant background subtracted after the offset */
-	int estimate_background; /* 0: 1 estimates a smooth background common to all angles jointly with the volume */
-	double background_smooth; /* 100: its smoothness weight, px^2 */
-	double psf_fwhm_nm;    /* 0: joint deconvolution by a Gaussian PSF of this FWHM; 0: none */
-	double depth_pool_nm;  /* -1: window over which intensities are summed for each pixel's depth; -1: 0.75 fwhm_nm, 0: off */
-	double depth_pool_range_nm; /* -1: only pixels whose first depth guess is this close to the centre's are summed; -1: 50, 0: all */
+	double offset;
+	double matirf_background;
+	int estimate_background;
+	double background_smooth;
+	double psf_fwhm_nm;
+	double depth_pool_nm;
+	double depth_pool_range_nm;
 	/* photobleaching across the stacks (3D mode) */
-	enum c0_bleaching bleach; /* estimate: the fade from the stacks' frame sums, each intensity divided by its factor; off */
-	double bleach_factors[C0_MAX_STACKS]; /* known factors (each stack's mean population relative to the start) */
-	int nbleach_factors;   /* 0: estimated (or off) */
-	enum c0_acquisition acquisition; /* sequential: stacks recorded one after another; interleaved: frame by frame in turn */
-	int acquisition_order[C0_MAX_STACKS]; /* 1-based stack numbers in the order they were recorded */
-	int nacquisition_order; /* 0: the order given */
-	double gaps_frames[C0_MAX_STACKS]; /* illuminated, unrecorded frames between consecutive recorded stacks */
-	int ngaps_frames;      /* 0: none; 1: the same everywhere; else one per pair */
-	int baseline;          /* 0: 1 also reconstructs the standard MA-TIRF volume from the background-corrected means */
+	enum c0_bleaching bleach;
+	double bleach_factors[C0_MAX_STACKS];
+	int nbleach_factors;
+	enum c0_acquisition acquisition;
+	int acquisition_order[C0_MAX_STACKS];
+	int nacquisition_order;
+	double gaps_frames[C0_MAX_STACKS];
+	int ngaps_frames;
+	int baseline;
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \

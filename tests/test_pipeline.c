@@ -6,6 +6,7 @@
 #include "core/err.h"
 #include "col0rme.h"
 #include "app/pipeline.h"
+#include "app/params.h"
 #include "stages/depthpool.h"
 #include "sim/sim.h"
 #include "io/tiff.h"
@@ -196,9 +197,49 @@ static void test_files_and_arrays(void)
 	CHECK(system(cmd) == 0);
 }
 
+/* The table's documented default is the defaults' value wherever it is a
+ * plain value (a number, a list, a choice, on/off): docs/params.md and the
+ * help cannot promise what the library does not do. */
+static void test_param_defaults(void)
+{
+	const struct c0_run_conf d = C0_RUN_CONF_DEFAULTS;
+	int n, checked = 0;
+	const struct c0_param *t = c0_params(&n);
+	for (int i = 0; i < n; i++) {
+		struct c0_run_conf c = d;
+		const char *def = t[i].def;
+		if (t[i].type == C0_P_FLAG || (t[i].type == C0_P_ENUM && (!strcmp(def, "on") || !strcmp(def, "off"))))
+			def = !strcmp(def, "on") ? (t[i].type == C0_P_FLAG ? "1" : "on") : !strcmp(def, "off") ? (t[i].type == C0_P_FLAG ? "0" : "off") : def;
+		const int sentinel = t[i].type == C0_P_DOUBLE ? *(const double *)((const char *)&d + t[i].off) == -1
+				     : t[i].type == C0_P_INT && *(const int *)((const char *)&d + t[i].off) == -1;
+		if (sentinel) {   /* -1: the default, resolved by the stages, which the help must say */
+			CHECK_MSG(strstr(t[i].help, "-1: the default"), "%s", t[i].name);
+			continue;
+		}
+		if (t[i].type == C0_P_STRING || (t[i].count && strcmp(def, "none")))
+			continue;
+		if (t[i].count) {   /* a list whose default is none: empty */
+			CHECK_MSG(*(const int *)((const char *)&d + t[i].count) == 0, "%s", t[i].name);
+			checked++;
+			continue;
+		}
+		/* setting the documented default must leave the defaults as they are */
+		if (c0_param_set(&t[i], &c, t[i].name, def) == C0_OK) {
+			CHECK_MSG(!memcmp(&c, &d, sizeof c), "%s: documented default '%s' differs from C0_RUN_CONF_DEFAULTS", t[i].name, def);
+			checked++;
+		}
+	}
+	CHECK_MSG(checked >= 30, "%d of %d rows have a plain default", checked, n);
+	/* and each row is a parameter c0_run_conf_set knows, once */
+	for (int i = 0; i < n; i++)
+		for (int j = i + 1; j < n; j++)
+			CHECK_MSG(strcmp(t[i].name, t[j].name), "%s twice", t[i].name);
+}
+
 int main(void)
 {
 	RUN(test_conf);
+	RUN(test_param_defaults);
 	RUN(test_files_and_arrays);
 	return CHECK_DONE();
 }

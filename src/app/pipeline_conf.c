@@ -1,6 +1,7 @@
-/* The run configuration: one table gives each parameter's name, type, field
- * and help; setting by name, and turning it into the stages' configs. */
+/* The run configuration: setting a parameter by name (app/params.h holds
+ * the table), and turning the whole into the stages' configs. */
 #include "app/pipeline.h"
+#include "app/params.h"
 #include "stages/depthpool.h"
 #include "stages/psfimage.h"
 #include "core/err.h"
@@ -15,84 +16,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum ptype { P_DOUBLE, P_INT, P_FLAG, P_DOUBLES, P_INTS, P_ENUM, P_STRING };
-
-struct param {
-	const char *name;
-	enum ptype type;
-	size_t off;          /* the field */
-	size_t count;        /* lists: the count field, 0 for a fixed length */
-	int max;             /* lists: capacity (fixed length when count is 0) */
-	const char *choices; /* enums: names in value order, '|'-separated */
-	const char *doc;
-};
-
-#define F(f) offsetof(struct c0_run_conf, f)
-#define NUM(n, t, doc) { #n, t, F(n), 0, 0, NULL, doc }
-#define LIST(x, t, doc) { #x, t, F(x), F(n##x), C0_MAX_STACKS, NULL, doc }
-static const struct param params[] = {
-	NUM(pixel_nm, P_DOUBLE, "camera pixel size in the sample, nm (0: the first stack's calibration)"),
-	NUM(fwhm_nm, P_DOUBLE, "PSF full width at half maximum, nm (0: 0.51 emission_nm / na)"),
-	NUM(psf_image, P_STRING, "measured PSF image (TIFF): its fitted Gaussian FWHM instead of fwhm_nm (none)"),
-	NUM(emission_nm, P_DOUBLE, "emission wavelength, nm, with na instead of fwhm_nm (0)"),
-	NUM(na, P_DOUBLE, "numerical aperture of the objective, with emission_nm (0)"),
-	NUM(srf, P_INT, "super-resolution factor: fine pixel = pixel_nm / srf (4)"),
-	{ "support_stacks", P_INTS, F(support_stacks), F(nsupport_stacks), C0_MAX_STACKS, NULL,
-	  "1-based stack numbers whose supports are joined (none: the smallest angle)" },
-	{ "penalty", P_ENUM, F(penalty), 0, 0, "l1|cel0", "support sparsity penalty (l1)" },
-	NUM(lambda, P_DOUBLE, "support regularisation relative to lambda_max (0: automatic, from the noise of the frame halves)"),
-	NUM(lag, P_INT, "covariance lag radius in pixels (0: ceil(6 sigma / pixel))"),
-	NUM(iterations, P_INT, "maximum FISTA iterations, per reweighting for cel0 (-1: 2000, or 10000 for pruned)"),
-	{ "support_solver", P_ENUM, F(support_solver), 0, 0, "fista|pruned",
-	  "l1 support solver: FISTA on a working set re-made every 100 iterations, with the whole grid's step (fista) or the set's own (pruned)" },
-	NUM(tol, P_DOUBLE, "FISTA stops when the iterate's relative change falls below this (-1: 0 for fista on l1, every iteration; 1e-5 for pruned and cel0)"),
-	NUM(reweightings, P_INT, "CEL0 reweighting steps (10)"),
-	{ "drift", P_ENUM, F(drift), 0, 0, "off|on", "estimate lateral drift from block means and undo it before the covariance and the means (on)" },
-	{ "pixel_guard", P_ENUM, F(pixel_guard), 0, 0, "off|on", "clip each pixel's temporal variance to what its covariances with its neighbours allow, against pixels with noise of their own (on)" },
-	NUM(frc, P_FLAG, "1: also solve each half of the frames for the FRC resolution and the localisation precision (1)"),
-	NUM(tile, P_INT, "support and intensity tile side in camera pixels, tiles overlap by two lags (0: 256, or the image when smaller)"),
-	{ "background", P_ENUM, F(background), 0, 0, "none|constant|smooth", "background model (smooth)" },
-	NUM(beta, P_DOUBLE, "background smoothness weight (20)"),
-	NUM(nu, P_DOUBLE, "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (1; 0: sqrt(T))"),
-	NUM(mu, P_DOUBLE, "fixed intensity smoothness weight (0: discrepancy principle)"),
-	{ "discrepancy", P_ENUM, F(discrepancy), 0, 0, "relative|plain",
-	  "intensity mu: residual = the model's floor (at mu = 1e-3) plus the noise level, or the noise level alone (relative)" },
-	NUM(cg_tol, P_DOUBLE, "CG stopping tolerance, relative residual (1e-3)"),
-	NUM(cg_iterations, P_INT, "CG steps per active-set round (500)"),
-	NUM(graph_radius, P_DOUBLE, "intensity smoothness couples support pixels up to this far apart, fine pixels (2.25)"),
-	LIST(noise_variance, P_DOUBLES, "per-stack noise variance, camera units^2 (none: estimated on the support)"),
-	LIST(angles, P_DOUBLES, "incidence angle in the glass of each stack, deg, same order (none: 2D)"),
-	LIST(gains, P_DOUBLES, "per-angle gain calibration, multiplies I0 (none: 1 for every angle)"),
-	NUM(n_glass, P_DOUBLE, "refractive index of the coverslip and immersion (1.518)"),
-	NUM(n_sample, P_DOUBLE, "refractive index of the sample (1.33)"),
-	NUM(wavelength_nm, P_DOUBLE, "excitation wavelength in vacuum, nm (488)"),
-	NUM(s_fraction, P_DOUBLE, "share of s-polarised excitation in I0 (0.75)"),
-	{ "z_range_nm", P_DOUBLES, F(z_range_nm), 0, 3, NULL, "depth bins MIN,MAX,STEP in nm (0,400,20)" },
-	{ "reg", P_ENUM, F(reg), 0, 0, "tv|hessian", "MA-TIRF regulariser: total variation or Hessian-Schatten (tv)" },
-	NUM(kappa, P_DOUBLE, "MA-TIRF regularisation weight, images scaled to a maximum of 1 (3e-2)"),
-	NUM(sparsity, P_DOUBLE, "weight of the l1 term that keeps few depths per pixel (3e-2)"),
-	NUM(axial_weight, P_DOUBLE, "axial weight of the regulariser relative to lateral (0)"),
-	NUM(matirf_iterations, P_INT, "maximum primal-dual iterations (3000)"),
-	NUM(matirf_tol, P_DOUBLE, "primal-dual stopping tolerance (0: 1e-3 exact, 1e-4 diag)"),
-	{ "matirf_solver", P_ENUM, F(matirf_solver), 0, 0, "exact|diag|auto|apg", "MA-TIRF solver: exact per-pixel data steps, diagonal steps, or apg (the exact per-pixel steps by a few projected gradient steps; auto: apg, docs/parameters.md)" },
-	NUM(matirf_coarse, P_INT, "levels of the warm start from 2x2-binned images, apg and exact with TV (-1: 2 with apg, else 0)"),
-	NUM(offset, P_DOUBLE, "camera offset subtracted from every image, standard MA-TIRF path (0)"),
-	NUM(matirf_background, P_DOUBLE, "constant background subtracted after the offset, standard MA-TIRF path (0)"),
-	NUM(estimate_background, P_FLAG, "1: estimate a smooth background common to all angles jointly, standard MA-TIRF path (0)"),
-	NUM(background_smooth, P_DOUBLE, "smoothness weight of the estimated background, px^2 (100)"),
-	NUM(psf_fwhm_nm, P_DOUBLE, "joint deconvolution by a Gaussian PSF of this FWHM, nm, standard MA-TIRF path (0: none)"),
-	NUM(depth_pool_nm, P_DOUBLE, "window over which intensities are summed for each pixel's depth, nm (-1: 0.75 fwhm_nm, 0: off)"),
-	NUM(depth_pool_range_nm, P_DOUBLE, "only window pixels whose first depth guess is this close to the centre's are summed, nm (-1: 50, 0: all)"),
-	{ "bleach", P_ENUM, F(bleach), 0, 0, "estimate|off", "photobleaching across the stacks: estimate and correct the fade, or off (estimate; 3D mode)" },
-	LIST(bleach_factors, P_DOUBLES, "known bleaching factors, each stack's mean population relative to the start (none: estimated)"),
-	{ "acquisition", P_ENUM, F(acquisition), 0, 0, "sequential|interleaved",
-	  "stacks recorded one after another, or frame by frame in turn (sequential)" },
-	LIST(acquisition_order, P_INTS, "1-based stack numbers in the order they were recorded (none: as given)"),
-	LIST(gaps_frames, P_DOUBLES, "illuminated, unrecorded frames between consecutive recorded stacks (none)"),
-	NUM(baseline, P_FLAG, "1: also reconstruct the standard MA-TIRF volume from the background-corrected means (0)"),
-};
-enum { NPARAMS = sizeof params / sizeof *params };
-
 void c0_run_conf_init(struct c0_run_conf *c)
 {
 	*c = (struct c0_run_conf)C0_RUN_CONF_DEFAULTS;
@@ -100,11 +23,13 @@ void c0_run_conf_init(struct c0_run_conf *c)
 
 const char *c0_run_conf_param(int i, const char **doc)
 {
-	if (i < 0 || i >= NPARAMS)
+	int n;
+	const struct c0_param *t = c0_params(&n);
+	if (i < 0 || i >= n)
 		return NULL;
 	if (doc)
-		*doc = params[i].doc;
-	return params[i].name;
+		*doc = t[i].doc;
+	return t[i].name;
 }
 
 const char *c0_version(void)
@@ -112,89 +37,12 @@ const char *c0_version(void)
 	return C0_VERSION;
 }
 
-static int number(const char *s, double *v)
-{
-	char *end;
-	errno = 0;
-	*v = strtod(s, &end);
-	return end != s && !errno && *v == *v && (*end == '\0' || *end == ',') ? (int)(end - s) : -1;
-}
-
 int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value)
 {
-	const struct param *p = NULL;
-	for (int i = 0; name && i < NPARAMS; i++)
-		if (!strcmp(params[i].name, name))
-			p = &params[i];
+	const struct c0_param *p = c0_param_find(name);
 	if (!p)
 		return c0_fail(C0_EINVAL, "%s: unknown parameter", name ? name : "(null)");
-	if (!value)
-		return c0_fail(C0_EINVAL, "%s: missing value", name);
-	char *f = (char *)c + p->off;
-	if (p->type == P_STRING) {   /* a file, kept by reference: the caller's string must outlive c */
-		FILE *fp = *value ? fopen(value, "rb") : NULL;
-		if (*value && !fp)
-			return c0_fail(C0_EINVAL, "%s %s: %s", name, value, strerror(errno));
-		if (fp)
-			fclose(fp);
-		*(const char **)f = *value ? value : NULL;
-		return C0_OK;
-	}
-	double v;
-	int k = number(value, &v);
-	switch (p->type) {
-	case P_DOUBLE:
-		if (k < 0 || value[k])
-			return c0_fail(C0_EINVAL, "%s %s: expected a number", name, value);
-		*(double *)f = v;
-		return C0_OK;
-	case P_INT:
-	case P_FLAG:
-		if (k < 0 || value[k] || v != (int)v || (p->type == P_FLAG && v != 0 && v != 1))
-			return c0_fail(C0_EINVAL, "%s %s: expected %s", name, value, p->type == P_FLAG ? "0 or 1" : "an integer");
-		*(int *)f = (int)v;
-		return C0_OK;
-	case P_DOUBLES:
-	case P_INTS: {
-		double tmp[C0_MAX_STACKS];
-		int n = 0;
-		for (const char *s = value; *s; n++) {
-			if (n == p->max || (k = number(s, &tmp[n])) < 0)
-				return c0_fail(C0_EINVAL, "%s %s: expected %s%d numbers, comma-separated", name, value,
-					       p->count ? "up to " : "", p->max);
-			if (p->type == P_INTS && tmp[n] != (int)tmp[n])
-				return c0_fail(C0_EINVAL, "%s %s: expected integers", name, value);
-			s += k + (s[k] == ',');
-		}
-		if (p->count ? n == 0 : n != p->max)
-			return c0_fail(C0_EINVAL, "%s %s: expected %s%d numbers, comma-separated", name, value,
-				       p->count ? "up to " : "", p->max);
-		for (int i = 0; i < n; i++)
-			if (p->type == P_INTS)
-				((int *)f)[i] = (int)tmp[i];
-			else
-				((double *)f)[i] = tmp[i];
-		if (p->count)
-			*(int *)((char *)c + p->count) = n;
-		return C0_OK;
-	}
-	case P_STRING:
-		break;
-	case P_ENUM: {
-		const char *s = p->choices;
-		for (int i = 0; s; i++) {
-			const char *bar = strchr(s, '|');
-			size_t l = bar ? (size_t)(bar - s) : strlen(s);
-			if (strlen(value) == l && !strncmp(s, value, l)) {
-				*(int *)f = i;   /* the enums are int-sized, valued in this order */
-				return C0_OK;
-			}
-			s = bar ? bar + 1 : NULL;
-		}
-		return c0_fail(C0_EINVAL, "%s %s: expected one of %s", name, value, p->choices);
-	}
-	}
-	return C0_EINVAL;
+	return c0_param_set(p, c, name, value);
 }
 
 void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)

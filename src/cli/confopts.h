@@ -1,21 +1,21 @@
-/* Command-line options for the parameters of struct c0_run_conf: one row
- * per parameter (flag, help), which each command picks by parameter name,
- * and the map back from parameter names to flags for error messages. */
+/* Command-line options for the parameters of struct c0_run_conf, made from
+ * the library's table (app/params.h), which each command picks by parameter
+ * name, and the map back from parameter names to flags for messages. */
 #pragma once
 #include "col0rme.h"
 #include "cli/opts.h"
 
 #include <stddef.h>
 
+#define C0_CLI_MAXPARAMS 64
+
+/* The run parameters as options, by their row in app/params.h. */
 struct c0_conf_cli {
 	struct c0_run_conf c;
-	const char *penalty, *background, *reg, *solver, *support_solver;  /* the named choices, set by name at the end */
-	const char *discrepancy, *bleach, *acquisition;
-	const char *drift;                       /* on|off */
+	const char *choice[C0_CLI_MAXPARAMS];    /* the named choices, set by name at the end */
+	char names[C0_CLI_MAXPARAMS][24];        /* the defaults' names */
+	int given[C0_CLI_MAXPARAMS];             /* numbers: given; fixed-length lists: values given */
 	int no_drift;                            /* --no-drift: drift off */
-	const char *pixel_guard;                 /* on|off */
-	int nz;                                  /* values given to --z-range */
-	int pixel_given;                         /* --pixel-size was given (then it must be positive) */
 	int channel;                             /* --channel: 0 reads every channel of a multi-channel file */
 };
 
@@ -31,7 +31,7 @@ int c0_conf_cli_opts(struct c0_conf_cli *m, const char *const *params, struct c0
  * (room needed: the names plus 3); returns the row count. */
 int c0_conf_cli_table(struct c0_conf_cli *m, const char *const *params, const char **outdir, int *force, int *verbose,
 		      struct c0_opt *o);
-/* After parsing: the named choices into m->c, --z-range's length. */
+/* After parsing: the named choices into m->c, fixed-length lists' lengths. */
 int c0_conf_cli_finish(struct c0_conf_cli *m);
 /* A command's own parameter name and its flag. */
 struct c0_cli_name { const char *param, *flag; };

@@ -23,6 +23,7 @@ static const struct {
 	{ "info", cmd_info, "describe TIFF stacks: size, frames, type, calibration, statistics" },
 	{ "simulate", cmd_simulate, "simulate MA-TIRF blinking stacks with ground truth" },
 	{ "intensity", cmd_intensity, "per-angle intensity and background on a support" },
+	{ "params", cmd_params, "every run parameter: name, option, default, meaning (Markdown)" },
 	{ "matirf", cmd_matirf, "MA-TIRF axial reconstruction from one image per angle" },
 	{ "run", cmd_run, "the whole method: support, intensities, MA-TIRF volume" },
 	{ "support", cmd_support, "COL0RME support estimation from the stacks' covariance" },
