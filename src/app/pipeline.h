@@ -105,5 +105,11 @@ int c0_step_matirf_raw(struct c0_result *r, const struct c0_run_conf *c, const s
  * from the frame sums and the fitted backgrounds (or the known factors, or
  * none) into r->bleach_factor and rep["bleaching"]. */
 int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f);
+/* The intensity step alone on the stacks, on the support mask in the TIFF
+ * support (fine grid), with c's noise variances when given (one per stack). */
+int c0_run_intensity_files(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, const char *support,
+			   struct c0_result **out);
+/* The standard MA-TIRF path on one 2D TIFF image per angle (paths[0..n)). */
+int c0_run_matirf_files(const struct c0_run_conf *c, char *const *paths, int n, struct c0_result **out);
 /* Writes what r holds into an open output directory. */
 int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out);

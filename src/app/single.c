@@ -1,0 +1,90 @@
+/* The single-step commands as library calls on files: the intensity step on
+ * a support mask from a TIFF, and the standard MA-TIRF path on one TIFF
+ * image per angle. */
+#include "app/pipeline.h"
+#include "io/tiff.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <stdlib.h>
+
+/* The support mask from a file, checked against the stacks' grid. */
+static int load_mask(const char *path, const struct c0_frames *f, int srf, uint8_t **mask, int *Ly, int *Lx)
+{
+	struct c0_tiff_info si;
+	float *sm;
+	if (!path)
+		return c0_fail(C0_EINVAL, "--support: a support mask is required");
+	int st = c0_tiff_load_f32(path, &si, &sm);
+	if (st)
+		return st;
+	if (si.width != (int64_t)f->width * srf || si.height != (int64_t)f->height * srf)
+		st = c0_fail(C0_EINVAL, "--support %s: %lldx%lld does not cover the %dx%d stack at --srf %d (expected %lldx%lld)",
+			     path, (long long)si.width, (long long)si.height, f->width, f->height, srf,
+			     (long long)f->width * srf, (long long)f->height * srf);
+	*Ly = (int)si.height, *Lx = (int)si.width;
+	if (!st && !(*mask = c0_alloc((size_t)si.width * si.height, 1)))
+		st = C0_ENOMEM;
+	int any = 0;
+	for (int64_t i = 0; !st && i < si.width * si.height; i++)
+		any |= (*mask)[i] = sm[i] > 0;
+	if (!st && !any)
+		st = c0_fail(C0_EINVAL, "--support %s: the support is empty", path);
+	free(sm);
+	return st;
+}
+
+int c0_run_intensity_files(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, const char *support,
+			   struct c0_result **out)
+{
+	*out = NULL;
+	if (c->nnoise_variance && c->nnoise_variance != n)
+		return c0_fail(C0_EINVAL, "noise_variance: %d values for %d stacks", c->nnoise_variance, n);
+	struct c0_frames f[C0_MAX_STACKS];
+	struct c0_stage_confs sc;
+	struct c0_result *r = NULL;
+	int st = c0_pipe_begin("intensity", c, stacks, n, f, &sc, &r);
+	if (st)
+		return st;
+	st = load_mask(support, &f[0], c->srf, &r->mask, &r->Ly, &r->Lx);
+	if (!st)
+		st = c0_step_intensity(r, &sc.intensity, &sc.support, f, c->nnoise_variance ? c->noise_variance : NULL, 0);
+	c0_stacks_close(f, n);
+	if (st)
+		c0_result_free(r);
+	else
+		*out = r;
+	return st;
+}
+
+int c0_run_matirf_files(const struct c0_run_conf *c, char *const *paths, int n, struct c0_result **out)
+{
+	*out = NULL;
+	struct c0_matirf_conf mc;
+	c0_run_conf_matirf(c, &mc);
+	int st = c0_run_conf_matirf_check(c, &mc, n), is_file[C0_MAX_STACKS];
+	float *data[C0_MAX_STACKS] = { 0 };
+	struct c0_tiff_info in[C0_MAX_STACKS];
+	for (int q = 0; !st && q < n; q++) {
+		is_file[q] = 1;
+		st = c0_tiff_load_f32(paths[q], &in[q], &data[q]);
+		if (!st && in[q].pages != 1)
+			st = c0_fail(C0_EINVAL, "%s: %lld planes; expected one 2D image per angle", paths[q], (long long)in[q].pages);
+		if (!st && (in[q].width != in[0].width || in[q].height != in[0].height))
+			st = c0_fail(C0_EINVAL, "%s: %lldx%lld pixels differs from %s", paths[q], (long long)in[q].width,
+				     (long long)in[q].height, paths[0]);
+	}
+	struct c0_result *r = NULL;
+	if (!st)
+		st = c0_result_new("matirf", n, (const char *const *)paths, is_file, &r);
+	if (!st)
+		st = c0_step_matirf_raw(r, c, &mc, (const float *const *)data, (int)in[0].height, (int)in[0].width,
+					c->pixel_nm > 0 ? c->pixel_nm : in[0].pixel_size_nm);
+	for (int q = 0; q < n; q++)
+		free(data[q]);
+	if (st)
+		c0_result_free(r);
+	else
+		*out = r;
+	return st;
+}
