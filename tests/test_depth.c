@@ -2,7 +2,7 @@
  * against the slow obvious computation on small cases. */
 #include "check.h"
 #include "stages/depthpool.h"
-#include "stages/depthcode.h"
+#include "app/depthcode.h"
 #include "eval/metrics.h"
 #include "core/rng.h"
 #include "core/err.h"

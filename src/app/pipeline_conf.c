@@ -3,7 +3,7 @@
 #include "app/pipeline.h"
 #include "app/params.h"
 #include "stages/depthpool.h"
-#include "stages/psfimage.h"
+#include "app/psfimage.h"
 #include "core/err.h"
 #include "c0_version.h"
 

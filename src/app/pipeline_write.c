@@ -2,7 +2,7 @@
  * each calibrated, through an output directory that is rolled back on
  * failure. */
 #include "app/pipeline.h"
-#include "stages/depthcode.h"
+#include "app/depthcode.h"
 #include "io/png.h"
 #include "io/tiff.h"
 #include "core/err.h"

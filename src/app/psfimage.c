@@ -1,4 +1,4 @@
-#include "stages/psfimage.h"
+#include "app/psfimage.h"
 #include "io/tiff.h"
 #include "core/err.h"
 

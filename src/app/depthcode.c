@@ -1,4 +1,4 @@
-#include "stages/depthcode.h"
+#include "app/depthcode.h"
 #include "core/err.h"
 #include "core/mem.h"
 
