@@ -32,6 +32,9 @@ def build_library(build):
                          "pip install the python/ folder of a col0rme checkout" % ROOT)
     if shutil.which("cmake") is None:
         raise SystemExit("col0rme: cmake not found; it builds libcol0rme (Debian: apt install cmake)")
+    cache = build / "CMakeCache.txt"
+    if cache.is_file() and "CMAKE_HOME_DIRECTORY:INTERNAL=%s\n" % ROOT not in cache.read_text():
+        shutil.rmtree(build)   # configured for a checkout since moved: CMake would refuse it
     # no -Werror: a compiler newer than the one the sources were checked with may warn;
     # no MPI: only the col0rme program starts it, the library alone never does;
     # the install RPATH (none): a build tree's RUNPATH ends in an empty entry, the current directory
