@@ -5,6 +5,7 @@
     matirf(images, angles=..., pixel_size=..., **options)        -> Result (volume, depth, z_nm)
     simulate(**parameters)                                       -> Simulation
     parameters()                                                 -> {name: help}
+    library()                                                    -> path of the libcol0rme in use
 
 options are the parameters of c0_run_conf_set (penalty="cel0", kappa=0.05,
 lam=1e-3 for "lambda", a Python keyword, ...): numbers, strings, booleans or
@@ -20,7 +21,8 @@ import numpy as np
 
 from . import _lib
 
-__all__ = ["Error", "Result", "Simulation", "run", "support", "matirf", "simulate", "parameters", "version"]
+__all__ = ["Error", "Result", "Simulation", "run", "support", "matirf", "simulate", "parameters", "version",
+           "library"]
 
 _c = None
 
@@ -43,6 +45,12 @@ def _check(status):
 
 def version():
     return _L().c0_version().decode()
+
+
+def library():
+    """The path of the libcol0rme the package loaded (its own copy unless COL0RME_LIB says otherwise)."""
+    _L()
+    return _lib.loaded_path
 
 
 def parameters():

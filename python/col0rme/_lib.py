@@ -1,4 +1,9 @@
-"""Finding libcol0rme.so and declaring the C functions (include/col0rme.h)."""
+"""Finding libcol0rme.so and declaring the C functions (include/col0rme.h).
+
+pip install ./python builds the library and ships it next to this file
+(python/setup.py); COL0RME_LIB=PATH overrides it. A package run from the
+source tree, without installing, falls back to an installed library
+(pkg-config, then the dynamic loader)."""
 import ctypes
 import ctypes.util
 import os
@@ -7,6 +12,7 @@ import shutil
 import subprocess
 
 SONAME = "libcol0rme.so.0"
+loaded_path = None   # the file load() opened
 
 
 def _candidates():
@@ -32,17 +38,19 @@ def _candidates():
 
 
 def load():
+    global loaded_path
     tried = []
-    for path in _candidates():
+    for cand in _candidates():
         try:
-            lib = ctypes.CDLL(path)
+            lib = ctypes.CDLL(cand)
         except OSError as e:
-            tried.append("%s (%s)" % (path, e))
+            tried.append("%s (%s)" % (cand, e))
             continue
         _declare(lib)
+        loaded_path = cand
         return lib
-    raise OSError("col0rme: cannot load the shared library; set COL0RME_LIB to the path of libcol0rme.so. Tried: "
-                  + "; ".join(tried))
+    raise OSError("col0rme: cannot load libcol0rme (pip install ./python ships it inside the package; "
+                  "COL0RME_LIB=PATH names another). Tried: " + "; ".join(tried))
 
 
 class Stack(ctypes.Structure):

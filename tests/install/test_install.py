@@ -1,6 +1,7 @@
 """Install to a temporary prefix and use the library as a third party would:
 the header alone, every examples/*.c built with pkg-config alone, one run of
-each, and a CMake project with find_package(col0rme).
+each, and a CMake project with find_package(col0rme). The Python package
+after such an install: test_python.py.
 
 usage: test_install.py BUILD_DIR SOURCE_DIR SCRATCH_DIR"""
 import glob
