@@ -113,6 +113,9 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
  * the stacks at or below the critical angle (epi) only join the support
  * (only[q]): ct holds the TIRF stacks' angles and gains, tirf[] their
  * indices, for the MA-TIRF step. */
+/* Angles below this share of the critical angle are refused as typos. */
+#define C0_ANGLE_FLOOR 0.8
+
 static int run_check(const struct c0_run_conf *c, const struct c0_stage_confs *s, int n, int *only, int *tirf,
 		     struct c0_run_conf *ct)
 {
@@ -126,6 +129,10 @@ static int run_check(const struct c0_run_conf *c, const struct c0_stage_confs *s
 	const double crit = c0_tirf_critical_deg(&s->matirf.tirf);
 	for (int q = 0; !st && three_d && q < n; q++) {
 		only[q] = c->angles[q] <= crit;
+		if (c->angles[q] != 0 && c->angles[q] < C0_ANGLE_FLOOR * crit)   /* 0: epi, at normal incidence */
+			st = c0_fail(C0_EINVAL, "angles: %g deg (stack %d) is far below the critical angle %.2f deg of n_glass %g "
+				     "and n_sample %g (under %g of it): a typo? An epifluorescence stack is given as 0",
+				     c->angles[q], q + 1, crit, c->n_glass, c->n_sample, C0_ANGLE_FLOOR);
 		if (!only[q])
 			ct->angles[ntirf] = c->angles[q], ct->gains[ntirf] = c->gains[q], tirf[ntirf++] = q;
 	}
@@ -176,6 +183,12 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	int only[C0_MAX_STACKS] = { 0 }, tirf[C0_MAX_STACKS];
 	struct c0_run_conf ct;
 	int st = run_check(c, &s, n, only, tirf, &ct);
+	const double crit = c0_tirf_critical_deg(&s.matirf.tirf);
+	for (int q = 0; !st && q < n; q++)
+		if (c->nangles && only[q])
+			c0_result_warn(r, "stack %d (%s) at %g deg is at or below the critical angle %.2f deg: no evanescent "
+				       "field, so it joins the support only and is left out of the MA-TIRF fit",
+				       q + 1, r->names[q], c->angles[q], crit);
 	if (!st)
 		st = support_stacks(c, only, n, r);
 	r->pixel_nm = s.support.pixel_nm, r->srf = s.support.srf;

@@ -61,6 +61,8 @@ struct c0_result {
 
 /* An empty result for command (the report's "command"), n stacks named. */
 int c0_result_new(const char *command, int n, const char *const *names, const int *is_file, struct c0_result **out);
+/* Adds one line to the report's "warnings" (the CLI prints them). */
+void c0_result_warn(struct c0_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Records the command line in the report. */
 void c0_result_set_argv(struct c0_result *r, int argc, char **argv);
 /* Opens the stacks as frame sources, all the same size. */

@@ -4,6 +4,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 
 static void lambda_auto(cJSON *o, const struct c0_support_result *s)
@@ -51,10 +52,16 @@ static int frc(cJSON *o, const struct c0_support_result *s, const struct c0_supp
 	cJSON *fr = cJSON_AddObjectToObject(o, "frc");
 	cJSON_AddStringToObject(fr, "images", "emitter variances of the even and the odd frames (fine grid), Hann window");
 	cJSON_AddNumberToObject(fr, "threshold", 1.0 / 7);
-	cJSON_AddNumberToObject(fr, "resolution_nm", s->frc_nm);
-	if (!(s->frc_nm > 0))
-		cJSON_AddStringToObject(fr, "note", "stays above 1/7 up to the fine grid's Nyquist frequency: the "
-					"resolution is at most 2 fine pixels");
+	if (s->frc_nm > 0)
+		cJSON_AddNumberToObject(fr, "resolution_nm", s->frc_nm);
+	else {   /* no crossing: a bound, never a resolution of 0 */
+		char note[160];
+		snprintf(note, sizeof note, "stays above 1/7 up to the fine grid's Nyquist frequency: finer than 2 fine "
+			 "pixels = %.3g nm, which this grid cannot tell apart", 2 * fine);
+		cJSON_AddNullToObject(fr, "resolution_nm");
+		cJSON_AddNumberToObject(fr, "resolution_bound_nm", 2 * fine);
+		cJSON_AddStringToObject(fr, "note", note);
+	}
 	double *fq = c0_alloc((size_t)s->frc.n, sizeof *fq);
 	if (!fq)
 		return C0_ENOMEM;

@@ -4,6 +4,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -33,6 +34,19 @@ void c0_result_set_argv(struct c0_result *r, int argc, char **argv)
 	for (int i = 0; i < argc; i++)
 		cJSON_AddItemToArray(a, cJSON_CreateString(argv[i]));
 	cJSON_ReplaceItemInObject(r->rep, "argv", a);
+}
+
+void c0_result_warn(struct c0_result *r, const char *fmt, ...)
+{
+	char msg[512];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(msg, sizeof msg, fmt, ap);
+	va_end(ap);
+	cJSON *w = cJSON_GetObjectItem(r->rep, "warnings");
+	if (!w)
+		w = cJSON_AddArrayToObject(r->rep, "warnings");
+	cJSON_AddItemToArray(w, cJSON_CreateString(msg));
 }
 
 void c0_result_free(struct c0_result *r)

@@ -55,6 +55,9 @@ int c0_cli_open(struct c0_cli *k)
 int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, int argc, char **argv)
 {
 	if (!st && c0_comm_rank() == 0) {
+		const cJSON *w;
+		cJSON_ArrayForEach(w, cJSON_GetObjectItem(r->rep, "warnings"))
+			fprintf(stderr, "col0rme %s: warning: %s\n", cmd, w->valuestring);
 		c0_result_set_argv(r, argc, argv);
 		st = c0_result_write_to(r, &k->out);
 	}

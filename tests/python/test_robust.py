@@ -275,6 +275,25 @@ def test_calibration(tmp, s16):
     check("show them in nm" not in guide and "µm" in guide, "the guide says the calibration unit is µm")
 
 
+def test_subcritical(tmp):
+    """issue 30: a stack at or below the critical angle gets one warning line; a typo far below is refused"""
+    s3 = simulate(tmp, "d3", 16, 16, 40, "62,66,70")
+    out = os.path.join(tmp, "sub_out")
+    fast = ["--fwhm", "229", "--matirf-iterations", "100", "--no-drift"]
+    p = cli("run", *fast, "--angles", "60.5,66,70", "-o", out, *s3)   # critical angle 61.2 at 1.518/1.33
+    warns = [l for l in p.stderr.splitlines() if "warning" in l]
+    check(p.returncode == 0 and len(warns) == 1 and "60.5 deg" in warns[0] and "61.18 deg" in warns[0]
+          and "support only" in warns[0], "sub-critical angle: one warning line (%r)" % p.stderr)
+    rep = json.load(open(os.path.join(out, "report.json"))) if p.returncode == 0 else {}
+    check(rep.get("warnings") == [w.split("warning: ", 1)[1] for w in warns], "the warning is in report.json")
+    p = cli("run", *fast, "--angles", "62,66,70", "-o", os.path.join(tmp, "sub_ok"), *s3)
+    check(p.returncode == 0 and "warning" not in p.stderr, "TIRF angles: no warning (%r)" % p.stderr)
+    bad = os.path.join(tmp, "sub_bad")
+    check(refused(cli("run", *fast, "--angles", "45,66,70", "-o", bad, *s3), "--angles: 45 deg", "critical angle 61.18 deg"),
+          "an angle under 0.8 of the critical one is refused")
+    check(not os.path.exists(bad), "nothing written for the refused angle")
+
+
 with tempfile.TemporaryDirectory() as tmp:
     s16 = simulate(tmp, "d16", 16, 16, 40)
     s20 = simulate(tmp, "d20", 20, 16, 40)
@@ -285,4 +304,5 @@ with tempfile.TemporaryDirectory() as tmp:
     test_channels(tmp, s16)
     test_calibration(tmp, s16)
     test_outdir_messages(tmp, s16)
+    test_subcritical(tmp)
 done()
