@@ -101,7 +101,7 @@ public class Col0rme implements PlugIn {
 		} catch (Failure e) {
 			/* the user picks other titles in the dialog */
 		}
-		fs.add(Fields.Kind.STRING, whole ? "Stacks (one per angle, in acquisition order; or one hyperstack)" : "Stack", stacks);
+		fs.add(Fields.Kind.STRING, whole ? "Stacks (one per angle, or one hyperstack)" : "Stack", stacks);
 		if (whole)
 			fs.option("Angles (deg)", "--angles", property(pre, "col0rme.angles", true));
 		fs.option("Pixel size (nm)", "--pixel-size", pre != null ? pre.calibratedPixelNm() : null);

@@ -77,6 +77,7 @@ final class Fields {
 			case CHOICE: gd.addChoice(f.label, f.items, f.value); break;
 			case MESSAGE: gd.addMessage(f.label); break;
 			}
+		gd.addMessage(emptyMeans());
 		gd.addHelp(helpHtml(title));
 		gd.showDialog();
 		if (gd.wasCanceled())
@@ -119,6 +120,16 @@ final class Fields {
 				a.add(f.value);
 			}
 		return a;
+	}
+
+	/* What an empty field means, in the CLI's words (its default text up to
+	 * the first colon: "automatic: max(...)" reads "automatic"). */
+	private String emptyMeans() {
+		StringBuilder b = new StringBuilder("An empty field leaves col0rme's default (Help lists them all):");
+		for (Field f : list)
+			if (f.flag != null && f.cliDefault != null && !isValue(f) && !f.cliDefault.equals("none"))
+				b.append("\n    ").append(f.label.replaceAll(" \\(.*", "")).append(": ").append(f.cliDefault.replaceAll(":.*", ""));
+		return b.toString();
 	}
 
 	private String helpHtml(String title) {
