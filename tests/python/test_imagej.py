@@ -135,37 +135,52 @@ check("voxel 25 25 20 nm slices 20" in so, "headless: the opened volume is z-cal
 argv = json.load(open(os.path.join(out1, "report.json")))["argv"]
 check("--verbose" in argv and argv[argv.index("--angles") + 1] == ANGLES, "the plugin ran col0rme with --verbose and the angles")
 
-# 2. Xvfb: the documented run() line, recorded as the menu would record it; an
-# unsaved hyperstack (written to a temporary folder, big-endian) gives the same volume
+# 2. Xvfb: Demo data, then 3D-COL0RME with only an output folder (the dialog
+# prefilled from the demo); the documented run() line, recorded as the menu
+# would record it; an unsaved hyperstack (written to a temporary folder,
+# big-endian); the documented folder macro on a folder with one acquisition
+acqs = os.path.join(scratch, "acquisitions")
+os.makedirs(os.path.join(acqs, "a1"))
+for p in stacks:
+    os.symlink(p, os.path.join(acqs, "a1", os.path.basename(p)))
+folder_macro = re.search(r"^```\n(dir = getDirectory.*?)^```", doc, re.M | re.S).group(1)
+folder_macro = folder_macro.replace('getDirectory("Folder of acquisitions")', '"%s/"' % acqs)
 xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
                         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
 try:
     display = ":" + xvfb.stdout.readline().decode().strip()
-    out2, out3 = os.path.join(scratch, "run_xvfb"), os.path.join(scratch, "run_hyper")
+    out0, out2, out3 = (os.path.join(scratch, n) for n in ("run_demo", "run_xvfb", "run_hyper"))
     opts = doc_line.replace(DOC_OUT, out2)
-    opens = "".join('open("%s");\n' % p for p in stacks)
-    rc, so, se = imagej(f"""{opens}
+    rc, so, se = imagej(f"""run("Demo data");
+run("3D-COL0RME...", "output={out0}");
+close("volume.tif"); close("depth.png"); close("support.tif"); close("render.tif");
 line = call("TestHooks.record", "3D-COL0RME...", "{opts}");
 print("RECORDED " + line);
-close("*");
-{opens}
+close("volume.tif"); close("depth.png"); close("support.tif"); close("render.tif");
 h = call("TestHooks.hyperstack", "{STACKS}", "angles as channels");
 for (k = 1; k <= 5; k++) close("stack_q0" + k + ".tif");
 run("3D-COL0RME...", "stacks=[angles as channels] angles={ANGLES} pixel=100 fwhm=229 output={out3} drift=on bleaching=estimate");
-print("TMP " + getDirectory("temp"));
-""", "xvfb", display=display, headless=False)
+close("*");
+{folder_macro}""", "xvfb", display=display, headless=False)
     print(so, se)
 finally:
     xvfb.terminate()
     xvfb.wait()
+cli_volume = open(os.path.join(cli1, "volume.tif"), "rb").read()
 check(rc == 0, "Xvfb: the macro ran (exit 0)")
+check(open(os.path.join(out0, "volume.tif"), "rb").read() == cli_volume,
+      "Xvfb: Demo data, then OK in 3D-COL0RME... (only the output given) gives the CLI's volume.tif")
 rec = re.search(r'^RECORDED (.*)$', so, re.M).group(1).strip()
 check(rec == 'run("3D-COL0RME...", "%s");' % opts, "Xvfb: the Recorder's line is the documented options string")
-check(open(os.path.join(out2, "volume.tif"), "rb").read() == open(os.path.join(cli1, "volume.tif"), "rb").read(),
+check(open(os.path.join(out2, "volume.tif"), "rb").read() == cli_volume,
       "Xvfb: run(\"3D-COL0RME...\") gives the CLI's volume.tif, byte for byte")
 check(same_file_pixels(os.path.join(out3, "volume.tif"), os.path.join(cli1, "volume.tif")),
       "Xvfb: an unsaved hyperstack (angles as channels, written big-endian by ImageJ) gives the same volume")
+check(open(os.path.join(acqs, "a1_col0rme", "volume.tif"), "rb").read() == cli_volume,
+      "Xvfb: the documented folder macro gives the CLI's volume.tif for the acquisition")
 check(not [f for f in os.listdir(TMP) if f.startswith("col0rme-in")], "the temporary copy of the hyperstack was removed")
+shutil.rmtree(TMP)
+os.makedirs(TMP)
 
 # 3. bad input: one line, exit status 1, nothing written
 def refused(name, macro, want, path=None):
