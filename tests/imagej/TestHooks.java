@@ -75,4 +75,11 @@ public class TestHooks {
 	public static String saveRaw(String title, String path) {
 		return new ij.io.FileSaver(WindowManager.getImage(title)).saveAsRawStack(path) ? path : "";
 	}
+
+	/** The image as ImageJ's File > Save As > Tiff writes it (the encoder the
+	 *  plugin uses for unsaved stacks). */
+	public static String saveTiff(String title, String path) {
+		ImagePlus copy = WindowManager.getImage(title).duplicate();   /* the image itself keeps no file */
+		return new ij.io.FileSaver(copy).saveAsTiffStack(path) ? path : "";
+	}
 }

@@ -150,6 +150,7 @@ xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1280x1024x2
 try:
     display = ":" + xvfb.stdout.readline().decode().strip()
     out0, out2, out3 = (os.path.join(scratch, n) for n in ("run_demo", "run_xvfb", "run_hyper"))
+    hyper_copy = os.path.join(scratch, "hyper_as_imagej_writes.tif")
     opts = doc_line.replace(DOC_OUT, out2)
     rc, so, se = imagej(f"""run("Demo data");
 run("3D-COL0RME...", "output={out0}");
@@ -158,6 +159,7 @@ line = call("TestHooks.record", "3D-COL0RME...", "{opts}");
 print("RECORDED " + line);
 close("volume.tif"); close("depth.png"); close("support.tif"); close("render.tif");
 h = call("TestHooks.hyperstack", "{STACKS}", "angles as channels");
+call("TestHooks.saveTiff", "angles as channels", "{hyper_copy}");
 for (k = 1; k <= 5; k++) close("stack_q0" + k + ".tif");
 run("3D-COL0RME...", "stacks=[angles as channels] angles={ANGLES} pixel=100 fwhm=229 output={out3} drift=on bleaching=estimate");
 close("*");
@@ -174,10 +176,14 @@ rec = re.search(r'^RECORDED (.*)$', so, re.M).group(1).strip()
 check(rec == 'run("3D-COL0RME...", "%s");' % opts, "Xvfb: the Recorder's line is the documented options string")
 check(open(os.path.join(out2, "volume.tif"), "rb").read() == cli_volume,
       "Xvfb: run(\"3D-COL0RME...\") gives the CLI's volume.tif, byte for byte")
+check(open(hyper_copy, "rb").read(2) == b"MM", "ImageJ writes the hyperstack big-endian (MM)")
 check(same_file_pixels(os.path.join(out3, "volume.tif"), os.path.join(cli1, "volume.tif")),
       "Xvfb: an unsaved hyperstack (angles as channels, written big-endian by ImageJ) gives the same volume")
 check(open(os.path.join(acqs, "a1_col0rme", "volume.tif"), "rb").read() == cli_volume,
       "Xvfb: the documented folder macro gives the CLI's volume.tif for the acquisition")
+hyper_argv = json.load(open(os.path.join(out3, "report.json")))["argv"]
+check(re.fullmatch(re.escape(TMP) + r"/col0rme-in\d*/stack_01\.tif", hyper_argv[-1]) is not None,
+      "the unsaved hyperstack went to col0rme as a temporary file")
 check(not [f for f in os.listdir(TMP) if f.startswith("col0rme-in")], "the temporary copy of the hyperstack was removed")
 shutil.rmtree(TMP)
 os.makedirs(TMP)
