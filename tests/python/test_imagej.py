@@ -5,7 +5,8 @@ the demo data with no display (call() from a -batch macro) and under Xvfb
 installed jar finding the installed col0rme.
 
 usage: test_imagej.py COL0RME PLUGIN_JAR IJ_JAR SOURCE_DIR BUILD_DIR SCRATCH
-Exits 77 (skipped) with the reason when java, the jar, ij.jar or Xvfb is missing."""
+Exits 77 (skipped) with the reason, after the --help-json checks, when java,
+the jar, ij.jar or Xvfb is missing."""
 import json
 import os
 import re
@@ -18,7 +19,8 @@ import numpy as np
 import tifffile
 
 exe, jar, ij_jar, src, build, scratch = sys.argv[1:7]
-exe, jar, scratch = os.path.abspath(exe), os.path.abspath(jar), os.path.abspath(scratch)
+exe, scratch = os.path.abspath(exe), os.path.abspath(scratch)
+jar = os.path.abspath(jar) if jar else ""
 ANGLES = "62.5,63.5,65,67,70"
 STACKS = ",".join("stack_q%02d.tif" % k for k in range(1, 6))
 T0 = time.time()
@@ -27,15 +29,6 @@ T0 = time.time()
 def skip(why):
     print("SKIP: " + why)
     sys.exit(77)
-
-
-for tool in ("java", "javac", "Xvfb"):
-    if not shutil.which(tool):
-        skip("%s not found (apt-get install default-jdk-headless xvfb imagej)" % tool)
-if not os.path.isfile(jar):
-    skip("the plugin jar %s was not built (no JDK or ij.jar when CMake configured)" % jar)
-if not os.path.isfile(ij_jar):
-    skip("ImageJ's %s not found" % ij_jar)
 
 
 def check(cond, what):
@@ -61,6 +54,15 @@ run_opts = {o["flag"]: o for o in json.loads(subprocess.run([exe, "run", "--help
 check(run_opts["--pixel-size"]["param"] == "pixel_nm" and run_opts["--n-glass"]["default"] == "1.518"
       and run_opts["--drift"]["metavar"] == "on|off" and run_opts["--verbose"]["type"] == "flag",
       "run --help-json: parameter names, defaults and choices")
+
+# the plugin needs java, ij.jar and Xvfb (the --help-json checks above do not)
+for tool in ("java", "javac", "Xvfb"):
+    if not shutil.which(tool):
+        skip("%s not found (apt-get install default-jdk-headless xvfb imagej)" % tool)
+if not os.path.isfile(jar):
+    skip("the plugin jar was not built (no JDK or ij.jar when CMake configured)")
+if not os.path.isfile(ij_jar):
+    skip("ImageJ's %s not found" % ij_jar)
 
 shutil.rmtree(scratch, ignore_errors=True)
 for d in ("bin", "home", "tmp", "ij/plugins", "hooks", "nobin"):

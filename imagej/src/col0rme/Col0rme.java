@@ -73,14 +73,12 @@ public class Col0rme implements PlugIn {
 			System.err.flush();
 			System.exit(1);   /* ImageJ -batch exits 0 after a failed macro */
 		}
-		if (e.cancelled) {
+		if (e.cancelled)
 			IJ.showStatus(line);
-			Macro.abort();
-			return;
-		}
-		IJ.error("col0rme", line);
+		else
+			IJ.error("col0rme", line);
 		if (IJ.isMacro())
-			Macro.abort();
+			Macro.abort();   /* a macro does not go on without the result */
 	}
 
 	/* The dialog (or options), the checks, the run and the results. options:
