@@ -29,6 +29,16 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	if (nextra)
 		memcpy(k->opts + no, extra, (size_t)nextra * sizeof *extra);
 	spec->opts = k->opts, spec->nopts = no + nextra;
+	/* --help-json with the library's parameter names (c0_run_conf_set) */
+	const char *pnames[64] = { "outdir" };
+	for (int i = 0; params[i]; i++)
+		pnames[1 + i] = params[i];
+	pnames[no - 2] = "force", pnames[no - 1] = "verbose";
+	for (int i = 1; i < argc && strcmp(argv[i], "--"); i++)
+		if (!strcmp(argv[i], "--help-json")) {
+			c0_opts_help_json(spec, pnames);
+			return 1;
+		}
 	int na, rc = c0_opts_parse(spec, argc, argv, &na, k->paths);
 	if (rc)
 		return rc;

@@ -6,32 +6,103 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void show_default(const struct c0_opt *o, char *buf, size_t n)
+/* The default as text ("" when there is none to show). */
+static void default_text(const struct c0_opt *o, char *buf, size_t n)
 {
 	buf[0] = '\0';
 	if (o->defhint) {
-		snprintf(buf, n, " (default: %s)", o->defhint);
+		snprintf(buf, n, "%s", o->defhint);
 		return;
 	}
 	switch (o->type) {
-	case C0_OPT_INT: snprintf(buf, n, " (default: %d)", *(int *)o->dst); break;
-	case C0_OPT_LONG: snprintf(buf, n, " (default: %lld)", *(long long *)o->dst); break;
-	case C0_OPT_DOUBLE: snprintf(buf, n, " (default: %g)", *(double *)o->dst); break;
+	case C0_OPT_INT: snprintf(buf, n, "%d", *(int *)o->dst); break;
+	case C0_OPT_LONG: snprintf(buf, n, "%lld", *(long long *)o->dst); break;
+	case C0_OPT_DOUBLE: snprintf(buf, n, "%g", *(double *)o->dst); break;
 	case C0_OPT_STRING:
 		if (*(const char **)o->dst)
-			snprintf(buf, n, " (default: %s)", *(const char **)o->dst);
+			snprintf(buf, n, "%s", *(const char **)o->dst);
 		break;
-	case C0_OPT_DOUBLES:
-		if (*o->count) {
-			size_t k = (size_t)snprintf(buf, n, " (default: ");
-			for (int i = 0; i < *o->count && k < n; i++)
-				k += (size_t)snprintf(buf + k, n - k, "%s%g", i ? "," : "", ((double *)o->dst)[i]);
-			if (k < n)
-				snprintf(buf + k, n - k, ")");
-		}
+	case C0_OPT_DOUBLES: {
+		size_t k = 0;
+		for (int i = 0; i < *o->count && k < n; i++)
+			k += (size_t)snprintf(buf + k, n - k, "%s%g", i ? "," : "", ((double *)o->dst)[i]);
 		break;
+	}
 	default: break;
 	}
+}
+
+static void show_default(const struct c0_opt *o, char *buf, size_t n)
+{
+	char d[160];
+	default_text(o, d, sizeof d);
+	if (*d)
+		snprintf(buf, n, " (default: %s)", d);
+	else
+		buf[0] = '\0';
+}
+
+static void json_string(const char *s)
+{
+	if (!s) {
+		fputs("null", stdout);
+		return;
+	}
+	putchar('"');
+	for (; *s; s++) {
+		unsigned char c = (unsigned char)*s;
+		if (c == '"' || c == '\\')
+			printf("\\%c", c);
+		else if (c == '\n')
+			fputs("\\n", stdout);
+		else if (c < 0x20)
+			printf("\\u%04x", c);
+		else
+			putchar(c);
+	}
+	putchar('"');
+}
+
+static const char *const type_names[] = { "flag", "int", "int", "number", "string", "numbers", "ints" };
+
+static void json_row(const char *flag, char shortname, const char *param, const char *type, const char *metavar,
+		     const char *help, const char *def, int last)
+{
+	char sh[3] = { '-', shortname, 0 }, derived[64];
+	if (!param) {   /* the flag's name, as an identifier */
+		size_t i = 0;
+		for (const char *p = flag + 2; *p && i + 1 < sizeof derived; p++)
+			derived[i++] = *p == '-' ? '_' : *p;
+		derived[i] = '\0';
+		param = derived;
+	}
+	fputs("    {\"flag\": ", stdout), json_string(flag);
+	fputs(", \"short\": ", stdout), json_string(shortname ? sh : NULL);
+	fputs(", \"param\": ", stdout), json_string(param);
+	fputs(", \"type\": ", stdout), json_string(type);
+	fputs(", \"metavar\": ", stdout), json_string(metavar);
+	fputs(", \"help\": ", stdout), json_string(help);
+	fputs(", \"default\": ", stdout), json_string(def && *def ? def : NULL);
+	puts(last ? "}" : "},");
+}
+
+void c0_opts_help_json(const struct c0_cmd_spec *spec, const char *const *params)
+{
+	fputs("{\"command\": ", stdout), json_string(spec->name);
+	fputs(",\n  \"args\": ", stdout), json_string(spec->args);
+	fputs(",\n  \"summary\": ", stdout), json_string(spec->summary);
+	fputs(",\n  \"options\": [\n", stdout);
+	for (int i = 0; i < spec->nopts; i++) {
+		const struct c0_opt *o = &spec->opts[i];
+		char flag[80], def[160];
+		snprintf(flag, sizeof flag, "--%s", o->name);
+		default_text(o, def, sizeof def);
+		json_row(flag, o->shortname, params ? params[i] : NULL, type_names[o->type],
+			 o->type == C0_OPT_FLAG ? NULL : o->metavar ? o->metavar : "X", o->help, def, !spec->threads && i == spec->nopts - 1);
+	}
+	if (spec->threads)
+		json_row("--threads", 0, NULL, "int", "N", "worker threads", "the CPUs this process may run on", 1);
+	puts("  ]}");
 }
 
 void c0_opts_help(const struct c0_cmd_spec *spec)
@@ -48,6 +119,7 @@ void c0_opts_help(const struct c0_cmd_spec *spec)
 	if (spec->threads)
 		printf("  %-28s %s\n", "    --threads N", "worker threads (default: the CPUs this process may run on)");
 	printf("  %-28s %s\n", "-h, --help", "show this help");
+	printf("  %-28s %s\n", "    --help-json", "print these options as JSON (flag, param, type, metavar, help, default) and exit");
 }
 
 static int bad(const struct c0_cmd_spec *spec, const char *name, const char *val, const char *why)
@@ -138,6 +210,10 @@ int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *np
 		}
 		if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
 			c0_opts_help(spec);
+			return 1;
+		}
+		if (!strcmp(a, "--help-json")) {
+			c0_opts_help_json(spec, NULL);
 			return 1;
 		}
 		const struct c0_opt *o = NULL;

@@ -41,3 +41,8 @@ struct c0_cmd_spec {
  * needs room for max_pos of them (argc when max_pos < 0). */
 int c0_opts_parse(const struct c0_cmd_spec *spec, int argc, char **argv, int *npos, char **pos);
 void c0_opts_help(const struct c0_cmd_spec *spec);
+/* --help-json: the options as JSON for programs (the ImageJ plugin builds
+ * its dialogs from it): command, args, summary and per option flag, short,
+ * param (params[i] when params is given, else the flag's name with '_'),
+ * type, metavar, help and default (the text --help shows, or null). */
+void c0_opts_help_json(const struct c0_cmd_spec *spec, const char *const *params);

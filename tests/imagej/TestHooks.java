@@ -1,0 +1,85 @@
+import ij.IJ;
+import ij.ImagePlus;
+import ij.ImageStack;
+import ij.WindowManager;
+import ij.plugin.frame.Recorder;
+
+/** Test hooks for the ImageJ plugin's test, called from -batch macros with
+ *  call("TestHooks...."): what a user's hands would do in ImageJ's window. */
+public class TestHooks {
+	/** Runs an ImageJ command with the Recorder open, as from the menu, and
+	 *  returns what the Recorder wrote for it. */
+	public static String record(String command, String options) {
+		Recorder r = new Recorder(false);
+		Recorder.record = true;
+		Recorder.recordInMacros = true;
+		IJ.run(command, options);
+		String text = r.getText();
+		r.close();
+		return text;
+	}
+
+	/** Presses Escape once a child "col0rme COMMAND --verbose" (the run, not
+	 *  its --help-json) has run for a moment. */
+	public static String escapeWhileRunning(final String command) {
+		Thread t = new Thread(() -> {
+			try {
+				while (!ProcessHandle.current().descendants().anyMatch(p -> p.info().arguments()
+					.map(a -> a.length > 1 && a[0].equals(command) && a[1].equals("--verbose")).orElse(false)))
+					Thread.sleep(20);
+				Thread.sleep(300);
+			} catch (InterruptedException e) {
+				return;
+			}
+			IJ.setKeyDown(27);
+		});
+		t.setDaemon(true);
+		t.start();
+		return "";
+	}
+
+	/** One unsaved hyperstack named name with the stacks' frames as its
+	 *  channels (ImageJ's czt order), calibrated as the first stack. */
+	public static String hyperstack(String titles, String name) {
+		String[] t = titles.split(",");
+		ImagePlus[] in = new ImagePlus[t.length];
+		for (int c = 0; c < t.length; c++)
+			in[c] = WindowManager.getImage(t[c]);
+		int frames = in[0].getStackSize();
+		ImageStack s = new ImageStack(in[0].getWidth(), in[0].getHeight());
+		for (int f = 1; f <= frames; f++)
+			for (ImagePlus imp : in)
+				s.addSlice(imp.getStack().getProcessor(f).duplicate());
+		ImagePlus h = new ImagePlus(name, s);
+		h.setDimensions(t.length, 1, frames);
+		h.setOpenAsHyperStack(true);
+		h.setCalibration(in[0].getCalibration().copy());
+		h.show();
+		return name;
+	}
+
+	/** Unsaved copies (titles copy_1, copy_2...) of the stacks; returns their titles. */
+	public static String copies(String titles) {
+		StringBuilder b = new StringBuilder();
+		int k = 1;
+		for (String t : titles.split(",")) {
+			ImagePlus c = WindowManager.getImage(t).duplicate();
+			c.setTitle("copy_" + k++);
+			c.show();
+			b.append(b.length() > 0 ? "," : "").append(c.getTitle());
+		}
+		return b.toString();
+	}
+
+	/** The image's pixels as raw big-endian data (saveAs needs ImageJ's menus). */
+	public static String saveRaw(String title, String path) {
+		return new ij.io.FileSaver(WindowManager.getImage(title)).saveAsRawStack(path) ? path : "";
+	}
+
+	/** The image as ImageJ's File > Save As > Tiff writes it (the encoder the
+	 *  plugin uses for unsaved stacks). */
+	public static String saveTiff(String title, String path) {
+		ImagePlus copy = WindowManager.getImage(title).duplicate();   /* the image itself keeps no file */
+		return new ij.io.FileSaver(copy).saveAsTiffStack(path) ? path : "";
+	}
+}
