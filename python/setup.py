@@ -39,7 +39,7 @@ def build_library(build):
     # no MPI: only the col0rme program starts it, the library alone never does;
     # the install RPATH (none): a build tree's RUNPATH ends in an empty entry, the current directory
     _cmake("-S", ROOT, "-B", build, "-DCMAKE_BUILD_TYPE=Release", "-DBUILD_TESTING=OFF", "-DCOL0RME_WERROR=OFF",
-           "-DCOL0RME_MPI=OFF", "-DCMAKE_BUILD_WITH_INSTALL_RPATH=ON")
+           "-DCOL0RME_MPI=OFF", "-DCOL0RME_IMAGEJ=OFF", "-DCMAKE_BUILD_WITH_INSTALL_RPATH=ON")
     jobs = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL") or str(os.cpu_count() or 1)
     _cmake("--build", build, "--target", "c0_shared", "--parallel", jobs)
     sonames = [p for p in build.glob("libcol0rme.so.*") if p.is_symlink() and p.name.count(".") == 2]
