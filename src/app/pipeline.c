@@ -59,7 +59,7 @@ void c0_result_free(struct c0_result *r)
 			free(r->corrected[q]);
 	}
 	free(r->sres), free(r->ires), free(r->corrected), free(r->mask), free(r->names), free(r->json);
-	c0_drift_free(r->drift), free(r->render);
+	c0_drift_free(r->drift), free(r->render), free(r->mean);
 	c0_matirf_result_free(&r->vol), c0_matirf_result_free(&r->base);
 	cJSON_Delete(r->rep);
 	free(r);
@@ -351,9 +351,10 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	int sts[C0_MAX_STACKS];
 	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
 	r->ires = c0_alloc((size_t)n, sizeof *r->ires);
+	r->mean = c0_alloc((size_t)n * f[0].height * f[0].width, sizeof *r->mean);
 	if (corrected)
 		r->corrected = c0_alloc((size_t)n, sizeof *r->corrected);
-	if (!msg || !r->ires || (corrected && !r->corrected)) {
+	if (!msg || !r->ires || !r->mean || (corrected && !r->corrected)) {
 		free(msg);
 		return C0_ENOMEM;
 	}
@@ -384,6 +385,8 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 			continue;
 		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], &r->ires[i],
 					 corrected ? &r->corrected[i] : NULL);
+		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
+			r->mean[(size_t)i * H * W + p] = (float)(known[i] ? known[i]->mean : own[i])[p];
 		if (sts[i])
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 #pragma omp critical(c0_intensity_progress)

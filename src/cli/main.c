@@ -25,6 +25,7 @@ static const struct {
 	{ "intensity", cmd_intensity, "per-angle intensity and background on a support" },
 	{ "matirf", cmd_matirf, "MA-TIRF axial reconstruction from one image per angle" },
 	{ "run", cmd_run, "the whole method: support, intensities, MA-TIRF volume" },
+	{ "report", cmd_report, "report.html again from an output directory's files" },
 	{ "support", cmd_support, "COL0RME support estimation from the stacks' covariance" },
 };
 
