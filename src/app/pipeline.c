@@ -429,6 +429,9 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		cJSON_AddItemToArray(arr, j);
 	}
 	cJSON *p = cJSON_AddObjectToObject(r->rep, "intensity_parameters");
+	cJSON_AddNumberToObject(p, "pixel_size_nm", ic->pixel_nm);   /* the forward model, for report.html's error map */
+	cJSON_AddNumberToObject(p, "fwhm_nm", ic->fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", ic->srf);
 	static const char *bg[] = { "none", "constant", "smooth" };
 	cJSON_AddStringToObject(p, "background", bg[ic->background]);
 	cJSON_AddNumberToObject(p, "beta", ic->beta);

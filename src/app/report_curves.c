@@ -60,7 +60,7 @@ static void lambda_one(struct c0_html *h, const cJSON *rep, int k)
 	double chosen = c0_json_num(rep, p, NAN);
 	c0_html_add(h, "<figure class=\"plotfig\">");
 	if (n > 1 && ns == n && nn == n) {
-		struct c0_plot pl = { x[0], x[n - 1], 1e-4, 1, 1, 1, 0, 0 };
+		struct c0_plot pl = { x[0], x[n - 1], 1e-4, 1, 1, 1, 0, 0, 1 };
 		c0_plot_begin(h, &pl, "\u03bb / \u03bb_max", "share of fine pixels above \u03bb");
 		c0_plot_line(h, &pl, x, s, n, "#1f4e8c", 0);
 		c0_plot_line(h, &pl, x, z, n, "#888", 1);
@@ -126,7 +126,7 @@ void c0_fig_drift(struct c0_html *h, const struct c0_rundir *d)
 		     "covariance and the means; an axis within 6 noise sds of zero is left uncorrected.");
 	double lo = -10, hi = 10;
 	range(x, n, &lo, &hi), range(y, n, &lo, &hi);
-	struct c0_plot pl = { 0, t[n - 1] + t[0], lo - 2, hi + 2, 0, 0, 0, 0 };
+	struct c0_plot pl = { 0, t[n - 1] + t[0], lo - 2, hi + 2, 0, 0, 0, 0, 0 };
 	c0_html_add(h, "<figure class=\"plotfig\">");
 	c0_plot_begin(h, &pl, "frame (whole acquisition)", "shift (nm)");
 	c0_plot_line(h, &pl, t, x, n, "#c0392b", 0);
@@ -163,7 +163,7 @@ void c0_fig_bleach(struct c0_html *h, const struct c0_rundir *d)
 	double end = 0;
 	for (int q = 0; q < n; q++)
 		end = fmax(end, start[q] + T);
-	struct c0_plot pl = { 0, end > 0 ? end : 1, 0, 1.05, 0, 0, 0, 0 };
+	struct c0_plot pl = { 0, end > 0 ? end : 1, 0, 1.05, 0, 0, 0, 0, 0 };
 	double lo = 1;
 	for (int q = 0; q < n; q++)
 		lo = fmin(lo, F[q]);
@@ -220,7 +220,7 @@ static void frc_one(struct c0_html *h, const cJSON *rep, int k)
 	if (n > 1 && nc == n) {
 		double lo = 0, hi = 1;
 		range(c, n, &lo, &hi);
-		struct c0_plot pl = { 0, f[n - 1], fmin(0, lo), 1.02, 0, 0, 0, 0 };
+		struct c0_plot pl = { 0, f[n - 1], fmin(0, lo), 1.02, 0, 0, 0, 0, 0 };
 		c0_plot_begin(h, &pl, "spatial frequency (1/nm)", "Fourier ring correlation");
 		double tf[2] = { 0, f[n - 1] }, tv[2] = { thr, thr };
 		c0_plot_line(h, &pl, tf, tv, 2, "#888", 1);

@@ -51,7 +51,8 @@ struct c0_rundir {
 	const char *dir;
 	cJSON *rep;
 	int n;                           /* stacks (report.json's "intensity", else "support") */
-	int ny, nx, srf;                 /* camera grid and super-resolution factor */
+	int ny, nx, srf;                 /* camera grid (from the file grid) and super-resolution factor */
+	const char *grid;
 	double pixel_nm, fwhm_nm;        /* camera pixel, PSF */
 	float *mean[C0_MAX_STACKS];      /* mean_qNN.tif, camera grid (NULL: not written) */
 	float *inten[C0_MAX_STACKS];     /* intensity_qNN.tif, fine grid */
@@ -93,6 +94,7 @@ struct c0_plot {
 	double x0, x1, y0, y1;           /* data range */
 	int logx, logy;
 	int w, h;                        /* pixels */
+	int legend_low;                  /* 1: the legend bottom left instead of top right */
 };
 void c0_plot_begin(struct c0_html *h, struct c0_plot *p, const char *xlabel, const char *ylabel);
 void c0_plot_line(struct c0_html *h, const struct c0_plot *p, const double *x, const double *y, int n,

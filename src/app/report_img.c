@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PANEL_CSS 210   /* a panel's width on the page, CSS pixels */
+#define PANEL_CSS 192   /* a panel's width on the page, CSS pixels */
 
 static int cmp_float(const void *a, const void *b)
 {
@@ -225,13 +225,13 @@ static void depth_panel(struct c0_html *h, const struct c0_depthmap *m, double z
 
 static void depth_bar(struct c0_html *h, double z0, double z1)
 {
-	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"70\" height=\"210\" role=\"img\"><defs><linearGradient id=\"zgrad\" "
+	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"70\" height=\"192\" role=\"img\"><defs><linearGradient id=\"zgrad\" "
 		       "x1=\"0\" y1=\"0\" x2=\"0\" y2=\"1\">");
 	for (int k = 0; k < 5; k++)
 		c0_html_printf(h, "<stop offset=\"%d%%\" stop-color=\"rgb(%d,%d,%d)\"/>", 25 * k, (int)(255 * depth_stops[k][0]),
 			       (int)(255 * depth_stops[k][1]), (int)(255 * depth_stops[k][2]));
-	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"194\" fill=\"url(#zgrad)\"/>"
-		       "<text x=\"24\" y=\"16\">%g nm</text><text x=\"24\" y=\"109\">%g</text><text x=\"24\" y=\"204\">%g nm</text>"
+	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"176\" fill=\"url(#zgrad)\"/>"
+		       "<text x=\"24\" y=\"16\">%g nm</text><text x=\"24\" y=\"100\">%g</text><text x=\"24\" y=\"186\">%g nm</text>"
 		       "</svg><figcaption>depth</figcaption></figure>", z0, (z0 + z1) / 2, z1);
 }
 
@@ -251,9 +251,9 @@ void c0_fig_depth(struct c0_html *h, const struct c0_rundir *d)
 	c0_html_add(h, "</div></section>\n");
 }
 
-static void err_bar(struct c0_html *h, double s)
+static void err_bar(struct c0_html *h, double s, int sds)
 {
-	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"90\" height=\"210\" role=\"img\"><defs><linearGradient id=\"egrad\" "
+	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"90\" height=\"192\" role=\"img\"><defs><linearGradient id=\"egrad\" "
 		       "x1=\"0\" y1=\"0\" x2=\"0\" y2=\"1\">");
 	for (int k = 0; k <= 8; k++) {
 		float v = (float)(s * (1 - k / 4.0));
@@ -261,9 +261,10 @@ static void err_bar(struct c0_html *h, double s)
 		c0_cmap_diverging(&v, 1, s, c);
 		c0_html_printf(h, "<stop offset=\"%.1f%%\" stop-color=\"rgb(%d,%d,%d)\"/>", 12.5 * k, c[0], c[1], c[2]);
 	}
-	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"194\" fill=\"url(#egrad)\"/>"
-		       "<text x=\"24\" y=\"16\">+%.3g</text><text x=\"24\" y=\"109\">0</text><text x=\"24\" y=\"204\">\u2212%.3g</text>"
-		       "</svg><figcaption>data \u2212 model</figcaption></figure>", s, s);
+	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"176\" fill=\"url(#egrad)\"/>"
+		       "<text x=\"24\" y=\"16\">+%.3g</text><text x=\"24\" y=\"100\">0</text><text x=\"24\" y=\"186\">\u2212%.3g</text>"
+		       "</svg><figcaption>%s</figcaption></figure>", s, s,
+		       sds ? "(data \u2212 model) / noise sd" : "data \u2212 model");
 }
 
 static void err_table(struct c0_html *h, const struct c0_rundir *d)
@@ -293,12 +294,18 @@ void c0_fig_errmap(struct c0_html *h, const struct c0_rundir *d)
 	}
 	section(h, "error-map", "Error map", "The estimate taken back to the camera by the forward model of the "
 		"intensity step (the intensity blurred by the Gaussian PSF and integrated over the camera pixels, plus the "
-		"estimated background) against the data's mean image. <b>Red</b>: the data is brighter than the model (structure "
-		"the estimate misses); <b>blue</b>: the model is brighter (structure it invents). One colour scale for all "
-		"stacks (error_qNN.tif: the same residual, calibrated, for Fiji).");
+		"estimated background) against the data's mean image, in noise sds of the mean image (\u00b15 at full colour). <b>Red</b>: the data is brighter than the model (structure "
+		"the estimate misses); <b>blue</b>: the model is brighter (structure it invents). The same scale for all "
+		"stacks (error_qNN.tif: the residual in camera units, calibrated, for Fiji).");
+	/* shown in noise sds of the mean image when every stack has one (the
+	 * same colour means the same significance at every angle), else in
+	 * camera units on one scale */
 	const size_t L = (size_t)d->ny * d->nx;
-	double s = 0;
+	int sds = 1;
 	for (int q = 0; q < d->n; q++)
+		sds &= !d->err[q] || d->es[q].noise_sd > 0;
+	double s = sds ? 5 : 0;
+	for (int q = 0; !sds && q < d->n; q++)
 		if (d->err[q]) {
 			float *a = c0_alloc(L, sizeof *a);
 			for (size_t i = 0; a && i < L; i++)
@@ -306,14 +313,20 @@ void c0_fig_errmap(struct c0_html *h, const struct c0_rundir *d)
 			s = a ? fmax(s, c0_quantile(a, L, 0.995)) : s;
 			free(a);
 		}
-	for (int q = 0; q < d->n; q++) {
+	float *z = c0_alloc(L, sizeof *z);
+	for (int q = 0; z && q < d->n; q++) {
 		char cap[512];
 		if (!d->err[q])
 			continue;
+		for (size_t i = 0; i < L; i++)
+			z[i] = sds ? (float)(d->err[q][i] / d->es[q].noise_sd) : d->err[q][i];
 		stack_caption(d, q, cap, sizeof cap);
-		panel(h, d->err[q], d->ny, d->nx, d->pixel_nm, DIVERGING, 0, s > 0 ? s : 1, cap);
+		panel(h, z, d->ny, d->nx, d->pixel_nm, DIVERGING, 0, s > 0 ? s : 1, cap);
 	}
-	err_bar(h, s > 0 ? s : 1);
+	if (!z && !h->st)
+		h->st = -1;
+	free(z);
+	err_bar(h, s > 0 ? s : 1, sds);
 	c0_html_add(h, "</div>");
 	err_table(h, d);
 	c0_html_add(h, "<p class=\"what\">RSP (resolution-scaled Pearson): the correlation of the data's mean image and "

@@ -27,7 +27,7 @@ static int exists(const struct c0_rundir *d, const char *name)
 	return !path_of(d, name, p, sizeof p) && !stat(p, &s);
 }
 
-/* name as one ny x nx image (planes > 1: planes of that size), its pixel size */
+/* name as planes images of ny x nx (the size of d->grid's file) */
 static int load(const struct c0_rundir *d, const char *name, int64_t planes, int ny, int nx, float **img)
 {
 	char p[4400];
@@ -39,8 +39,8 @@ static int load(const struct c0_rundir *d, const char *name, int64_t planes, int
 		return st;
 	if (in.width != nx || in.height != ny || in.pages != planes) {
 		free(*img), *img = NULL;
-		return c0_fail(C0_EINVAL, "%s: %lldx%lldx%lld, expected %dx%dx%lld from report.json", p, (long long)in.width,
-			       (long long)in.height, (long long)in.pages, nx, ny, (long long)planes);
+		return c0_fail(C0_EINVAL, "%s: %lldx%lldx%lld, expected %dx%dx%lld (%s's grid, srf and stacks)", p,
+			       (long long)in.width, (long long)in.height, (long long)in.pages, nx, ny, (long long)planes, d->grid);
 	}
 	return C0_OK;
 }
@@ -69,7 +69,9 @@ static int read_json(struct c0_rundir *d)
 static int read_grid(struct c0_rundir *d)
 {
 	const cJSON *r = d->rep;
-	const char *sec = c0_json_at(r, "parameters.pixel_size_nm") ? "parameters" : "support_parameters";
+	const char *sec = c0_json_at(r, "parameters.pixel_size_nm")             ? "parameters"
+			  : c0_json_at(r, "intensity_parameters.pixel_size_nm") ? "intensity_parameters"
+										: "support_parameters";
 	char k[64];
 	snprintf(k, sizeof k, "%s.pixel_size_nm", sec);
 	d->pixel_nm = c0_json_num(r, k, 0);
@@ -88,9 +90,10 @@ static int read_grid(struct c0_rundir *d)
 	/* the camera grid from the first stack's file */
 	char p[4400];
 	struct c0_tiff_reader *t;
-	const char *first = exists(d, "mean_q01.tif") ? "mean_q01.tif" : cJSON_IsArray(in) ? "background_q01.tif" : NULL;
-	if (!first)
-		return C0_OK;
+	const char *first = exists(d, "mean_q01.tif") || !cJSON_IsArray(in) ? "mean_q01.tif" : "background_q01.tif";
+	if (!cJSON_IsArray(in) && !exists(d, first))
+		return C0_OK;   /* a support run from before mean_qNN.tif: no images */
+	d->grid = first;
 	int st = path_of(d, first, p, sizeof p);
 	if (!st && !exists(d, first))
 		return c0_fail(C0_EIO, "%s: missing (report.json says this run wrote it)", p);
@@ -104,8 +107,13 @@ static int read_grid(struct c0_rundir *d)
 static int load_stacks(struct c0_rundir *d)
 {
 	const int ny = d->ny, nx = d->nx, Ly = ny * d->srf, Lx = nx * d->srf;
-	const int means = exists(d, "mean_q01.tif") || exists(d, "mean_q02.tif"), inten = c0_json_at(d->rep, "intensity") != NULL;
-	int st = C0_OK;
+	const int inten = c0_json_at(d->rep, "intensity") != NULL;
+	int means = 0, st = C0_OK;
+	for (int q = 0; q < d->n && !means; q++) {   /* all or none (runs before mean_qNN.tif have none) */
+		char name[64];
+		snprintf(name, sizeof name, "mean_q%02d.tif", q + 1);
+		means = exists(d, name);
+	}
 	for (int q = 0; q < d->n && !st; q++) {
 		char name[64];
 		if (means) {

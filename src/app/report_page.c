@@ -32,7 +32,8 @@ static const char css[] =
 	".tbar{height:9px;background:#7a93b8}ul.warnings{margin:0;padding-left:20px}"
 	"li.warn{color:#8a3b00}li.warn::marker{content:'\\26A0  '}li.note{color:#444}li.ok{color:#1e6b36}"
 	"pre.cmd{background:#f3f3f3;border:1px solid #ddd;padding:8px;white-space:pre-wrap;word-break:break-all;font-size:12.5px}"
-	"nav a{margin-right:12px;color:#1f4e8c;text-decoration:none}";
+	"nav a{margin-right:12px;color:#1f4e8c;text-decoration:none}"
+	".cols{display:grid;grid-template-columns:repeat(auto-fit,minmax(560px,1fr));gap:0 14px}.cols section{margin:14px 0 0}";
 
 static void header(struct c0_html *h, const struct c0_rundir *d)
 {
@@ -65,10 +66,12 @@ static void page(struct c0_html *h, const struct c0_rundir *d)
 	c0_fig_render(h, d);
 	c0_fig_depth(h, d);
 	c0_fig_errmap(h, d);
+	c0_html_add(h, "<div class=\"cols\">");
 	c0_fig_lambda(h, d);
+	c0_fig_frc(h, d);
 	c0_fig_drift(h, d);
 	c0_fig_bleach(h, d);
-	c0_fig_frc(h, d);
+	c0_html_add(h, "</div>\n");
 	c0_tab_parameters(h, d);
 	c0_tab_timings(h, d);
 	c0_tab_command(h, d);

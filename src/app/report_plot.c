@@ -107,7 +107,7 @@ void c0_plot_mark(struct c0_html *h, const struct c0_plot *p, double x, double y
 
 void c0_plot_legend(struct c0_html *h, const struct c0_plot *p, int row, const char *colour, int dashed, const char *text)
 {
-	double x = p->w - MR - 150, y = MT + 14 + 15 * row;
+	double x = p->legend_low ? ML + 10 : p->w - MR - 150, y = p->legend_low ? p->h - MB - 10 - 15 * row : MT + 14 + 15 * row;
 	c0_html_printf(h, "<line x1=\"%.0f\" x2=\"%.0f\" y1=\"%.0f\" y2=\"%.0f\" stroke=\"%s\" stroke-width=\"2\"%s/>"
 		       "<text class=\"tick\" x=\"%.0f\" y=\"%.0f\">", x, x + 18, y - 4, y - 4, colour,
 		       dashed ? " stroke-dasharray=\"5 3\"" : "", x + 23, y);

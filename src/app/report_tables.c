@@ -201,7 +201,8 @@ static const struct prow {
 	{ "MA-TIRF solver", "matirf.solver", "--matirf-solver", NULL },
 };
 
-static int given(const cJSON *rep, const char *flags)
+/* the first of flags ("--a|--b") on the command line, or NULL */
+static const char *given(const cJSON *rep, const char *flags)
 {
 	const cJSON *argv = c0_json_at(rep, "argv");
 	for (int i = 0; i < cJSON_GetArraySize(argv); i++) {
@@ -209,11 +210,11 @@ static int given(const cJSON *rep, const char *flags)
 		for (const char *f = flags; a && *f;) {
 			size_t k = strcspn(f, "|");
 			if (!strncmp(a, f, k) && (a[k] == 0 || a[k] == '='))
-				return 1;
+				return a;
 			f += k + (f[k] == '|');
 		}
 	}
-	return 0;
+	return NULL;
 }
 
 /* a value: numbers and strings tagged with their path; long arrays as first ... last */
@@ -244,7 +245,7 @@ static void value(struct c0_html *h, const cJSON *v, const char *path)
 
 static void prow_out(struct c0_html *h, const cJSON *rep, const struct prow *r, const char *path, const char *label)
 {
-	const int g = given(rep, r->flags);
+	const char *g = given(rep, r->flags);
 	const char *how = g ? "given" : r->rule ? "chosen" : "default";
 	c0_html_printf(h, "<tr class=\"%s\"><td>", how);
 	c0_html_escape(h, label);
@@ -252,8 +253,10 @@ static void prow_out(struct c0_html *h, const cJSON *rep, const struct prow *r, 
 	value(h, c0_json_at(rep, path), path);
 	c0_html_printf(h, "</td><td>%s</td><td>", how);
 	if (g) {
+		char flag[64];
+		snprintf(flag, sizeof flag, "%.*s", (int)strcspn(g, "="), g);
 		c0_html_add(h, "on the command line (");
-		c0_html_escape(h, r->flags);
+		c0_html_escape(h, flag);
 		c0_html_add(h, ")");
 	} else
 		c0_html_escape(h, r->rule ? r->rule : "the documented default");
