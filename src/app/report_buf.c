@@ -126,8 +126,16 @@ static void mem_flush(png_structp png)
 	(void)png;
 }
 
-/* libpng into memory; 0 or an error status */
-static int png_encode(int w, int ht, const uint8_t *rgb, struct membuf *m)
+static int all_grey(const uint8_t *rgb, size_t n)
+{
+	for (size_t i = 0; i < n; i++)
+		if (rgb[3 * i] != rgb[3 * i + 1] || rgb[3 * i] != rgb[3 * i + 2])
+			return 0;
+	return 1;
+}
+
+/* libpng into memory; row: NULL for RGB, else room for a grey row */
+static int png_rows(int w, int ht, const uint8_t *rgb, png_bytep row, struct membuf *m)
 {
 	png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
 	png_infop info = png ? png_create_info_struct(png) : NULL;
@@ -136,15 +144,31 @@ static int png_encode(int w, int ht, const uint8_t *rgb, struct membuf *m)
 		return c0_fail(C0_ENOMEM, "report.html: PNG encoding failed");
 	}
 	png_set_write_fn(png, m, mem_write, mem_flush);
-	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)ht, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-		     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)ht, 8, row ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
+		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
 	png_set_compression_level(png, 9);
 	png_write_info(png, info);
-	for (int y = 0; y < ht; y++)
-		png_write_row(png, (png_const_bytep)(rgb + (size_t)y * w * 3));
+	for (int y = 0; y < ht; y++) {
+		const uint8_t *r = rgb + (size_t)y * w * 3;
+		for (int x = 0; row && x < w; x++)
+			row[x] = r[3 * x];
+		png_write_row(png, row ? row : (png_const_bytep)r);
+	}
 	png_write_end(png, info);
 	png_destroy_write_struct(&png, &info);
 	return m->oom ? c0_fail(C0_ENOMEM, "report.html: out of memory") : C0_OK;
+}
+
+/* as 8-bit grey when every pixel is grey (a third of the bytes for the mean
+ * images and the render) */
+static int png_encode(int w, int ht, const uint8_t *rgb, struct membuf *m)
+{
+	png_bytep row = NULL;
+	if (all_grey(rgb, (size_t)w * ht) && !(row = malloc((size_t)w)))
+		return c0_fail(C0_ENOMEM, "report.html: out of memory");
+	int st = png_rows(w, ht, rgb, row, m);
+	free(row);
+	return st;
 }
 
 void c0_html_png(struct c0_html *h, int w, int ht, const uint8_t *rgb)

@@ -65,12 +65,18 @@ int c0_errmap(struct c0_rundir *d)
 	double *model = c0_alloc(n ? n : 1, sizeof *model);
 	int st = model ? C0_OK : C0_ENOMEM;
 	for (int q = 0; q < d->n && !st; q++) {
-		if (!d->mean[q] || !d->inten[q] || !d->bg[q])
+		if (!d->mean[q] || !d->inten || !d->bg[q])
 			continue;
+		char name[64];
+		float *x = NULL;
+		snprintf(name, sizeof name, "intensity_q%02d.tif", q + 1);
 		if (!(d->err[q] = c0_alloc(n, sizeof *d->err[q])))
 			st = C0_ENOMEM;
 		if (!st)
-			st = forward(d, d->inten[q], d->bg[q], model);
+			st = c0_rundir_plane(d, name, 0, &x);
+		if (!st)
+			st = forward(d, x, d->bg[q], model);
+		free(x);
 		if (st)
 			break;
 		stats(d->mean[q], model, n, d->err[q], &d->es[q]);

@@ -55,11 +55,11 @@ struct c0_rundir {
 	const char *grid;
 	double pixel_nm, fwhm_nm;        /* camera pixel, PSF */
 	float *mean[C0_MAX_STACKS];      /* mean_qNN.tif, camera grid (NULL: not written) */
-	float *inten[C0_MAX_STACKS];     /* intensity_qNN.tif, fine grid */
 	float *bg[C0_MAX_STACKS];        /* background_qNN.tif, camera grid */
 	float *err[C0_MAX_STACKS];       /* the residual (report_errmap.c), camera grid */
 	struct c0_errstat es[C0_MAX_STACKS];
-	float *render;                   /* render.tif, n planes of the fine grid */
+	int inten, render;               /* intensity_qNN.tif and render.tif (fine grid) are there, checked;
+					  * read plane by plane (c0_rundir_plane) where drawn */
 	struct c0_depthmap {
 		float *depth, *total;    /* mean depth (nm), and the volume summed over depth */
 		int ny, nx;
@@ -72,6 +72,8 @@ struct c0_rundir {
  * an error names the missing or bad file. */
 int c0_rundir_load(struct c0_rundir *d, const char *dir);
 void c0_rundir_free(struct c0_rundir *d);
+/* Plane `plane` of d's file name (allocated). */
+int c0_rundir_plane(const struct c0_rundir *d, const char *name, int64_t plane, float **out);
 /* d->err and d->es for every stack with a mean, intensity and background. */
 int c0_errmap(struct c0_rundir *d);
 

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PANEL_CSS 192   /* a panel's width on the page, CSS pixels */
+#define PANEL_CSS 184   /* a panel's width on the page, CSS pixels */
 
 static int cmp_float(const void *a, const void *b)
 {
@@ -173,7 +173,7 @@ static void absent(struct c0_html *h, const char *id, const char *title, const c
 void c0_fig_mean(struct c0_html *h, const struct c0_rundir *d)
 {
 	if (!d->n || !d->mean[0]) {
-		absent(h, "mean", "Mean images", "No mean_qNN.tif in this directory (written by runs since report.html was added).");
+		absent(h, "mean", "Mean images", "No mean_qNN.tif here: the command read no stacks (matirf), or the run is older than these files.");
 		return;
 	}
 	section(h, "mean", "Mean images", "The temporal mean of each stack on the camera grid (after drift correction), "
@@ -201,7 +201,14 @@ void c0_fig_render(struct c0_html *h, const struct c0_rundir *d)
 	for (int q = 0; q < d->n; q++) {
 		char cap[512];
 		stack_caption(d, q, cap, sizeof cap);
-		panel(h, d->render + q * L, Ly, Lx, d->pixel_nm / d->srf, GREY, 0, c0_quantile(d->render + q * L, L, 0.999), cap);
+		float *img;
+		int st = c0_rundir_plane(d, "render.tif", q, &img);
+		if (st) {
+			h->st = h->st ? h->st : st;
+			return;
+		}
+		panel(h, img, Ly, Lx, d->pixel_nm / d->srf, GREY, 0, c0_quantile(img, L, 0.999), cap);
+		free(img);
 	}
 	c0_html_add(h, "</div></section>\n");
 }
@@ -225,13 +232,13 @@ static void depth_panel(struct c0_html *h, const struct c0_depthmap *m, double z
 
 static void depth_bar(struct c0_html *h, double z0, double z1)
 {
-	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"70\" height=\"192\" role=\"img\"><defs><linearGradient id=\"zgrad\" "
+	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"70\" height=\"184\" role=\"img\"><defs><linearGradient id=\"zgrad\" "
 		       "x1=\"0\" y1=\"0\" x2=\"0\" y2=\"1\">");
 	for (int k = 0; k < 5; k++)
 		c0_html_printf(h, "<stop offset=\"%d%%\" stop-color=\"rgb(%d,%d,%d)\"/>", 25 * k, (int)(255 * depth_stops[k][0]),
 			       (int)(255 * depth_stops[k][1]), (int)(255 * depth_stops[k][2]));
-	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"176\" fill=\"url(#zgrad)\"/>"
-		       "<text x=\"24\" y=\"16\">%g nm</text><text x=\"24\" y=\"100\">%g</text><text x=\"24\" y=\"186\">%g nm</text>"
+	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"168\" fill=\"url(#zgrad)\"/>"
+		       "<text x=\"24\" y=\"16\">%g nm</text><text x=\"24\" y=\"96\">%g</text><text x=\"24\" y=\"178\">%g nm</text>"
 		       "</svg><figcaption>depth</figcaption></figure>", z0, (z0 + z1) / 2, z1);
 }
 
@@ -253,7 +260,7 @@ void c0_fig_depth(struct c0_html *h, const struct c0_rundir *d)
 
 static void err_bar(struct c0_html *h, double s, int sds)
 {
-	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"90\" height=\"192\" role=\"img\"><defs><linearGradient id=\"egrad\" "
+	c0_html_add(h, "<figure class=\"panel cbar\"><svg width=\"64\" height=\"184\" role=\"img\"><defs><linearGradient id=\"egrad\" "
 		       "x1=\"0\" y1=\"0\" x2=\"0\" y2=\"1\">");
 	for (int k = 0; k <= 8; k++) {
 		float v = (float)(s * (1 - k / 4.0));
@@ -261,8 +268,8 @@ static void err_bar(struct c0_html *h, double s, int sds)
 		c0_cmap_diverging(&v, 1, s, c);
 		c0_html_printf(h, "<stop offset=\"%.1f%%\" stop-color=\"rgb(%d,%d,%d)\"/>", 12.5 * k, c[0], c[1], c[2]);
 	}
-	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"176\" fill=\"url(#egrad)\"/>"
-		       "<text x=\"24\" y=\"16\">+%.3g</text><text x=\"24\" y=\"100\">0</text><text x=\"24\" y=\"186\">\u2212%.3g</text>"
+	c0_html_printf(h, "</linearGradient></defs><rect x=\"4\" y=\"8\" width=\"16\" height=\"168\" fill=\"url(#egrad)\"/>"
+		       "<text x=\"24\" y=\"16\">+%.3g</text><text x=\"24\" y=\"96\">0</text><text x=\"24\" y=\"178\">\u2212%.3g</text>"
 		       "</svg><figcaption>%s</figcaption></figure>", s, s,
 		       sds ? "(data \u2212 model) / noise sd" : "data \u2212 model");
 }

@@ -45,6 +45,41 @@ static int load(const struct c0_rundir *d, const char *name, int64_t planes, int
 	return C0_OK;
 }
 
+/* name holds planes images of ny x nx: checked now, read when drawn */
+static int check(const struct c0_rundir *d, const char *name, int64_t planes, int ny, int nx)
+{
+	char p[4400];
+	struct c0_tiff_reader *t;
+	int st = path_of(d, name, p, sizeof p);
+	if (!st && !exists(d, name))
+		return c0_fail(C0_EIO, "%s: missing (report.json says this run wrote it)", p);
+	if (st || (st = c0_tiff_open(p, &t)))
+		return st;
+	const struct c0_tiff_info *in = c0_tiff_get_info(t);
+	if (in->width != nx || in->height != ny || in->pages != planes)
+		st = c0_fail(C0_EINVAL, "%s: %lldx%lldx%lld, expected %dx%dx%lld (%s's grid, srf and stacks)", p,
+			     (long long)in->width, (long long)in->height, (long long)in->pages, nx, ny, (long long)planes, d->grid);
+	c0_tiff_close(t);
+	return st;
+}
+
+int c0_rundir_plane(const struct c0_rundir *d, const char *name, int64_t plane, float **out)
+{
+	char p[4400];
+	struct c0_tiff_reader *t;
+	int st = path_of(d, name, p, sizeof p);
+	*out = NULL;
+	if (st || (st = c0_tiff_open(p, &t)))
+		return st;
+	const struct c0_tiff_info *in = c0_tiff_get_info(t);
+	if (!(*out = c0_alloc((size_t)in->width * in->height, sizeof **out)))
+		st = C0_ENOMEM;
+	if (!st && (st = c0_tiff_read_f32(t, plane, *out)))
+		free(*out), *out = NULL;
+	c0_tiff_close(t);
+	return st;
+}
+
 static int read_json(struct c0_rundir *d)
 {
 	char p[4400];
@@ -122,15 +157,16 @@ static int load_stacks(struct c0_rundir *d)
 		}
 		if (!st && inten) {
 			snprintf(name, sizeof name, "intensity_q%02d.tif", q + 1);
-			st = load(d, name, 1, Ly, Lx, &d->inten[q]);
+			st = check(d, name, 1, Ly, Lx);
 		}
 		if (!st && inten) {
 			snprintf(name, sizeof name, "background_q%02d.tif", q + 1);
 			st = load(d, name, 1, ny, nx, &d->bg[q]);
 		}
 	}
-	if (!st && c0_json_at(d->rep, "render"))
-		st = load(d, "render.tif", d->n, Ly, Lx, &d->render);
+	d->inten = !st && inten;
+	if (!st && c0_json_at(d->rep, "render") && !(st = check(d, "render.tif", d->n, Ly, Lx)))
+		d->render = 1;
 	return st;
 }
 
@@ -190,8 +226,8 @@ int c0_rundir_load(struct c0_rundir *d, const char *dir)
 void c0_rundir_free(struct c0_rundir *d)
 {
 	for (int q = 0; q < C0_MAX_STACKS; q++)
-		free(d->mean[q]), free(d->inten[q]), free(d->bg[q]), free(d->err[q]);
-	free(d->render), free(d->vol.depth), free(d->vol.total), free(d->base.depth), free(d->base.total);
+		free(d->mean[q]), free(d->bg[q]), free(d->err[q]);
+	free(d->vol.depth), free(d->vol.total), free(d->base.depth), free(d->base.total);
 	cJSON_Delete(d->rep);
 	memset(d, 0, sizeof *d);
 }

@@ -20,7 +20,7 @@ static const char css[] =
 	".sub{color:#555;margin:0 0 10px}.what{color:#555;max-width:980px;margin:4px 0 10px}.absent{color:#888;font-style:italic}"
 	".panels{display:flex;flex-wrap:wrap;gap:12px;align-items:flex-start}"
 	"figure{margin:0}figcaption{font-size:12px;color:#444;max-width:440px;margin-top:3px}"
-	".panel svg{display:block;background:#000}.panel image{image-rendering:pixelated}.cbar svg{background:none}"
+	".panel figcaption{max-width:184px}.cbar figcaption{max-width:80px}.panel svg{display:block;background:#000}.panel image{image-rendering:pixelated}.cbar svg{background:none}"
 	".cbar text{font-size:11px;fill:#333}.bar{fill:#fff;stroke:#000;stroke-width:.6}"
 	".barlabel{fill:#fff;font-size:12px;text-anchor:middle;paint-order:stroke;stroke:#000;stroke-width:2px}"
 	".plot .grid{stroke:#eee}.plot .frame{fill:none;stroke:#999}.plot .tick{font-size:10.5px;fill:#444}"

@@ -66,7 +66,8 @@ static void warn_solves(struct c0_html *h, const struct c0_rundir *d, struct not
 	char line[768];
 	for (int k = 0; k < cJSON_GetArraySize(su); k++) {
 		const cJSON *s = cJSON_GetArrayItem(su, k);
-		const char *name = cJSON_GetStringValue(c0_json_at(s, "stack"));
+		const char *name = cJSON_GetStringValue(c0_json_at(s, "stack")), *sl = name ? strrchr(name, '/') : NULL;
+		name = sl ? sl + 1 : name;
 		double it = c0_json_num(s, "iterations", 0);
 		if (!cJSON_IsFalse(c0_json_at(s, "converged")) || !(cap > 0 && it >= cap))
 			continue;

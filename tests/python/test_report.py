@@ -49,7 +49,7 @@ def refused(p, *needles):
 
 
 def png_decode(data):
-    """(w, h, rows) of an 8-bit RGB PNG, checking signature, CRCs and the
+    """(w, h, pixels) of an 8-bit grey or RGB(A) PNG, checking signature, CRCs and the
     inflated size; raises ValueError otherwise (an independent decoder)"""
     if data[:8] != b"\x89PNG\r\n\x1a\n":
         raise ValueError("no PNG signature")
@@ -62,9 +62,9 @@ def png_decode(data):
             raise ValueError("bad CRC in %s" % kind)
         if kind == b"IHDR":
             w, h, depth, ctype = struct.unpack(">IIBB", body[:10])
-            if depth != 8 or ctype not in (2, 6):
-                raise ValueError("not 8-bit RGB(A)")
-            ch = 3 if ctype == 2 else 4
+            if depth != 8 or ctype not in (0, 2, 6):
+                raise ValueError("not 8-bit grey or RGB(A)")
+            ch = {0: 1, 2: 3, 6: 4}[ctype]
         elif kind == b"IDAT":
             idat += body
         elif kind == b"IEND":
@@ -219,7 +219,7 @@ def browser_checks(tmp, out):
     check(not console, "no console errors: %s" % console[:3])
     if os.path.exists(png):
         w, h, px = png_decode(open(png, "rb").read())
-        rgb = px[..., :3].reshape(-1, 3)
+        rgb = px[..., :3].reshape(-1, px.shape[2] if px.shape[2] < 3 else 3)
         colours = len(np.unique(rgb[::7], axis=0))
         dark = np.mean(rgb.sum(1) < 200)
         check(colours > 200 and dark > 0.02, "screenshot %dx%d not blank: %d colours, %.1f %% dark" % (w, h, colours, 100 * dark))
