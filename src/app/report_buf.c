@@ -126,6 +126,30 @@ static void mem_flush(png_structp png)
 	(void)png;
 }
 
+/* The image's colours when there are at most 256 (a hash of 1024 slots),
+ * else 0; idx: each pixel's entry in pal. */
+static int palette(const uint8_t *rgb, size_t n, png_color *pal, uint8_t *idx)
+{
+	int32_t slot[1024];
+	uint8_t which[1024];
+	int np = 0;
+	memset(slot, 0xff, sizeof slot);
+	for (size_t i = 0; i < n; i++) {
+		int32_t c = rgb[3 * i] << 16 | rgb[3 * i + 1] << 8 | rgb[3 * i + 2];
+		unsigned h = ((unsigned)c * 2654435761u) >> 22;
+		while (slot[h] >= 0 && slot[h] != c)
+			h = (h + 1) & 1023;
+		if (slot[h] < 0) {
+			if (np == 256)
+				return 0;
+			slot[h] = c, which[h] = (uint8_t)np;
+			pal[np++] = (png_color){ rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2] };
+		}
+		idx[i] = which[h];
+	}
+	return np;
+}
+
 static int all_grey(const uint8_t *rgb, size_t n)
 {
 	for (size_t i = 0; i < n; i++)
@@ -134,8 +158,10 @@ static int all_grey(const uint8_t *rgb, size_t n)
 	return 1;
 }
 
-/* libpng into memory; row: NULL for RGB, else room for a grey row */
-static int png_rows(int w, int ht, const uint8_t *rgb, png_bytep row, struct membuf *m)
+/* libpng into memory: 8-bit grey (grey: idx holds the levels), indexed with
+ * np colours (idx), else RGB */
+static int png_rows(int w, int ht, const uint8_t *rgb, int grey, const png_color *pal, int np, const uint8_t *idx,
+		    struct membuf *m)
 {
 	png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
 	png_infop info = png ? png_create_info_struct(png) : NULL;
@@ -144,30 +170,39 @@ static int png_rows(int w, int ht, const uint8_t *rgb, png_bytep row, struct mem
 		return c0_fail(C0_ENOMEM, "report.html: PNG encoding failed");
 	}
 	png_set_write_fn(png, m, mem_write, mem_flush);
-	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)ht, 8, row ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
-		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-	png_set_compression_level(png, 9);
+	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)ht, 8,
+		     grey ? PNG_COLOR_TYPE_GRAY : np ? PNG_COLOR_TYPE_PALETTE : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+		     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+	if (np && !grey)
+		png_set_PLTE(png, info, pal, np);
+	png_set_compression_level(png, 6);
 	png_write_info(png, info);
-	for (int y = 0; y < ht; y++) {
-		const uint8_t *r = rgb + (size_t)y * w * 3;
-		for (int x = 0; row && x < w; x++)
-			row[x] = r[3 * x];
-		png_write_row(png, row ? row : (png_const_bytep)r);
-	}
+	for (int y = 0; y < ht; y++)
+		png_write_row(png, grey || np ? idx + (size_t)y * w : rgb + (size_t)y * w * 3);
 	png_write_end(png, info);
 	png_destroy_write_struct(&png, &info);
 	return m->oom ? c0_fail(C0_ENOMEM, "report.html: out of memory") : C0_OK;
 }
 
-/* as 8-bit grey when every pixel is grey (a third of the bytes for the mean
- * images and the render) */
+/* as grey when every pixel is (the mean images, the render), indexed when
+ * the image has at most 256 colours (the error map's 33 levels): a third
+ * of the bytes or less */
 static int png_encode(int w, int ht, const uint8_t *rgb, struct membuf *m)
 {
-	png_bytep row = NULL;
-	if (all_grey(rgb, (size_t)w * ht) && !(row = malloc((size_t)w)))
+	png_color pal[256];
+	uint8_t *idx = malloc((size_t)w * ht);
+	if (!idx)
 		return c0_fail(C0_ENOMEM, "report.html: out of memory");
-	int st = png_rows(w, ht, rgb, row, m);
-	free(row);
+	const size_t n = (size_t)w * ht;
+	const int grey = all_grey(rgb, n);
+	int np = 0;
+	if (grey)
+		for (size_t i = 0; i < n; i++)
+			idx[i] = rgb[3 * i];
+	else
+		np = palette(rgb, n, pal, idx);
+	int st = png_rows(w, ht, rgb, grey, pal, np, idx, m);
+	free(idx);
 	return st;
 }
 

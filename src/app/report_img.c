@@ -70,7 +70,7 @@ void c0_cmap_diverging(const float *img, size_t n, double s, uint8_t *rgb)
 {
 	static const double red[3] = { 0.70, 0.09, 0.17 }, blue[3] = { 0.13, 0.40, 0.67 };
 	for (size_t i = 0; i < n; i++) {
-		double t = s > 0 ? fmax(-1, fmin(1, img[i] / s)) : 0;
+		double t = s > 0 ? round(16 * fmax(-1, fmin(1, img[i] / s))) / 16 : 0;   /* 33 levels */
 		const double *c = t > 0 ? red : blue;
 		for (int k = 0; k < 3; k++)   /* white at 0, full colour at |t| = 1 */
 			rgb[3 * i + k] = byte(1 + fabs(t) * (c[k] - 1));

@@ -49,11 +49,11 @@ def refused(p, *needles):
 
 
 def png_decode(data):
-    """(w, h, pixels) of an 8-bit grey or RGB(A) PNG, checking signature, CRCs and the
+    """(w, h, pixels) of an 8-bit grey, RGB(A) or indexed PNG, checking signature, CRCs and the
     inflated size; raises ValueError otherwise (an independent decoder)"""
     if data[:8] != b"\x89PNG\r\n\x1a\n":
         raise ValueError("no PNG signature")
-    pos, idat, w = 8, b"", None
+    pos, idat, w, plte = 8, b"", None, None
     while pos < len(data):
         n, kind = struct.unpack(">I4s", data[pos:pos + 8])
         body = data[pos + 8:pos + 8 + n]
@@ -62,9 +62,11 @@ def png_decode(data):
             raise ValueError("bad CRC in %s" % kind)
         if kind == b"IHDR":
             w, h, depth, ctype = struct.unpack(">IIBB", body[:10])
-            if depth != 8 or ctype not in (0, 2, 6):
-                raise ValueError("not 8-bit grey or RGB(A)")
-            ch = {0: 1, 2: 3, 6: 4}[ctype]
+            if depth != 8 or ctype not in (0, 2, 3, 6):
+                raise ValueError("not 8-bit grey, RGB(A) or indexed")
+            ch = {0: 1, 2: 3, 3: 1, 6: 4}[ctype]
+        elif kind == b"PLTE":
+            plte = np.frombuffer(body, np.uint8).reshape(-1, 3)
         elif kind == b"IDAT":
             idat += body
         elif kind == b"IEND":
@@ -94,7 +96,12 @@ def png_decode(data):
                 line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
         out.append(bytes(line))
         prev = line
-    return w, h, np.frombuffer(b"".join(out), np.uint8).reshape(h, w, ch)
+    px = np.frombuffer(b"".join(out), np.uint8).reshape(h, w, ch)
+    if ctype == 3:
+        if px.max() >= len(plte):
+            raise ValueError("index beyond the palette")
+        px = plte[px[..., 0]]
+    return w, h, px
 
 
 def json_at(rep, path):
