@@ -368,6 +368,12 @@ def main():
         p = cli("report", out)
         check(p.returncode == 0 and open(os.path.join(out, "report.html"), encoding="utf-8").read() == html,
               "col0rme report writes the run's page again, byte for byte: %s" % p.stderr.strip())
+        # support writes its part: the mean, the lambda curve and the FRC
+        sup = os.path.join(tmp, "support")
+        p = cli("support", "--fwhm", "229", "-o", sup, stacks[0])
+        page = open(os.path.join(sup, "report.html"), encoding="utf-8").read() if p.returncode == 0 else ""
+        check(all('<section id="%s"' % i in page for i in IDS) and "<polyline" in page
+              and len(re.findall(r"data:image/png", page)) == 1, "support writes a page with its part: %s" % p.stderr.strip())
         browser_checks(tmp, out)
         bad_input(tmp, out)
         validation(tmp, data, stacks[0])
