@@ -158,6 +158,10 @@ int c0_run(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, st
 /* Writes the files `col0rme run` writes into outdir (created; must be empty
  * unless force; never the directory of an input). On failure nothing is left. */
 int c0_result_write(const struct c0_result *r, const char *outdir, int force);
+/* OUTDIR/report.html (and error_qNN.tif) from an output directory's files
+ * alone: report.json and the TIFFs a run wrote (c0_result_write calls it
+ * last). On failure nothing is written. */
+int c0_report_html(const char *outdir);
 /* One step alone, as `col0rme support` and `col0rme matirf` do. The support of
  * each stack, joined (support and report). */
 int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out);

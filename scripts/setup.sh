@@ -8,7 +8,8 @@ PKGS=(build-essential cmake pkg-config libtiff-dev libtiff-tools libcjson-dev li
       python3-numpy python3-tifffile clang libclang-rt-14-dev libomp-14-dev
       libopenmpi-dev openmpi-bin
       python3-venv python3-pip python3-setuptools python3-wheel python3-pytest binutils
-      default-jdk-headless imagej xvfb)
+      default-jdk-headless imagej xvfb
+      chromium)
 
 missing=()
 for p in "${PKGS[@]}"; do

@@ -4,6 +4,7 @@
     support(stacks, pixel_size=..., fwhm=..., **options)         -> Result (support only)
     matirf(images, angles=..., pixel_size=..., **options)        -> Result (volume, depth, z_nm)
     simulate(**parameters)                                       -> Simulation
+    report(outdir)                        -> path of outdir/report.html (written again from its files)
     parameters()                                                 -> {name: help}
     library()                                                    -> path of the libcol0rme in use
 
@@ -21,7 +22,7 @@ import numpy as np
 
 from . import _lib
 
-__all__ = ["Error", "Result", "Simulation", "run", "support", "matirf", "simulate", "parameters", "version",
+__all__ = ["Error", "Result", "Simulation", "run", "support", "matirf", "simulate", "report", "parameters", "version",
            "library"]
 
 _c = None
@@ -172,13 +173,20 @@ class Result:
         self.report = json.loads(j.decode()) if j else {}
 
     def write(self, outdir, force=False):
-        """Writes the files `col0rme run` writes (volume.tif, report.json, ...)."""
+        """Writes the files `col0rme run` writes (volume.tif, report.json, report.html, ...)."""
         _check(_L().c0_result_write(self._h, os.fsencode(outdir), int(bool(force))))
 
     def __del__(self):
         if getattr(self, "_h", None):
             self._free(self._h)
             self._h = None
+
+
+def report(outdir):
+    """Writes outdir/report.html (and error_qNN.tif) again from the files of
+    an earlier run in outdir, as `col0rme report` does; returns its path."""
+    _check(_L().c0_report_html(os.fsencode(outdir)))
+    return os.path.join(outdir, "report.html")
 
 
 def _result(call, *args):

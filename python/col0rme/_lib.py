@@ -72,6 +72,7 @@ def _declare(lib):
         "c0_run_support": (I, [P, ctypes.POINTER(Stack), I, ctypes.POINTER(P)]),
         "c0_run_matirf": (I, [P, ctypes.POINTER(FP), I, I, I, ctypes.POINTER(P)]),
         "c0_result_write": (I, [P, S, I]),
+        "c0_report_html": (I, [S]),
         "c0_result_nstacks": (I, [P]),
         "c0_result_support": (ctypes.POINTER(ctypes.c_uint8), [P, IP, IP]),
         "c0_result_intensity": (FP, [P, I, IP, IP]),

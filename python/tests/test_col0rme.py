@@ -88,6 +88,22 @@ def test_run_on_paths_and_write(data, cli_run, tmp_path):
         r.write(tmp_path / "out")   # not empty, no force
 
 
+def test_report_page(cli_run, tmp_path):
+    """col0rme.report writes report.html again from a run's files; a directory
+    that is not a run's output raises and gets nothing"""
+    page = (cli_run / "report.html").read_text(encoding="utf-8")
+    (tmp_path / "copy").mkdir()
+    for f in os.listdir(cli_run):
+        if f != "report.html":
+            (tmp_path / "copy" / f).write_bytes((cli_run / f).read_bytes())
+    path = col0rme.report(str(tmp_path / "copy"))
+    assert open(path, encoding="utf-8").read() == page
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(col0rme.Error, match="not a col0rme output directory"):
+        col0rme.report(str(tmp_path / "empty"))
+    assert not os.listdir(tmp_path / "empty")
+
+
 def test_options_reach_the_library(data):
     _, _, stacks = data
     r = col0rme.run(stacks[:1], pixel_size=100, fwhm=229, penalty="cel0", srf=2, lam=1e-4)

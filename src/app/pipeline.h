@@ -48,6 +48,7 @@ struct c0_result {
 	uint8_t *mask;               /* Ly x Lx union of the supports (or the given mask) */
 	int Ly, Lx;
 	struct c0_intensity_result *ires; /* n, after the intensity step */
+	float *mean;                 /* n planes of the camera grid: each stack's temporal mean (intensity step) */
 	float **corrected;           /* n temporal means minus background, for the baseline */
 	struct c0_matirf_result vol, base;
 	double bleach_factor[C0_MAX_STACKS]; /* each stack's intensity is divided by this before MA-TIRF (1: none) */

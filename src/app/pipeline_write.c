@@ -54,6 +54,28 @@ static int write_intensity(const struct c0_result *r, struct c0_outdir *out)
 	return C0_OK;
 }
 
+/* mean_qNN.tif: each stack's temporal mean (camera grid), from the
+ * intensity step or, without it, the support step (report.html's error map
+ * and mean images read them) */
+static int write_means(const struct c0_result *r, struct c0_outdir *out)
+{
+	const int ny = r->Ly / r->srf, nx = r->Lx / r->srf, nk = r->mean ? r->n : r->nsup;
+	const size_t L = (size_t)ny * nx;
+	float *img = r->mean ? NULL : c0_alloc(L, sizeof *img);
+	int st = r->mean || img ? C0_OK : C0_ENOMEM;
+	for (int k = 0; k < nk && !st; k++) {
+		char name[64];
+		struct c0_tiff_wopts o = { .width = nx, .height = ny, .dtype = C0_F32, .pixel_size_nm = r->pixel_nm,
+					   .software = "col0rme" };
+		for (size_t p = 0; img && p < L; p++)
+			img[p] = (float)r->sres[k].mean[p];
+		snprintf(name, sizeof name, "mean_q%02d.tif", (r->mean ? k : r->sup[k]) + 1);
+		st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, r->mean ? r->mean + k * L : img);
+	}
+	free(img);
+	return st;
+}
+
 /* PREFIXvolume.tif, PREFIXdepth.tif (mean depth) and PREFIXdepth.png */
 static int write_volume(const struct c0_result *r, const struct c0_matirf_result *v, double pixel_nm,
 			const char *prefix, struct c0_outdir *out)
@@ -117,12 +139,16 @@ int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out)
 		st = write_support(r, out);
 	if (!st && r->ires)
 		st = write_intensity(r, out);
+	if (!st && (r->mean || r->sres))
+		st = write_means(r, out);
 	if (!st && r->vol.f)
 		st = write_volume(r, &r->vol, r->vol_pixel_nm, "", out);
 	if (!st && r->base.f)
 		st = write_volume(r, &r->base, r->pixel_nm, "baseline_", out);
 	if (!st)
 		st = c0_report_write(r->rep, c0_outdir_file(out, "report.json"));
+	if (!st)   /* the page, from the files just written (app/report_html.h) */
+		st = c0_report_html(out->stage);
 	return st;
 }
 

@@ -77,6 +77,9 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 	for (int i = 0; i < r->n; i++)
 		cJSON_AddItemToArray(arr, intensity_stack(r->names[i], &r->ires[i], ic, frames[i], tc[i]));
 	cJSON *p = cJSON_AddObjectToObject(rep, "intensity_parameters");
+	cJSON_AddNumberToObject(p, "pixel_size_nm", ic->pixel_nm);   /* the forward model, for report.html's error map */
+	cJSON_AddNumberToObject(p, "fwhm_nm", ic->fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", ic->srf);
 	static const char *bg[] = { "none", "constant", "smooth" };
 	cJSON_AddStringToObject(p, "background", bg[ic->background]);
 	cJSON_AddNumberToObject(p, "beta", ic->beta);

@@ -62,7 +62,7 @@ void c0_result_free(struct c0_result *r)
 			free(r->corrected[q]);
 	}
 	free(r->sres), free(r->ires), free(r->corrected), free(r->mask), free(r->names), free(r->json);
-	c0_drift_free(r->drift), free(r->render);
+	c0_drift_free(r->drift), free(r->render), free(r->mean);
 	c0_matirf_result_free(&r->vol), c0_matirf_result_free(&r->base);
 	cJSON_Delete(r->rep);
 	free(r);

@@ -159,6 +159,8 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 			continue;
 		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], &r->ires[i],
 					 corrected ? &r->corrected[i] : NULL);
+		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
+			r->mean[(size_t)i * H * W + p] = (float)(known[i] ? known[i]->mean : own[i])[p];
 		if (sts[i])
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 #pragma omp critical(c0_intensity_progress)
@@ -184,9 +186,10 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	int sts[C0_MAX_STACKS];
 	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
 	r->ires = c0_alloc((size_t)n, sizeof *r->ires);
+	r->mean = c0_alloc((size_t)n * f[0].height * f[0].width, sizeof *r->mean);
 	if (corrected)
 		r->corrected = c0_alloc((size_t)n, sizeof *r->corrected);
-	if (!msg || !r->ires || (corrected && !r->corrected)) {
+	if (!msg || !r->ires || !r->mean || (corrected && !r->corrected)) {
 		free(msg);
 		return C0_ENOMEM;
 	}

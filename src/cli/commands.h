@@ -9,6 +9,7 @@ int cmd_intensity(int argc, char **argv);
 int cmd_matirf(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_params(int argc, char **argv);
+int cmd_report(int argc, char **argv);
 
 /* Shared by subcommands: print "col0rme CMD: error: MSG" and return 1. */
 int c0_cli_error(const char *cmd);

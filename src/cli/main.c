@@ -26,6 +26,7 @@ static const struct {
 	{ "params", cmd_params, "every run parameter: name, option, default, meaning (Markdown)" },
 	{ "matirf", cmd_matirf, "MA-TIRF axial reconstruction from one image per angle" },
 	{ "run", cmd_run, "the whole method: support, intensities, MA-TIRF volume" },
+	{ "report", cmd_report, "report.html again from an output directory's files" },
 	{ "support", cmd_support, "COL0RME support estimation from the stacks' covariance" },
 };
 
