@@ -2,6 +2,7 @@
  * each calibrated, through an output directory that is rolled back on
  * failure. */
 #include "app/pipeline.h"
+#include "app/drift_out.h"
 #include "stages/depthcode.h"
 #include "io/png.h"
 #include "io/tiff.h"
