@@ -34,6 +34,9 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 		return c0_fail(C0_EINVAL, "matirf_background_smooth %g: must be >= 0", c->bg_smooth);
 	if (!(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
 		return c0_fail(C0_EINVAL, "psf_fwhm_nm: %g pixels sigma, must be in [0, 12]", c->psf_sigma_px);
+	if (c->psf_sigma_px > 0 && (c->solver == C0_MATIRF_EXACT || c->solver == C0_MATIRF_APG))
+		return c0_fail(C0_EINVAL, "matirf_solver %s: its per-pixel data step has no room for the PSF blur of psf_fwhm_nm; "
+			       "use diag (or auto, which takes diag with psf_fwhm_nm)", c->solver == C0_MATIRF_APG ? "apg" : "exact");
 	if (!(c->gamma > 0))
 		return c0_fail(C0_EINVAL, "matirf: gamma %g must be > 0", c->gamma);
 	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))

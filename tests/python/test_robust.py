@@ -275,6 +275,39 @@ def test_calibration(tmp, s16):
     check("show them in nm" not in guide and "µm" in guide, "the guide says the calibration unit is µm")
 
 
+def matirf_images(tmp, stacks):
+    """one 2D image per angle: each stack's mean less the camera offset"""
+    imgs = []
+    for q, s in enumerate(stacks):
+        f = os.path.join(tmp, "mean_q%02d.tif" % (q + 1))
+        tifffile.imwrite(f, tifffile.imread(s).astype(np.float32).mean(axis=0) - 100)
+        imgs.append(f)
+    return imgs
+
+
+def solver_of(out):
+    return json.load(open(os.path.join(out, "report.json")))["matirf"]["solver"]
+
+
+def test_matirf_psf(tmp, big):
+    """issue 33: with --psf-fwhm an explicit --matirf-solver is obeyed or refused naming it, auto says what
+    it chose when that is not its documented apg"""
+    imgs = matirf_images(tmp, big)
+    out = os.path.join(tmp, "psf_out")
+    base = ["matirf", "--angles", "62,66", "--pixel-size", "100", "--matirf-iterations", "200", "-o", out]
+    for s in ("apg", "exact"):
+        check(refused(cli(*base, "--psf-fwhm", "240", "--matirf-solver", s, *imgs), "--matirf-solver " + s, "--psf-fwhm"),
+              "matirf --matirf-solver %s --psf-fwhm refused naming the solver" % s)
+    check(not os.path.exists(out), "nothing written by the refusals")
+    p = cli(*base, "--psf-fwhm", "240", "--matirf-solver", "diag", *imgs)
+    check(p.returncode == 0 and solver_of(out) == "diag" and "auto" not in p.stderr, "explicit diag obeyed, quietly")
+    p = cli(*base, "--force", "--psf-fwhm", "240", *imgs)
+    check(p.returncode == 0 and solver_of(out) == "diag" and "--matirf-solver auto: diag" in p.stderr,
+          "auto with --psf-fwhm says it takes diag: %r" % p.stderr)
+    p = cli(*base, "--force", *imgs)
+    check(p.returncode == 0 and solver_of(out) == "apg" and "auto" not in p.stderr, "auto without --psf-fwhm: apg, quietly")
+
+
 with tempfile.TemporaryDirectory() as tmp:
     s16 = simulate(tmp, "d16", 16, 16, 40)
     s20 = simulate(tmp, "d20", 20, 16, 40)
@@ -285,4 +318,5 @@ with tempfile.TemporaryDirectory() as tmp:
     test_channels(tmp, s16)
     test_calibration(tmp, s16)
     test_outdir_messages(tmp, s16)
+    test_matirf_psf(tmp, big)
 done()
