@@ -33,7 +33,7 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (!(c->bg_smooth >= 0))
 		return c0_fail(C0_EINVAL, "matirf_background_smooth %g: must be >= 0", c->bg_smooth);
 	if (!(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
-		return c0_fail(C0_EINVAL, "psf_fwhm_nm: %g pixels sigma, must be in [0, 12]", c->psf_sigma_px);
+		return c0_fail(C0_EINVAL, "psf_fwhm_nm: a PSF of %g pixels sigma: must be finite, in [0, 12]", c->psf_sigma_px);
 	if (c->psf_sigma_px > 0 && (c->solver == C0_MATIRF_EXACT || c->solver == C0_MATIRF_APG))
 		return c0_fail(C0_EINVAL, "matirf_solver %s: its per-pixel data step has no room for the PSF blur of psf_fwhm_nm; "
 			       "use diag (or auto, which takes diag with psf_fwhm_nm)", c->solver == C0_MATIRF_APG ? "apg" : "exact");
@@ -121,6 +121,15 @@ int c0_matirf_nz(const struct c0_matirf_conf *c)
 int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 		    const float *const *x, int ny, int nx, struct c0_matirf_result *res)
 {
+	/* a wider PSF is no longer a lateral blur of this field but most of it */
+	const double fw = c->psf_sigma_px * sqrt(8 * log(2.0));
+	memset(res, 0, sizeof *res);
+	int st = c0_matirf_check(c, nq, angles);
+	if (st)
+		return st;
+	if (fw > (ny < nx ? ny : nx) / 4.0)
+		return c0_fail(C0_EINVAL, "psf_fwhm_nm: a FWHM of %.3g pixels is wider than a quarter of the %dx%d field", fw,
+			       nx, ny);
 	return matirf_level(c, nq, angles, gain, x, ny, nx, 0, c->coarse, NULL, res);
 }
 

@@ -306,6 +306,12 @@ def test_matirf_psf(tmp, big):
           "auto with --psf-fwhm says it takes diag: %r" % p.stderr)
     p = cli(*base, "--force", *imgs)
     check(p.returncode == 0 and solver_of(out) == "apg" and "auto" not in p.stderr, "auto without --psf-fwhm: apg, quietly")
+    # bad FWHMs: one line naming --psf-fwhm before the solve (1200 nm = 12 px, over a quarter of 40 px)
+    bad = os.path.join(tmp, "psf_bad")
+    for v, why in (("-5", "positive"), ("nan", "number"), ("inf", "finite"), ("1200", "quarter of the 40x40 field")):
+        check(refused(cli(*base[:-1], bad, "--matirf-solver", "diag", "--psf-fwhm", v, *imgs), "--psf-fwhm", why),
+              "--psf-fwhm %s refused naming it" % v)
+    check(not os.path.exists(bad), "nothing written by the refused FWHMs")
 
 
 with tempfile.TemporaryDirectory() as tmp:
