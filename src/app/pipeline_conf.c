@@ -206,7 +206,7 @@ void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
 	m->pdhg.maxit = c->matirf_iterations, m->pdhg.tol = c->matirf_tol;
 	/* measured: apg takes half the CPU of exact and diag on the 350x350 phantom
 	 * and less in the pipeline, with the same depths (docs/parameters.md) */
-	m->solver = c->matirf_solver != C0_MATIRF_AUTO ? c->matirf_solver : c->psf_fwhm_nm != 0 ? C0_MATIRF_DIAG : C0_MATIRF_APG;
+	m->solver = c->matirf_solver != C0_MATIRF_AUTO ? c->matirf_solver : C0_MATIRF_APG;
 	/* measured: 2 levels take apg from 343 to 71 full-grid iterations on the
 	 * 350x350 phantom (2.3x less CPU), depths 0.45 nm from the cold start's
 	 * (docs/parameters.md) */

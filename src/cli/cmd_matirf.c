@@ -4,7 +4,6 @@
 #include "io/tiff.h"
 #include "core/err.h"
 
-#include <stdio.h>
 #include <stdlib.h>
 
 static const char *const params[] = { "pixel_nm", C0_MATIRF_PARAMS, "offset", "matirf_background", "estimate_background",
@@ -26,8 +25,6 @@ int cmd_matirf(int argc, char **argv)
 	const int ni = k.n;
 	struct c0_matirf_conf mc;
 	c0_run_conf_matirf(&k.m.c, &mc);
-	if (k.m.c.matirf_solver == C0_MATIRF_AUTO && mc.solver != C0_MATIRF_APG)   /* not the documented choice */
-		fprintf(stderr, "col0rme matirf: --matirf-solver auto: diag, the solver that models --psf-fwhm's blur\n");
 	int st = c0_run_conf_matirf_check(&k.m.c, &mc, ni), is_file[C0_MAX_STACKS];
 	float *data[C0_MAX_STACKS] = { 0 };
 	struct c0_tiff_info in[C0_MAX_STACKS];

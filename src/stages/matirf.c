@@ -3,6 +3,7 @@
  * objective; the steps themselves are in matirf_steps.c and matirf_exact.c
  * (matirf_ctx.h says which file holds what). */
 #include "stages/matirf_ctx.h"
+#include "ops/tirfop.h"
 #include "optics/psf.h"
 #include "solve/prox_schatten.h"
 #include "core/clock.h"
@@ -34,9 +35,6 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 		return c0_fail(C0_EINVAL, "matirf_background_smooth %g: must be >= 0", c->bg_smooth);
 	if (!(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
 		return c0_fail(C0_EINVAL, "psf_fwhm_nm: a PSF of %g pixels sigma: must be finite, in [0, 12]", c->psf_sigma_px);
-	if (c->psf_sigma_px > 0 && (c->solver == C0_MATIRF_EXACT || c->solver == C0_MATIRF_APG))
-		return c0_fail(C0_EINVAL, "matirf_solver %s: its per-pixel data step has no room for the PSF blur of psf_fwhm_nm; "
-			       "use diag (or auto, which takes diag with psf_fwhm_nm)", c->solver == C0_MATIRF_APG ? "apg" : "exact");
 	if (!(c->gamma > 0))
 		return c0_fail(C0_EINVAL, "matirf: gamma %g must be > 0", c->gamma);
 	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
@@ -75,19 +73,26 @@ void c0_matirf_result_free(struct c0_matirf_result *r)
 	memset(r, 0, sizeof *r);
 }
 
-/* The objective at u (scaled units): 1/2 ||W u - b||^2 + kappa R(u) + l1 sum u,
+/* The objective at u (scaled units): 1/2 ||B W u - b||^2 + kappa R(u) + l1 sum u,
  * to compare solvers; work: ncomp N floats. */
 static double objective(struct matirf_ctx *c, const float *u, float *work)
 {
 	const size_t M = c->M, N = c->N;
 	double data = 0, reg = 0, l1 = 0;
-	for (size_t k = 0; k < M; k++)
-		for (int q = 0; q < c->nq; q++) {
-			double s = -c->b[q * M + k];
-			for (int j = 0; j < c->nz; j++)
-				s += c->W[q * c->nz + j] * u[j * M + k];
-			data += 0.5 * s * s;
-		}
+	if (c->blur.k) {          /* 1/2 ||B W u - b||^2 */
+		const struct c0_tirfop w = { c->nq, c->nz, M, c->W };
+		c0_tirfop_forward(&w, u, c->dwork);
+		c0_blur2_apply(&c->blur, c->dwork, c->nq);
+		for (size_t i = 0; i < (size_t)c->nq * M; i++)
+			data += 0.5 * ((double)c->dwork[i] - c->b[i]) * ((double)c->dwork[i] - c->b[i]);
+	} else
+		for (size_t k = 0; k < M; k++)
+			for (int q = 0; q < c->nq; q++) {
+				double s = -c->b[q * M + k];
+				for (int j = 0; j < c->nz; j++)
+					s += c->W[q * c->nz + j] * u[j * M + k];
+				data += 0.5 * s * s;
+			}
 	for (size_t i = 0; i < N; i++)
 		l1 += u[i];
 	if (c->reg == C0_REG_TV) {
@@ -191,8 +196,7 @@ static int level_grid(struct level *L, const struct c0_matirf_conf *c, int nq, c
 		return st;
 	ctx->M = ctx->g.M, ctx->N = (size_t)ctx->g.M * nz;
 	ctx->ncomp = c->reg == C0_REG_TV ? ctx->g.nc : 6;
-	/* the exact solver's per-pixel prox has no room for a lateral blur */
-	ctx->exact = (c->solver == C0_MATIRF_EXACT || c->solver == C0_MATIRF_APG) && nz <= C0_NNQP_MAX && !(c->psf_sigma_px > 0);
+	ctx->exact = (c->solver == C0_MATIRF_EXACT || c->solver == C0_MATIRF_APG) && nz <= C0_NNQP_MAX;
 	ctx->apg = ctx->exact && c->solver == C0_MATIRF_APG;
 	ctx->ny = ny, ctx->nx = nx, ctx->bg_smooth = c->bg_smooth;
 	return C0_OK;
@@ -217,6 +221,9 @@ static int level_alloc(struct level *L, const struct c0_matirf_conf *c, size_t n
 			st = C0_ENOMEM;
 	}
 	if ((c->psf_sigma_px > 0 || c->bg_smooth > 0) && !(ctx->dwork = c0_alloc(nd, sizeof(float))))
+		st = C0_ENOMEM;
+	if (c->psf_sigma_px > 0 && ctx->exact &&
+	    (!(ctx->dwork2 = c0_alloc(nd, sizeof(float))) || !(ctx->corr = c0_alloc(N, sizeof(float)))))
 		st = C0_ENOMEM;
 	if (c->bg_smooth > 0) {
 		ctx->bg = c0_alloc(M, sizeof *ctx->bg), ctx->bgd = c0_alloc(M, sizeof *ctx->bgd), ctx->bgr = c0_alloc(M, sizeof *ctx->bgr);
@@ -247,7 +254,8 @@ static void level_free(struct level *L)
 	struct matirf_ctx *ctx = &L->ctx;
 	c0_grad3m_free(&ctx->g);
 	free(L->b), free(L->u), free(L->y), free(L->tau), free(ctx->d.work), free(ctx->c);
-	free(ctx->blur.work), free(ctx->dwork), free(ctx->bg), free(ctx->bgd), free(ctx->bgr), free(L->b0);
+	free(ctx->blur.work), free(ctx->dwork), free(ctx->dwork2), free(ctx->corr);
+	free(ctx->bg), free(ctx->bgd), free(ctx->bgr), free(L->b0);
 }
 
 /* the scaled data of the columns (and its copy when the background moves it) */
@@ -321,8 +329,8 @@ static struct c0_pdhg_problem level_problem(struct level *L, const struct c0_mat
 	return pb;
 }
 
-/* the coarse start: the apg and exact solvers with TV (no background, no
- * blur), on grids large enough to bin; u and y from the coarse levels */
+/* the coarse start: the apg and exact solvers with TV (no background), on
+ * grids large enough to bin; u and y from the coarse levels */
 static int level_warm(struct level *L, const struct c0_matirf_conf *c, int nq, const double *angles,
 		      const double *gain, const float *const *x, int ny, int nx, int coarse, int *iters)
 {

@@ -36,6 +36,7 @@ int matirf_coarse_start(const struct c0_matirf_conf *c, int nq, const double *an
 	}
 	struct c0_matirf_conf cc = *c;
 	cc.kappa = c->kappa / 2, cc.wz = c->wz * 2;
+	cc.psf_sigma_px = c->psf_sigma_px / 2;   /* the PSF binned with the images */
 	struct c0_matirf_result r;
 	if ((st = matirf_level(&cc, nq, angles, gain, xc, cy, cx, mx, levels - 1, yc, &r)))
 		goto out;

@@ -36,6 +36,10 @@ struct matirf_ctx {
 	 * each angle's image (full grid); work: nq M floats */
 	struct c0_blur2 blur;
 	float *dwork;
+	/* the exact and apg solvers with a blur: W^T W majorises W^T B^2 W
+	 * (||B|| <= 1), so their per-pixel step stays, its gradient corrected by
+	 * corr = W^T (I - B^2) W x (N floats; work: dwork2, nq M floats) */
+	float *corr, *dwork2;
 	/* background estimation: b = b0 - bg, bg updated from the residual every
 	 * BG_EVERY iterations; u is the solver's primal iterate */
 	const float *b0, *u;
@@ -93,6 +97,8 @@ void matirf_primal_fused_apg(void *vc, const float *y, float *x, float *t, float
 void matirf_background_update(struct matirf_ctx *c, const double *W);
 /* the exact and apg solvers' steps, H, its inverse and c (matirf_exact.c) */
 void matirf_exact_setup(struct matirf_ctx *x, const struct c0_matirf_conf *c, const double *W);
+/* their per-voxel c = W^T B b - l1 from the current data b */
+void matirf_exact_rhs(struct matirf_ctx *x);
 
 /* One level of the solve: mx0 > 0 fixes the data scale (a coarse level
  * solves in the fine level's units); coarse: levels of warm start below it;

@@ -2,8 +2,49 @@
  * per lateral pixel, a small non-negative quadratic program (the dual holds
  * only the regulariser's rows), and the steps and matrices it needs. */
 #include "stages/matirf_ctx.h"
+#include "ops/tirfop.h"
 
 #include <string.h>
+
+void matirf_exact_rhs(struct matirf_ctx *x)
+{
+	const int nz = x->nz, nq = x->nq;
+	const size_t M = x->M;
+	const double *W = x->W;
+	const float *b = x->b;
+	if (x->blur.k) {          /* B b, B being its own adjoint */
+		memcpy(x->dwork, b, sizeof(float) * nq * M);
+		c0_blur2_apply(&x->blur, x->dwork, nq);
+		b = x->dwork;
+	}
+	for (int j = 0; j < nz; j++)
+		for (size_t k = 0; k < M; k++) {
+			double s = -x->l1;
+			for (int q = 0; q < nq; q++)
+				s += W[q * nz + j] * b[q * M + k];
+			x->c[j * M + k] = (float)s;
+		}
+}
+
+/* With a blur the data term 1/2 ||B W u - b||^2 couples the pixels, but B is
+ * a normalised non-negative kernel (||B|| <= 1), so 1/2 (u - x)^T W^T W (u - x)
+ * majorises its curvature: the per-pixel step keeps H and takes the
+ * gradient's remainder corr = W^T (I - B^2) W x as a forward step (Condat-Vu
+ * in the metric H). Without a blur corr is 0 and the step is exact's. */
+static void blur_correction(struct matirf_ctx *c, const float *x)
+{
+	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
+	const size_t nd = (size_t)c->nq * c->M;
+	float *r = c->dwork, *s = c->dwork2;
+	c0_tirfop_forward(&w, x, r);
+	memcpy(s, r, sizeof(float) * nd);
+	c0_blur2_apply(&c->blur, s, c->nq);
+	c0_blur2_apply(&c->blur, s, c->nq);
+	for (size_t i = 0; i < nd; i++)
+		r[i] -= s[i];
+	memset(c->corr, 0, sizeof(float) * c->N);
+	c0_tirfop_adjoint_add(&w, r, c->corr);
+}
 
 /* The exact solver's primal step: G = data + l1 + positivity, whose prox is
  * a small non-negative quadratic program per column,
@@ -16,12 +57,16 @@ void matirf_primal_step_exact(void *vc, float *x, float *t, float rho, double su
 	const int nz = c->nz;
 	const double tau = c->tau1;
 	float d2 = 0, n2 = 0;
+	if (c->blur.k)
+		blur_correction(c, x);
 #pragma omp parallel for schedule(dynamic, 512) reduction(+ : d2, n2) if (c->N > 50000)
 	for (size_t k = 0; k < M; k++) {
 		double g[C0_NNQP_MAX], u[C0_NNQP_MAX];
 		for (int l = 0; l < nz; l++) {
 			const size_t i = l * M + k;
 			g[l] = c->c[i] + (x[i] - tau * t[i]) / tau;
+			if (c->blur.k)
+				g[l] += c->corr[i];
 			u[l] = x[i];
 		}
 		c0_nnqp(nz, c->H, c->Hi, g, u);   /* at its cap u is still feasible and no worse */
@@ -91,6 +136,8 @@ static void apg_step(struct matirf_ctx *c, const float *y, float *x, float *t, f
 	const int nz = c->nz;
 	const float it1 = (float)(1 / c->tau1), wl = (float)c->g.wl;
 	float d2 = 0, n2 = 0;
+	if (c->blur.k)
+		blur_correction(c, x);
 #pragma omp parallel for schedule(static) reduction(+ : d2, n2) if (N > 50000)
 	for (size_t k0 = 0; k0 < M; k0 += APG_CHUNK) {
 		const size_t n = k0 + APG_CHUNK < M ? APG_CHUNK : M - k0;
@@ -107,6 +154,9 @@ static void apg_step(struct matirf_ctx *c, const float *y, float *x, float *t, f
 				g[l * APG_CHUNK + i] = cl[i] + xl[i] * it1 - al[i];
 				u[l * APG_CHUNK + i] = xl[i];
 			}
+			if (c->blur.k)
+				for (size_t i = 0; i < n; i++)
+					g[l * APG_CHUNK + i] += c->corr[l * M + k0 + i];
 		}
 		apg_chunk(c, n, g, u);
 		for (int l = 0; l < nz; l++) {
@@ -178,11 +228,5 @@ void matirf_exact_setup(struct matirf_ctx *x, const struct c0_matirf_conf *c, co
 	x->apg_step = (float)(1 / L), x->apg_beta = (float)((1 - q) / (1 + q));
 	for (int i = 0; i < nz * nz; i++)
 		x->Hf[i] = (float)x->H[i];
-	for (int j = 0; j < nz; j++)
-		for (size_t k = 0; k < M; k++) {
-			double s = -x->l1;
-			for (int q = 0; q < nq; q++)
-				s += W[q * nz + j] * x->b[q * M + k];
-			x->c[j * M + k] = (float)s;
-		}
+	matirf_exact_rhs(x);
 }

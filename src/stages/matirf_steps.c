@@ -18,7 +18,7 @@ void matirf_K(void *vc, const float *u, float *y)
 	float *yr = c->exact ? y : y + c->nq * w.M;
 	if (!c->exact)
 		c0_tirfop_forward(&w, u, y);
-	if (c->blur.k)
+	if (!c->exact && c->blur.k)
 		c0_blur2_apply(&c->blur, y, c->nq);
 	if (c->reg == C0_REG_TV)
 		c0_grad3m_forward(&c->g, u, yr);
@@ -35,7 +35,7 @@ void matirf_KT(void *vc, const float *y, float *u)
 		c0_grad3m_adjoint(&c->g, yr, u);
 	else
 		c0_hess3_adjoint(&c->d, yr, u);
-	if (c->blur.k) {
+	if (!c->exact && c->blur.k) {
 		memcpy(c->dwork, y, sizeof(float) * c->nq * w.M);
 		c0_blur2_apply(&c->blur, c->dwork, c->nq);
 		c0_tirfop_adjoint_add(&w, c->dwork, u);
@@ -85,13 +85,7 @@ void matirf_background_update(struct matirf_ctx *c, const double *W)
 			c->b_mut[q * M + k] = c->b0[q * M + k] - c->bg[k];
 	}
 	if (c->exact)
-		for (int j = 0; j < c->nz; j++)
-			for (size_t k = 0; k < M; k++) {
-				double s = -c->l1;
-				for (int q = 0; q < c->nq; q++)
-					s += W[q * c->nz + j] * c->b_mut[q * M + k];
-				c->c[j * M + k] = (float)s;
-			}
+		matirf_exact_rhs(c);
 }
 
 #define BG_EVERY 10
