@@ -1,13 +1,15 @@
 /* The solvers alone, on small problems whose solution is known in closed
  * form: CG on an SPD system, FISTA on a non-negative lasso built to have a
  * given solution, PDHG on pairwise total variation denoising, the root
- * finder on a monotone function. Also: the adjoint checker catches a wrong
- * adjoint. */
+ * finder on a monotone function; the Schatten pieces (eig3, the spectral
+ * clip) against the closed-form eigenvalues of a symmetric 3x3 matrix. Also:
+ * the adjoint checker catches a wrong adjoint. */
 #include "check.h"
 #include "check_adjoint.h"
 #include "solve/cg.h"
 #include "solve/fista.h"
 #include "solve/pdhg.h"
+#include "solve/prox_schatten.h"
 #include "solve/root.h"
 #include "core/err.h"
 #include "core/rng.h"
@@ -242,6 +244,132 @@ static void test_root(void)
 	CHECK(t <= 5 && t > 4);
 }
 
+/* The eigenvalues of a symmetric 3x3 matrix, ascending, by the
+ * trigonometric closed form (Smith 1961): the slow obvious reference */
+static void eig3_closed(const double a[3][3], double e[3])
+{
+	const double p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+	const double q = (a[0][0] + a[1][1] + a[2][2]) / 3;
+	const double p2 = (a[0][0] - q) * (a[0][0] - q) + (a[1][1] - q) * (a[1][1] - q) + (a[2][2] - q) * (a[2][2] - q) + 2 * p1;
+	const double p = sqrt(p2 / 6);
+	if (p == 0) {
+		e[0] = e[1] = e[2] = q;
+		return;
+	}
+	double b[3][3];
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			b[i][j] = (a[i][j] - (i == j) * q) / p;
+	double r = (b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) - b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0]) +
+		    b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0])) / 2;
+	r = fmin(fmax(r, -1), 1);
+	const double phi = acos(r) / 3, pi = acos(-1.0);
+	e[2] = q + 2 * p * cos(phi);
+	e[0] = q + 2 * p * cos(phi + 2 * pi / 3);
+	e[1] = 3 * q - e[0] - e[2];
+}
+
+/* h packed as in prox_schatten.h <-> the matrix */
+static void unpack3(const double h[6], double a[3][3])
+{
+	const double r2 = sqrt(2.0);
+	a[0][0] = h[0], a[1][1] = h[1], a[2][2] = h[2];
+	a[0][1] = a[1][0] = h[3] / r2, a[0][2] = a[2][0] = h[4] / r2, a[1][2] = a[2][1] = h[5] / r2;
+}
+
+/* a random symmetric matrix of the kind the Hessian's dual step sees, with
+ * some repeated eigenvalues and diagonal ones among them (case % 4) */
+static void random_sym(int kase, double scale, double h[6])
+{
+	for (int e = 0; e < 6; e++)
+		h[e] = scale * c0_rng_normal(&rng);
+	if (kase % 4 == 1)
+		h[3] = h[4] = h[5] = 0;               /* diagonal: no rotation */
+	if (kase % 4 == 2) {                       /* s I + t v v^T: a double eigenvalue */
+		double v[3] = { c0_rng_normal(&rng), c0_rng_normal(&rng), c0_rng_normal(&rng) }, s = h[0], t = h[1];
+		const double r2 = sqrt(2.0);
+		h[0] = s + t * v[0] * v[0], h[1] = s + t * v[1] * v[1], h[2] = s + t * v[2] * v[2];
+		h[3] = r2 * t * v[0] * v[1], h[4] = r2 * t * v[0] * v[2], h[5] = r2 * t * v[1] * v[2];
+	}
+}
+
+static int cmp_d(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+static void test_schatten(void)
+{
+	double worst_rec = 0, worst_orth = 0, worst_eig = 0, worst_clip = 0, worst_comm = 0, worst_proj = -1;
+	int clipped = 0, kept = 0;
+	for (int t = 0; t < 400; t++) {
+		double h[6], a[3][3], a0[3][3], v[3][3], ref[3], e[3];
+		const double scale = t % 3 == 0 ? 1e-3 : t % 3 == 1 ? 1 : 50;
+		random_sym(t, scale, h);
+		unpack3(h, a0);
+		unpack3(h, a);
+		c0_eig3(a, v);                             /* a0 = v diag(a) v^T, v orthonormal */
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++) {
+				double r = 0, o = 0;
+				for (int l = 0; l < 3; l++)
+					r += v[i][l] * a[l][l] * v[j][l], o += v[l][i] * v[l][j];
+				worst_rec = fmax(worst_rec, fabs(r - a0[i][j]) / scale);
+				worst_orth = fmax(worst_orth, fabs(o - (i == j)));
+			}
+		eig3_closed(a0, ref);
+		for (int i = 0; i < 3; i++)
+			e[i] = a[i][i];
+		qsort(e, 3, sizeof *e, cmp_d);
+		for (int i = 0; i < 3; i++)
+			worst_eig = fmax(worst_eig, fabs(e[i] - ref[i]) / scale);
+		/* the clip: eigenvalues clip(ref), the same eigenvectors (it commutes
+		 * with a0), and the projection's variational inequality
+		 * <h - P h, b - P h> <= 0 for b in the ball */
+		const double k = scale * (0.2 + 2 * c0_rng_uniform(&rng));
+		double p[6], pm[3][3], pe[3];
+		memcpy(p, h, sizeof p);
+		c0_spectral_clip(p, k);
+		unpack3(p, pm);
+		eig3_closed(pm, pe);
+		int any = 0;
+		for (int i = 0; i < 3; i++) {
+			any |= fabs(ref[i]) > k;
+			worst_clip = fmax(worst_clip, fabs(pe[i] - fmin(fmax(ref[i], -k), k)) / scale);
+		}
+		if (!any)
+			kept += memcmp(p, h, sizeof p) == 0;
+		clipped += any;
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++) {
+				double c = 0;
+				for (int l = 0; l < 3; l++)
+					c += pm[i][l] * a0[l][j] - a0[i][l] * pm[l][j];
+				worst_comm = fmax(worst_comm, fabs(c) / (scale * scale));
+			}
+		for (int s = 0; s < 8; s++) {
+			double b[6], bm[3][3], be[3];
+			random_sym(s, scale, b);
+			unpack3(b, bm);
+			eig3_closed(bm, be);
+			const double n = fmax(fabs(be[0]), fabs(be[2])), f = k * c0_rng_uniform(&rng) / n;
+			double ip = 0;
+			for (int l = 0; l < 6; l++)
+				ip += (h[l] - p[l]) * (f * b[l] - p[l]);
+			worst_proj = fmax(worst_proj, ip / (scale * scale));
+		}
+	}
+	CHECK_MSG(worst_rec < 1e-12 && worst_orth < 1e-12, "eig3: reconstruction %g, orthogonality %g", worst_rec, worst_orth);
+	/* the closed form loses half the digits at a double eigenvalue (acos
+	 * near +-1): the reference is the coarser one there */
+	CHECK_MSG(worst_eig < 1e-6, "eig3: eigenvalues off the closed form by %g", worst_eig);
+	CHECK_MSG(worst_clip < 1e-6 && worst_comm < 1e-10, "clip: eigenvalues %g, commutator %g", worst_clip, worst_comm);
+	CHECK_MSG(worst_proj < 1e-10, "clip: not the projection, <h - Ph, b - Ph> = %g", worst_proj);
+	CHECK(clipped > 100 && clipped < 390);       /* both cases occur */
+	CHECK(kept == 400 - clipped);                /* inside the ball: untouched */
+}
+
 int main(void)
 {
 	c0_rng_init(&rng, 7, 0);
@@ -250,5 +378,6 @@ int main(void)
 	RUN(test_fista);
 	RUN(test_pdhg);
 	RUN(test_root);
+	RUN(test_schatten);
 	return CHECK_DONE();
 }

@@ -3,6 +3,7 @@
  * failure. */
 #include "app/pipeline.h"
 #include "app/depthcode.h"
+#include "app/drift_out.h"
 #include "io/png.h"
 #include "io/tiff.h"
 #include "core/err.h"

@@ -2,95 +2,12 @@
 #include "cli/commands.h"
 #include "cli/opts.h"
 #include "cli/confopts.h"
-#include "sim/sim.h"
+#include "app/sim_report.h"
 #include "io/outdir.h"
-#include "io/report.h"
 #include "core/err.h"
 
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
-
-static void report(const struct c0_sim_conf *c, const struct c0_sim_result *r, cJSON *rep)
-{
-	cJSON *p = cJSON_AddObjectToObject(rep, "parameters");
-	cJSON_AddNumberToObject(p, "seed", (double)c->seed);
-	cJSON_AddNumberToObject(p, "width", c->width);
-	cJSON_AddNumberToObject(p, "height", c->height);
-	cJSON_AddNumberToObject(p, "frames", c->frames);
-	cJSON_AddNumberToObject(p, "pixel_size_nm", c->pixel_nm);
-	cJSON_AddNumberToObject(p, "fwhm_nm", c->fwhm_nm);
-	cJSON_AddNumberToObject(p, "srf", c->srf);
-	c0_report_add_array(p, "angles_deg", c->angles, c->nangles);
-	cJSON_AddNumberToObject(p, "n_glass", c->tirf.n_glass);
-	cJSON_AddNumberToObject(p, "n_sample", c->tirf.n_sample);
-	cJSON_AddNumberToObject(p, "wavelength_nm", c->tirf.wavelength_nm);
-	cJSON_AddNumberToObject(p, "s_polarisation_fraction", c->tirf.s_fraction);
-	if (c->emitters_csv)
-		cJSON_AddStringToObject(p, "emitters_csv", c->emitters_csv);
-	else {
-		cJSON_AddNumberToObject(p, "filaments", c->filaments);
-		cJSON_AddNumberToObject(p, "persistence_nm", c->persistence_nm);
-		cJSON_AddNumberToObject(p, "density_per_um", c->density_per_um);
-		cJSON_AddBoolToObject(p, "pairs", c->pairs);
-		if (c->pairs) {
-			cJSON_AddNumberToObject(p, "pair_sep_nm", c->pair_sep_nm);
-			cJSON_AddNumberToObject(p, "pair_dz_nm", c->pair_dz_nm);
-		}
-	}
-	cJSON_AddNumberToObject(p, "z_min_nm", c->z_min_nm);
-	cJSON_AddNumberToObject(p, "z_max_nm", c->z_max_nm);
-	cJSON_AddNumberToObject(p, "tau_on_ms", c->tau_on_ms);
-	cJSON_AddNumberToObject(p, "tau_off_ms", c->tau_off_ms);
-	cJSON_AddNumberToObject(p, "tau_bleach_s", c->tau_bleach_s);
-	cJSON_AddStringToObject(p, "tau_bleach_definition", "mean cumulative ON time before bleaching");
-	static const char *orders[] = { "sequential", "interleaved", "restart" };
-	cJSON_AddStringToObject(p, "bleach_order", orders[c->order]);
-	if (c->ngaps)
-		c0_report_add_array(p, "gaps_s", c->gap_s, c->ngaps);
-	cJSON_AddNumberToObject(p, "fps", c->fps);
-	c0_report_add_array(p, "drift_nm", c->drift_nm, 2);
-	cJSON_AddStringToObject(p, "drift", c->drift_walk ? "random walk" : "linear");
-	cJSON_AddNumberToObject(p, "brightness_photons", c->brightness);
-	cJSON_AddNumberToObject(p, "brightness_cv", c->brightness_cv);
-	cJSON_AddNumberToObject(p, "background_photons", c->background);
-	cJSON_AddNumberToObject(p, "offset_adu", c->offset);
-	cJSON_AddNumberToObject(p, "gain_adu_per_photon", c->gain);
-	cJSON_AddNumberToObject(p, "snr_db_target", c->snr_db);
-	cJSON_AddNumberToObject(p, "hot_pixel_fraction", c->hot_fraction);
-	cJSON_AddNumberToObject(p, "hot_pixel_sd_adu", c->hot_sd);
-	cJSON_AddStringToObject(p, "snr_definition", "10 log10(var(noise-free ADU over pixels and frames) / read_noise^2), per angle");
-	cJSON *e = cJSON_AddObjectToObject(rep, "estimates");
-	cJSON_AddNumberToObject(e, "emitters", r->nemitters);
-	cJSON *angles = cJSON_AddArrayToObject(e, "angles");
-	for (int q = 0; q < c->nangles; q++) {
-		const struct c0_sim_angle *a = &r->angle[q];
-		cJSON *o = cJSON_CreateObject();
-		cJSON_AddNumberToObject(o, "angle_deg", c->angles[q]);
-		if (a->p_per_nm > 0)
-			cJSON_AddNumberToObject(o, "penetration_depth_nm", a->depth_nm);
-		else
-			cJSON_AddStringToObject(o, "excitation", "epi (below the critical angle: no evanescent decay)");
-		cJSON_AddNumberToObject(o, "i0_relative", a->i0_rel);
-		cJSON_AddNumberToObject(o, "read_noise_adu", a->read_noise);
-		cJSON_AddNumberToObject(o, "snr_db", a->snr_db);
-		cJSON_AddNumberToObject(o, "start_s", a->t_start_s);
-		cJSON_AddNumberToObject(o, "bleach_factor", a->bleach_factor);
-		cJSON_AddItemToArray(angles, o);
-	}
-	/* the truth for run's bleaching estimate: rate per second and per frame,
-	 * and each stack's mean population relative to the unbleached one */
-	cJSON *b = cJSON_AddObjectToObject(e, "bleaching");
-	cJSON_AddNumberToObject(b, "rate_per_s", r->bleach_rate);
-	cJSON_AddNumberToObject(b, "rate_per_frame", r->bleach_rate / c->fps);
-	double f[C0_MAX_ANGLES];
-	for (int q = 0; q < c->nangles; q++)
-		f[q] = r->angle[q].bleach_factor;
-	c0_report_add_array(b, "stack_factors", f, c->nangles);
-	cJSON_AddNumberToObject(b, "fade_last_vs_first", c->nangles > 1 ? 1 - f[c->nangles - 1] / f[0] : 0);
-	cJSON *t = cJSON_AddObjectToObject(rep, "timings_s");
-	cJSON_AddNumberToObject(t, "simulate", r->seconds);
-}
 
 /* The simulator's parameter names (as in sim.json) that its messages cite,
  * and their flags here. */
@@ -110,18 +27,17 @@ static int fail(void)
 	return c0_cli_error_names("simulate", NAMES);
 }
 
-int cmd_simulate(int argc, char **argv)
+/* The options into c: -1 to go on, else the command's exit code. */
+static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **outdir, int *force)
 {
-	struct c0_sim_conf c;
-	c0_sim_defaults(&c);
-	const char *outdir = NULL;
-	int force = 0, verbose = 0, nangles = c.nangles, nz = 2, ndrift = 0;
+	struct c0_sim_conf c = *conf;
+	int verbose = 0, nangles = c.nangles, nz = 2, ndrift = 0;
 	const char *order = "sequential";
 	long long seed = (long long)c.seed;
 	double zr[2] = { c.z_min_nm, c.z_max_nm }, hot[2] = { c.hot_fraction, c.hot_sd };
 	int nhot = 0;
 	const struct c0_opt opts[] = {
-		{ "output", 'o', C0_OPT_STRING, &outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
+		{ "output", 'o', C0_OPT_STRING, outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL },
 		{ "seed", 0, C0_OPT_LONG, &seed, "N", "random seed (same seed, same bytes)", NULL, 0, NULL },
 		{ "width", 0, C0_OPT_INT, &c.width, "PX", "camera pixels across", NULL, 0, NULL },
 		{ "height", 0, C0_OPT_INT, &c.height, "PX", "camera pixels down", NULL, 0, NULL },
@@ -161,7 +77,7 @@ int cmd_simulate(int argc, char **argv)
 		{ "hot-pixels", 0, C0_OPT_DOUBLES, hot, "SHARE[,SD]", "a fixed share of pixels (sCMOS) with extra Gaussian read noise of sd SD ADU (30 unless given)", "0", 2, &nhot },
 		{ "drift-nm", 0, C0_OPT_DOUBLES, c.drift_nm, "X,Y", "stage drift over the whole acquisition (all angles in order): displacement at the last frame", "0,0", 2, &ndrift },
 		{ "drift-walk", 0, C0_OPT_FLAG, &c.drift_walk, NULL, "drift as a Gaussian random walk (per-axis step sd |X|/sqrt(frames), |Y|/...) instead of linear", NULL, 0, NULL },
-		{ "force", 0, C0_OPT_FLAG, &force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
+		{ "force", 0, C0_OPT_FLAG, force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
 	const struct c0_cmd_spec spec = { "simulate", "[options] -o OUTDIR",
@@ -182,27 +98,25 @@ int cmd_simulate(int argc, char **argv)
 	c.hot_fraction = hot[0], c.hot_sd = hot[1];
 	if (ndrift == 1)
 		return c0_fail(C0_EINVAL, "--drift-nm: expected X,Y in nm"), fail();
-	static const char *orders[] = { "sequential", "interleaved", "restart" };
-	c.order = -1;
-	for (int k = 0; k < 3; k++)
-		if (!strcmp(order, orders[k]))
-			c.order = k;
-	if (c.order < 0) {
-		c0_fail(C0_EINVAL, "--bleach-order %s: expected sequential, interleaved or restart", order);
+	if (c0_sim_order_parse(order, &c.order))
 		return fail();
-	}
+	*conf = c;
+	return -1;
+}
+
+int cmd_simulate(int argc, char **argv)
+{
+	struct c0_sim_conf c;
+	c0_sim_defaults(&c);
+	const char *outdir = NULL;
+	int force = 0, rc = parse(argc, argv, &c, &outdir, &force);
+	if (rc >= 0)
+		return rc;
 	struct c0_outdir out;
+	struct c0_sim_result res;
 	if (c0_sim_check(&c) || c0_outdir_open(&out, outdir, force))
 		return fail();
-	struct c0_sim_result res;
-	cJSON *rep = c0_report_new("simulate", argc, argv);
-	int st = c0_simulate(&c, &out, &res);
-	if (!st) {
-		report(&c, &res, rep);
-		st = c0_report_write(rep, c0_outdir_file(&out, "sim.json"));
-	}
-	cJSON_Delete(rep);
-	if ((st = c0_outdir_finish(&out, st))) {
+	if (c0_outdir_finish(&out, c0_sim_write(&c, &out, argc, argv, &res))) {
 		c0_sim_result_free(&res);
 		return fail();
 	}

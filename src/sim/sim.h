@@ -75,6 +75,10 @@ struct c0_sim_conf {
 };
 
 void c0_sim_defaults(struct c0_sim_conf *c);
+/* enum c0_sim_order by its name in sim.json (sequential, interleaved, restart)
+ * and back; an unknown name is refused naming bleach_order. */
+int c0_sim_order_parse(const char *name, int *order);
+const char *c0_sim_order_name(int order);
 int c0_sim_check(const struct c0_sim_conf *c);
 /* Sets the default angle set for c->tirf (nangles equally spaced in NA). */
 void c0_sim_default_angles(struct c0_sim_conf *c, int n);

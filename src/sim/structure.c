@@ -36,6 +36,21 @@ void c0_sim_defaults(struct c0_sim_conf *c)
 	c0_sim_default_angles(c, 5);
 }
 
+static const char *const ORDERS[] = { "sequential", "interleaved", "restart" };
+
+const char *c0_sim_order_name(int order)
+{
+	return order >= 0 && order < 3 ? ORDERS[order] : "?";
+}
+
+int c0_sim_order_parse(const char *name, int *order)
+{
+	for (int k = 0; k < 3; k++)
+		if (!strcmp(name, ORDERS[k]))
+			return *order = k, C0_OK;
+	return c0_fail(C0_EINVAL, "bleach_order %s: expected sequential, interleaved or restart", name);
+}
+
 int c0_sim_check(const struct c0_sim_conf *c)
 {
 	if (c->width < 8 || c->height < 8)

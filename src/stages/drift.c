@@ -417,10 +417,9 @@ static void stack_blocks_free(struct stack_blocks *o)
 	free(o->bm), free(o->sx), free(o->sy);
 }
 
-int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct c0_drift **out)
+/* the stacks' sizes: the same field, each long enough for two blocks */
+static int check_stacks(const struct c0_drift_conf *c, const struct c0_frames *f, int n)
 {
-	double t0 = c0_now();
-	*out = NULL;
 	if (n < 1 || n > MAXQ)
 		return c0_fail(C0_EINVAL, "drift: %d stacks (1..%d)", n, MAXQ);
 	if (c->block < 1)
@@ -435,17 +434,13 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 			st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to estimate drift (needs >= 10; switch "
 				     "drift correction off)", f[q].name, (long long)T);
 	}
-	if (st)
-		return st;
-	struct c0_drift *d = c0_alloc(1, sizeof *d);
-	struct stack_blocks *sb = c0_alloc((size_t)n, sizeof *sb);
-	if (!d || !sb) {
-		free(d), free(sb);
-		return C0_ENOMEM;
-	}
-	d->nq = n, d->H = f[0].height, d->W = f[0].width;
-	const int H = d->H, W = d->W;
-	/* the stacks side by side: each reads its own file */
+	return st;
+}
+
+/* the stacks' block means and chained shifts, the stacks side by side: each
+ * reads its own file; the first failing stack's message */
+static int read_stacks(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct stack_blocks *sb)
+{
 	int fail = -1;
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int q = 0; q < n; q++) {
@@ -455,22 +450,26 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 			if (fail < 0 || q < fail)
 				fail = q;
 	}
-	if (fail >= 0)
-		st = c0_fail(C0_EIO, "%s", sb[fail].msg);
+	return fail >= 0 ? c0_fail(C0_EIO, "%s", sb[fail].msg) : C0_OK;
+}
+
+/* The trajectory, stack after stack: the blocks' shifts chained within a
+ * stack and continued across stacks; the block means move into d. */
+static int chain(struct c0_drift *d, const struct c0_frames *f, int n, struct stack_blocks *sb)
+{
+	const int H = d->H, W = d->W;
 	int64_t nball = 0;
 	for (int q = 0; q < n; q++)
 		nball += sb[q].nb;
-	d->block = (int)sb[0].B;
-	if (!st && (!(d->bt = c0_alloc((size_t)nball, sizeof *d->bt)) || !(d->bx = c0_alloc((size_t)nball, sizeof *d->bx)) ||
-		    !(d->by = c0_alloc((size_t)nball, sizeof *d->by)) || !(d->bm = c0_alloc((size_t)nball, sizeof *d->bm))))
-		st = c0_fail(C0_ENOMEM, "drift: out of memory");
-	/* the trajectory, stack after stack */
+	if (!(d->bt = c0_alloc((size_t)nball, sizeof *d->bt)) || !(d->bx = c0_alloc((size_t)nball, sizeof *d->bx)) ||
+	    !(d->by = c0_alloc((size_t)nball, sizeof *d->by)) || !(d->bm = c0_alloc((size_t)nball, sizeof *d->bm)))
+		return c0_fail(C0_ENOMEM, "drift: out of memory");
 	int prev0 = 0;
 	int64_t g = 0;
-	for (int q = 0; q < n && !st; q++) {
+	for (int q = 0; q < n; q++) {
 		const int this0 = d->nb;   /* this stack's first block */
 		const int64_t T = f[q].count, B = sb[q].B;
-		for (int64_t k = 0; k < sb[q].nb && !st; k++) {
+		for (int64_t k = 0; k < sb[q].nb; k++) {
 			int64_t t1 = k * B, t2 = k == sb[q].nb - 1 ? T : t1 + B;
 			double bx = 0, by = 0;
 			if (d->nb > 0 && k > 0) {
@@ -485,12 +484,10 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 				bx = d->bx[j] + u * (d->bx[j] - d->bx[i]);
 				by = d->by[j] + u * (d->by[j] - d->by[i]);
 			}
-			if (fabs(bx) > W / 4.0 || fabs(by) > H / 4.0) {
-				st = c0_fail(C0_EINVAL, "%s: the drift at frames %lld-%lld (%.1f, %.1f pixels) exceeds a quarter "
-					     "of the field; correct it beforehand or switch drift correction off",
-					     f[q].name, (long long)t1 + 1, (long long)t2, bx, by);
-				break;
-			}
+			if (fabs(bx) > W / 4.0 || fabs(by) > H / 4.0)
+				return c0_fail(C0_EINVAL, "%s: the drift at frames %lld-%lld (%.1f, %.1f pixels) exceeds a quarter "
+					       "of the field; correct it beforehand or switch drift correction off",
+					       f[q].name, (long long)t1 + 1, (long long)t2, bx, by);
 			d->bm[d->nb] = sb[q].bm[k], sb[q].bm[k] = NULL;
 			d->bt[d->nb] = (double)g + 0.5 * (double)(t1 + t2 - 1);
 			d->bx[d->nb] = bx, d->by[d->nb] = by;
@@ -502,11 +499,32 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 		d->hooks[q].d = d, d->hooks[q].q = q;
 		g += T;
 	}
+	return C0_OK;
+}
+
+int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct c0_drift **out)
+{
+	double t0 = c0_now();
+	*out = NULL;
+	int st = check_stacks(c, f, n);
+	if (st)
+		return st;
+	struct c0_drift *d = c0_alloc(1, sizeof *d);
+	struct stack_blocks *sb = c0_alloc((size_t)n, sizeof *sb);
+	if (!d || !sb) {
+		free(d), free(sb);
+		return C0_ENOMEM;
+	}
+	d->nq = n, d->H = f[0].height, d->W = f[0].width;
+	st = read_stacks(c, f, n, sb);
+	d->block = (int)sb[0].B;
+	if (!st)
+		st = chain(d, f, n, sb);
 	for (int q = 0; q < n; q++)
 		stack_blocks_free(&sb[q]);
 	free(sb);
 	if (!st)
-		st = c0_fshift_new(H, W, &d->sh);
+		st = c0_fshift_new(d->H, d->W, &d->sh);
 	if (!st)
 		st = refine(d);
 	for (int k = 0; d->bm && k < d->nb; k++)
@@ -558,71 +576,4 @@ void c0_drift_get_info(const struct c0_drift *d, struct c0_drift_info *o)
 	o->max_px = d->max_px, o->seconds = d->seconds;
 	o->noise_px[0] = d->noise_px[0], o->noise_px[1] = d->noise_px[1];
 	o->corrected[0] = !d->off[0], o->corrected[1] = !d->off[1];
-}
-
-int c0_drift_csv(const struct c0_drift *d, double pixel_nm, char **buf, size_t *len)
-{
-	const int64_t G = d->start[d->nq - 1] + d->frames[d->nq - 1];
-	size_t cap = (size_t)G * 48 + 64, k = 0;
-	char *b = c0_alloc(cap, 1);
-	if (!b)
-		return C0_ENOMEM;
-	k += (size_t)snprintf(b + k, cap - k, "stack,frame,dx_nm,dy_nm\n");
-	for (int q = 0; q < d->nq; q++)
-		for (int64_t t = 0; t < d->frames[q]; t++) {
-			double dx, dy;
-			c0_drift_at(d, q, t, &dx, &dy);
-			k += (size_t)snprintf(b + k, cap - k, "%d,%lld,%.2f,%.2f\n", q + 1, (long long)t + 1, dx * pixel_nm,
-					      dy * pixel_nm);
-		}
-	*buf = b, *len = k;
-	return C0_OK;
-}
-
-static void put(uint8_t *rgb, int w, int h, int x, int y, const uint8_t *c)
-{
-	if (x >= 0 && x < w && y >= 0 && y < h)
-		memcpy(rgb + 3 * ((size_t)y * w + x), c, 3);
-}
-
-int c0_drift_plot(const struct c0_drift *d, double pixel_nm, uint8_t **rgb, int *w, int *h)
-{
-	const int W = 480, H = 240, m = 10;
-	const int64_t G = d->start[d->nq - 1] + d->frames[d->nq - 1];
-	uint8_t *p = c0_alloc((size_t)W * H * 3, 1);
-	if (!p)
-		return C0_ENOMEM;
-	memset(p, 255, (size_t)W * H * 3);
-	double lim = 10;   /* nm, symmetric about 0 */
-	for (int q = 0; q < d->nq; q++)
-		for (int64_t t = 0; t < d->frames[q]; t++) {
-			double dx, dy;
-			c0_drift_at(d, q, t, &dx, &dy);
-			lim = fmax(lim, fmax(fabs(dx), fabs(dy)) * pixel_nm * 1.1);
-		}
-	const uint8_t grey[3] = { 190, 190, 190 }, black[3] = { 0, 0, 0 }, red[3] = { 220, 30, 30 }, blue[3] = { 30, 60, 220 };
-#define ROW(v) (H / 2 - (int)lround((v) / lim * (H / 2 - m)))
-#define COL(g) (m + (int)lround((double)(g) / (double)(G > 1 ? G - 1 : 1) * (W - 2 * m)))
-	for (double v = -floor(lim / 10) * 10; v <= lim; v += 10)
-		for (int x = 0; x < m; x++)
-			put(p, W, H, x, ROW(v), grey);
-	for (int x = m; x < W - m; x++)
-		put(p, W, H, x, H / 2, grey);
-	for (int q = 1; q < d->nq; q++)
-		for (int y = 0; y < H; y += 4)
-			put(p, W, H, COL(d->start[q]), y, grey);
-	for (int y = m; y < H - m; y++)
-		put(p, W, H, m - 1, y, black);
-	for (int q = 0; q < d->nq; q++)
-		for (int64_t t = 0; t < d->frames[q]; t++) {
-			double dx, dy;
-			c0_drift_at(d, q, t, &dx, &dy);
-			int x = COL(d->start[q] + t);
-			for (int k = -1; k <= 1; k++)
-				put(p, W, H, x, ROW(dx * pixel_nm) + k, red), put(p, W, H, x, ROW(dy * pixel_nm) + k, blue);
-		}
-#undef ROW
-#undef COL
-	*rgb = p, *w = W, *h = H;
-	return C0_OK;
 }

@@ -41,9 +41,3 @@ struct c0_drift_info {
 	int corrected[2];           /* 0: the axis' drift stayed within 6 noise sds, left uncorrected */
 };
 void c0_drift_get_info(const struct c0_drift *d, struct c0_drift_info *out);
-
-/* drift.csv: one row per frame (stack, frame, dx_nm, dy_nm), allocated. */
-int c0_drift_csv(const struct c0_drift *d, double pixel_nm, char **buf, size_t *len);
-/* A small plot (RGB, allocated): x (red) and y (blue) shift against frame,
- * grey zero line, grey ticks every 10 nm, stack boundaries dotted. */
-int c0_drift_plot(const struct c0_drift *d, double pixel_nm, uint8_t **rgb, int *w, int *h);

@@ -36,9 +36,10 @@ struct c0_matirf_conf {
 	 * of the mean residual, clipped at 0 (bg_smooth in px^2) */
 	double bg_smooth;
 	/* 0: no deconvolution; > 0: the forward model blurs each angle's image
-	 * by a Gaussian of this sigma (camera pixels); uses the diag solver */
+	 * by a Gaussian of this sigma (camera pixels), in every solver (exact
+	 * and apg: their per-pixel step majorises the blurred data term) */
 	double psf_sigma_px;
-	/* levels of the warm start from 2x2-binned images (apg and exact with TV) */
+	/* levels of the warm start from 2x2-binned images and PSF (apg and exact with TV) */
 	int coarse;
 };
 #define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0 }

@@ -292,6 +292,40 @@ def test_subcritical(tmp):
     check(refused(cli("run", *fast, "--angles", "45,66,70", "-o", bad, *s3), "--angles: 45 deg", "critical angle 61.18 deg"),
           "an angle under 0.8 of the critical one is refused")
     check(not os.path.exists(bad), "nothing written for the refused angle")
+def matirf_images(tmp, stacks):
+    """one 2D image per angle: each stack's mean less the camera offset"""
+    imgs = []
+    for q, s in enumerate(stacks):
+        f = os.path.join(tmp, "mean_q%02d.tif" % (q + 1))
+        tifffile.imwrite(f, tifffile.imread(s).astype(np.float32).mean(axis=0) - 100)
+        imgs.append(f)
+    return imgs
+
+
+def solver_of(out):
+    return json.load(open(os.path.join(out, "report.json")))["matirf"]["solver"]
+
+
+def test_matirf_psf(tmp, big):
+    """issue 33: with --psf-fwhm an explicit --matirf-solver is obeyed (all three model the blur) and auto
+    stays its documented apg, quietly"""
+    imgs = matirf_images(tmp, big)
+    out = os.path.join(tmp, "psf_out")
+    base = ["matirf", "--angles", "62,66", "--pixel-size", "100", "--matirf-iterations", "200", "-o", out]
+    for s in ("apg", "exact", "diag"):
+        p = cli(*base, "--force", "--psf-fwhm", "240", "--matirf-solver", s, *imgs)
+        check(p.returncode == 0 and solver_of(out) == s and "auto" not in p.stderr,
+              "matirf --matirf-solver %s --psf-fwhm runs %s: %r" % (s, s, p.stderr))
+    for extra in ([], ["--psf-fwhm", "240"]):
+        p = cli(*base, "--force", *extra, *imgs)
+        check(p.returncode == 0 and solver_of(out) == "apg" and "auto" not in p.stderr,
+              "auto %s: apg, quietly" % " ".join(extra))
+    # bad FWHMs: one line naming --psf-fwhm before the solve (1200 nm = 12 px, over a quarter of 40 px)
+    bad = os.path.join(tmp, "psf_bad")
+    for v, why in (("-5", "positive"), ("nan", "number"), ("inf", "finite"), ("1200", "quarter of the 40x40 field")):
+        check(refused(cli(*base[:-1], bad, "--matirf-solver", "diag", "--psf-fwhm", v, *imgs), "--psf-fwhm", why),
+              "--psf-fwhm %s refused naming it" % v)
+    check(not os.path.exists(bad), "nothing written by the refused FWHMs")
 
 
 with tempfile.TemporaryDirectory() as tmp:
@@ -305,4 +339,5 @@ with tempfile.TemporaryDirectory() as tmp:
     test_calibration(tmp, s16)
     test_outdir_messages(tmp, s16)
     test_subcritical(tmp)
+    test_matirf_psf(tmp, big)
 done()
