@@ -1,5 +1,6 @@
 #include "stages/support.h"
 #include "ops/covop.h"
+#include "ops/covnormal.h"
 #include "ops/covpool.h"
 #include "optics/psf.h"
 #include "core/c0math.h"
@@ -144,254 +145,53 @@ static double smooth(void *vctx, const double *x, double *g)
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
 
-/* The same on a working set: x and g hold only the pixels ws[0..nws), the
- * others are 0. A x = Hy X Hx costs 2 band products per stored pixel instead
- * of per grid pixel: the support is a few percent of the grid. The set is in
- * grid order, so each grid row's pixels are a run ws[rs[a]..rs[a+1]). */
+/* The same on a working set: x and g hold only the set's pixels
+ * (ops/covnormal.h), the others are 0. */
 struct wctx {
 	struct ctx *c;
-	size_t *ws;          /* the set's grid indices */
-	size_t nws;
-	size_t *rs;          /* Ly + 1: row a's runs are run[rs[a]..rs[a+1]) */
-	size_t *run;         /* runs of adjacent columns: ws[run[j]..run[j+1]) */
-	int *col;            /* column of each ws pixel */
-	size_t *rg;          /* Ly + 1: row a's groups are grp[rg[a]..rg[a+1]) */
-	size_t *grp;         /* groups of up to 4 adjacent pixels of a run: ws[grp[g]..grp[g + 1]) */
+	struct c0_covnormal N;
 	double *cw, *nw;     /* C and the column norms at the set's pixels */
-	int nbuf;            /* threads that may share A^T A on the set */
-	struct tbuf *buf;    /* one each */
 };
-
-/* Rows of T = V Hx held by one thread: row base + j in slot j, zero outside
- * the columns [lo[j], hi[j]) its last scatter wrote. Three bands' worth of
- * rows and a gather block's: the rows kept are moved down about once per
- * two bands of output rows. */
-#define BUF_BANDS 3
-struct tbuf {
-	int rows;
-	double *T;           /* rows x TLD */
-	int *lo, *hi;
-	struct gitem *it;    /* GATHER_ROWS x GATHER_COLS */
-};
-/* The gather goes through blocks of output rows and columns, so that the
- * part of T it reads stays in the first-level cache. */
-#define GATHER_ROWS 16
-#define GATHER_COLS 96
-/* one group of the set to gather: its column of T from the band's first
- * row, its band row of Hy, the group */
-struct gitem {
-	const double *t, *h;
-	size_t g;
-};
-
-/* T's row stride: 3 columns past the grid's, never written, so that a group
- * of 4 at the row's end reads its lanes within the row */
-#define TLD(Lx) ((size_t)(Lx) + 3)
-
-static void ws_index(struct wctx *w)
-{
-	const int Ly = w->c->op->Ly, Lx = w->c->op->Lx;
-	size_t k = 0, j = 0, g = 0;
-	for (int a = 0; a < Ly; a++) {
-		w->rs[a] = j;
-		for (; k < w->nws && w->ws[k] < (size_t)(a + 1) * Lx; k++) {
-			w->col[k] = (int)(w->ws[k] - (size_t)a * Lx);
-			if (k == 0 || w->rs[a] == j || w->ws[k] != w->ws[k - 1] + 1)
-				w->run[j++] = k;
-		}
-	}
-	w->rs[Ly] = j, w->run[j] = k;
-	for (int a = 0; a < Ly; a++) {
-		w->rg[a] = g;
-		for (size_t r = w->rs[a]; r < w->rs[a + 1]; r++)
-			for (k = w->run[r]; k < w->run[r + 1]; k += 4)
-				w->grp[g++] = k;
-	}
-	w->rg[Ly] = g, w->grp[g] = w->nws;
-}
 
 static int ws_alloc(struct wctx *w, struct ctx *c)
 {
-	const size_t Ly = (size_t)c->op->Ly, L = Ly * c->op->Lx;
-	/* inside another team (tiles side by side) the set's loops run alone */
-	const int nbuf = omp_in_parallel() ? 1 : omp_get_max_threads();
-	*w = (struct wctx){ c, c0_alloc(L, sizeof(size_t)), 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
-			    c0_alloc(L, sizeof(int)), c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)), NULL, NULL,
-			    nbuf, c0_alloc((size_t)nbuf, sizeof(struct tbuf)) };
-	int ok = w->ws && w->rs && w->run && w->col && w->rg && w->grp && w->buf;
-	for (int i = 0; ok && i < nbuf; i++) {
-		struct tbuf *b = &w->buf[i];
-		b->rows = BUF_BANDS * c->op->Hy.w + GATHER_ROWS;
-		b->T = c0_alloc((size_t)b->rows * TLD(c->op->Lx), sizeof(double));
-		b->lo = c0_alloc((size_t)b->rows, sizeof(int)), b->hi = c0_alloc((size_t)b->rows, sizeof(int));
-		b->it = c0_alloc(GATHER_ROWS * GATHER_COLS, sizeof *b->it);
-		ok = b->T && b->lo && b->hi && b->it;
-		for (int j = 0; ok && j < b->rows; j++)
-			b->lo[j] = c->op->Lx, b->hi[j] = 0;
-	}
-	return ok ? C0_OK : C0_ENOMEM;
+	*w = (struct wctx){ c, { 0 }, NULL, NULL };
+	return c0_covnormal_init(&w->N, c->op);
 }
 
 static void ws_free(struct wctx *w)
 {
-	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->rg), free(w->grp), free(w->cw), free(w->nw);
-	for (int i = 0; w->buf && i < w->nbuf; i++)
-		free(w->buf[i].T), free(w->buf[i].lo), free(w->buf[i].hi), free(w->buf[i].it);
-	free(w->buf);
+	c0_covnormal_free(&w->N);
+	free(w->cw), free(w->nw);
 }
 
 /* The set := the pixels with in[i], in grid order; xw their values in x,
  * cw and nw those of C and the column norms */
 static int ws_set(struct wctx *w, const uint8_t *in, const double *x, double *xw)
 {
-	const size_t L = (size_t)w->c->op->Ly * w->c->op->Lx;
-	w->nws = 0;
-	for (size_t i = 0; i < L; i++)
-		if (in[i])
-			xw[w->nws] = x[i], w->ws[w->nws++] = i;
-	ws_index(w);
+	c0_covnormal_set(&w->N, in);
+	const size_t nws = w->N.nws, *ws = w->N.ws;
+	for (size_t k = 0; k < nws; k++)
+		xw[k] = x[ws[k]];
 	free(w->cw), free(w->nw);
-	w->cw = c0_alloc(w->nws, sizeof *w->cw), w->nw = c0_alloc(w->nws, sizeof *w->nw);
+	w->cw = c0_alloc(nws, sizeof *w->cw), w->nw = c0_alloc(nws, sizeof *w->nw);
 	if (!w->cw || !w->nw)
 		return C0_ENOMEM;
-	for (size_t k = 0; k < w->nws; k++)
-		w->cw[k] = w->c->C[w->ws[k]], w->nw[k] = w->c->op->n[w->ws[k]];
+	for (size_t k = 0; k < nws; k++)
+		w->cw[k] = w->c->C[ws[k]], w->nw[k] = w->c->op->n[ws[k]];
 	return C0_OK;
-}
-
-/* Row a of T = V Hx: the set's non-zero pixels in row a, scattered (Hx
- * symmetric: row b of Hx is its column b); [lo, hi) the columns written. */
-C0_HOT static void ws_row_scatter(const struct wctx *w, const struct c0_band *Hx, int a, const double *v, double *t,
-				  int *lo, int *hi)
-{
-	for (size_t k = w->run[w->rs[a]]; k < w->run[w->rs[a + 1]]; k++) {
-		if (v[k] == 0)
-			continue;
-		const int s = Hx->start[w->col[k]];
-		const double vk = v[k], *h = Hx->v + (size_t)w->col[k] * Hx->w;
-		double *tb = t + s;
-		for (int u = 0; u < Hx->w; u++)
-			tb[u] += vk * h[u];
-		*lo = *lo < s ? *lo : s, *hi = *hi > s + Hx->w ? *hi : s + Hx->w;
-	}
-}
-
-/* out = Hy T at the groups it[0..n): a column dot product per pixel, a
- * group of 4 adjacent pixels of a run in one vector, and four groups side
- * by side, whose sums are independent chains: one chain of Hy->w dependent
- * additions is bound by the addition's latency. Each lane sums in the
- * order of a scalar loop over u, so the grouping does not change a bit. */
-static inline void put_group(const struct wctx *w, size_t g, const c0_v4 *ax, double *out)
-{
-	for (size_t k = w->grp[g]; k < w->grp[g + 1]; k++)
-		out[k] = (*ax)[k - w->grp[g]];
-}
-C0_HOT static void ws_gather(const struct wctx *w, int hw, size_t ld, const struct gitem *it, int n, double *out)
-{
-	int i = 0;
-	for (; i + 4 <= n; i += 4) {
-		const double *t0 = it[i].t, *t1 = it[i + 1].t, *t2 = it[i + 2].t, *t3 = it[i + 3].t;
-		const double *h0 = it[i].h, *h1 = it[i + 1].h, *h2 = it[i + 2].h, *h3 = it[i + 3].h;
-		c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
-		for (int u = 0; u < hw; u++) {
-			const size_t o = (size_t)u * ld;
-			memcpy(&v0, t0 + o, sizeof v0), memcpy(&v1, t1 + o, sizeof v1);
-			memcpy(&v2, t2 + o, sizeof v2), memcpy(&v3, t3 + o, sizeof v3);
-			a0 += h0[u] * v0, a1 += h1[u] * v1, a2 += h2[u] * v2, a3 += h3[u] * v3;
-		}
-		put_group(w, it[i].g, &a0, out), put_group(w, it[i + 1].g, &a1, out);
-		put_group(w, it[i + 2].g, &a2, out), put_group(w, it[i + 3].g, &a3, out);
-	}
-	for (; i < n; i++) {
-		c0_v4 ax = { 0, 0, 0, 0 }, tu;
-		for (int u = 0; u < hw; u++) {
-			memcpy(&tu, it[i].t + (size_t)u * ld, sizeof tu);
-			ax += it[i].h[u] * tu;
-		}
-		put_group(w, it[i].g, &ax, out);
-	}
-}
-
-/* Slot j of b (row base + j of T) := row r of T: cleared, then scattered */
-static void buf_scatter(const struct wctx *w, struct tbuf *b, int j, int r, const double *v)
-{
-	const int Lx = w->c->op->Lx;
-	double *t = b->T + (size_t)j * TLD(Lx);
-	if (b->hi[j] > b->lo[j])
-		memset(t + b->lo[j], 0, sizeof *t * (size_t)(b->hi[j] - b->lo[j]));
-	b->lo[j] = Lx, b->hi[j] = 0;
-	ws_row_scatter(w, &w->c->op->Hx, r, v, t, &b->lo[j], &b->hi[j]);
-}
-
-/* Slot j := slot k's row (k > j) */
-static void buf_move(struct tbuf *b, int j, int k, int Lx)
-{
-	double *t = b->T + (size_t)j * TLD(Lx);
-	const double *f = b->T + (size_t)k * TLD(Lx);
-	if (b->hi[j] > b->lo[j])
-		memset(t + b->lo[j], 0, sizeof *t * (size_t)(b->hi[j] - b->lo[j]));
-	if (b->hi[k] > b->lo[k])
-		memcpy(t + b->lo[k], f + b->lo[k], sizeof *t * (size_t)(b->hi[k] - b->lo[k]));
-	b->lo[j] = b->lo[k], b->hi[j] = b->hi[k];
-}
-
-/* out = A^T A v on the working set: T = V Hx row by row, then Hy T at the
- * set's pixels row by row. Each thread takes a band of output rows and
- * holds only the rows of T that its next output rows reach (struct tbuf), so
- * that they stay in cache: the whole T, as large as the grid, went through
- * memory three times per product (cleared, scattered, gathered). A row of
- * T is made the same way wherever it is held, and each output from it in
- * the same order, so the numbers do not depend on the thread count. */
-static void normal_ws(struct wctx *w, const double *v, double *out)
-{
-	const struct c0_covop *op = w->c->op;
-	const struct c0_band *Hy = &op->Hy;
-	const int Ly = op->Ly, Lx = op->Lx;
-	const int par = w->nws > 20000 && w->nbuf > 1;
-#pragma omp parallel num_threads(w->nbuf) if (par)
-	{
-		const int nt = omp_get_num_threads(), id = omp_get_thread_num();
-		const int a0 = (int)((long long)Ly * id / nt), a1 = (int)((long long)Ly * (id + 1) / nt);
-		struct tbuf *b = &w->buf[id];
-		const size_t ld = TLD(Lx);
-		int base = a0 < a1 ? Hy->start[a0] : 0, next = base;   /* slots hold rows [base, next) */
-		for (int a = a0; a < a1; a += GATHER_ROWS) {
-			const int ae = a + GATHER_ROWS < a1 ? a + GATHER_ROWS : a1;
-			const int s = Hy->start[a], need = Hy->start[ae - 1] + Hy->w;
-			if (need - base > b->rows) {    /* slide: rows [s, next) to the first slots */
-				for (int r = s; r < next; r++)
-					buf_move(b, r - s, r - base, Lx);
-				base = s, next = next > s ? next : s;
-			}
-			for (; next < need; next++)
-				buf_scatter(w, b, next - base, next, v);
-			size_t cur[GATHER_ROWS];
-			for (int r = a; r < ae; r++)
-				cur[r - a] = w->rg[r];
-			for (int c0 = 0; c0 < Lx; c0 += GATHER_COLS) {
-				int n = 0;
-				for (int r = a; r < ae; r++) {
-					const double *tb = b->T + (size_t)(Hy->start[r] - base) * ld, *h = Hy->v + (size_t)r * Hy->w;
-					size_t *g = &cur[r - a];
-					for (; *g < w->rg[r + 1] && w->col[w->grp[*g]] < c0 + GATHER_COLS; ++*g)
-						b->it[n++] = (struct gitem){ tb + w->col[w->grp[*g]], h, *g };
-				}
-				ws_gather(w, Hy->w, ld, b->it, n, out);
-			}
-		}
-	}
 }
 
 static double smooth_ws(void *vctx, const double *xw, double *gw)
 {
 	struct wctx *w = vctx;
-	normal_ws(w, xw, gw);
+	c0_covnormal_apply(&w->N, xw, gw);
 	double xc = 0, xax = 0, xn = 0;
-	for (size_t k = 0; k < w->nws; k++)
+	for (size_t k = 0; k < w->N.nws; k++)
 		xc += xw[k] * w->cw[k], xax += xw[k] * gw[k], xn += xw[k] * w->nw[k];
 	const struct ctx *c = w->c;
 	const double s = fmax(0, (c->trR - xn) / c->HW);
-	for (size_t k = 0; k < w->nws; k++)
+	for (size_t k = 0; k < w->N.nws; k++)
 		gw[k] += s * w->nw[k] - w->cw[k];
 	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
 }
@@ -433,7 +233,7 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 	st = ws_alloc(&w, ctx);
 	double *xw = c0_alloc(L, sizeof *xw), *one = pruned ? c0_alloc(L, sizeof *one) : NULL, *g = ctx->Ax;
 	uint8_t *in = c0_alloc(L, 1);
-	const size_t *ws = w.ws;
+	const size_t *ws = w.N.ws;
 	if (st || !xw || (pruned && !one) || !in) {
 		st = C0_ENOMEM;
 		goto out;
@@ -456,7 +256,7 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 			break;
 		if ((st = ws_set(&w, in, x, xw)))
 			break;
-		for (size_t k = 0; k < w.nws; k++)
+		for (size_t k = 0; k < w.N.nws; k++)
 			pw[k] = xp[ws[k]];
 		part.prev = pw;
 		struct c0_fista_conf fw = *fc;
@@ -467,22 +267,22 @@ static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip,
 		if (pruned) {
 			/* A^T A >= 0 entrywise, so its largest row sum on the set bounds
 			 * its largest eigenvalue there (Gershgorin) */
-			for (size_t k = 0; k < w.nws; k++)
+			for (size_t k = 0; k < w.N.nws; k++)
 				one[k] = 1;
-			normal_ws(&w, one, g);
+			c0_covnormal_apply(&w.N, one, g);
 			double rs = 0;
-			for (size_t k = 0; k < w.nws; k++)
+			for (size_t k = 0; k < w.N.nws; k++)
 				rs = fmax(rs, g[k]);
 			lw = fmin(lip, rs);
 		}
-		if ((st = c0_fista_nn(smooth_ws, &w, w.nws, lw, NULL, ctx->lam, xw, &fw, &part)))
+		if ((st = c0_fista_nn(smooth_ws, &w, w.N.nws, lw, NULL, ctx->lam, xw, &fw, &part)))
 			break;
 		used += part.iters;
 		memset(x, 0, L * sizeof *x);
-		for (size_t k = 0; k < w.nws; k++)
+		for (size_t k = 0; k < w.N.nws; k++)
 			x[ws[k]] = xw[k];
 		memset(xp, 0, L * sizeof *xp);
-		for (size_t k = 0; k < w.nws; k++)
+		for (size_t k = 0; k < w.N.nws; k++)
 			xp[ws[k]] = pw[k];
 		if (used >= fc->maxit) {
 			part.converged = 0;
@@ -508,9 +308,9 @@ static int solve_masked(struct ctx *ctx, const struct c0_fista_conf *fc, double 
 	int st = ws_alloc(&w, ctx);
 	double *xw = c0_alloc(L, sizeof *xw);
 	if (!st && xw && !(st = ws_set(&w, mask, x, xw))) {
-		st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, 0, xw, fc, info);
-		for (size_t k = 0; !st && k < w.nws; k++)
-			x[w.ws[k]] = xw[k];
+		st = c0_fista_nn(smooth_ws, &w, w.N.nws, lip, NULL, 0, xw, fc, info);
+		for (size_t k = 0; !st && k < w.N.nws; k++)
+			x[w.N.ws[k]] = xw[k];
 	} else if (!st)
 		st = C0_ENOMEM;
 	ws_free(&w);
