@@ -1,6 +1,4 @@
-#include "stages/support.h"
-#include "ops/covop.h"
-#include "ops/covnormal.h"
+#include "stages/support_parts.h"
 #include "ops/covpool.h"
 #include "optics/psf.h"
 #include "core/c0math.h"
@@ -48,8 +46,7 @@ double c0_support_guard_ratio(const struct c0_support_conf *c)
 	return g < 1 ? g : 1;
 }
 
-/* A covariance accumulator for c's streamed stacks: with its pixel guard. */
-static int acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a)
+int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a)
 {
 	int st = c0_cov_acc_new(W, H, d, a);
 	if (!st && c->guard)
@@ -57,9 +54,20 @@ static int acc_new(const struct c0_support_conf *c, int W, int H, int d, struct 
 	return st;
 }
 
-static double lambda_rel(const struct c0_support_conf *c)
+double c0_support_lambda_rel(const struct c0_support_conf *c)
 {
 	return c->lambda_rel > 0 ? c->lambda_rel : c0_support_default_lambda(c->penalty);
+}
+
+int c0_support_fail_flat(void)
+{
+	return c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+}
+
+int c0_support_fail_short(const struct c0_frames *in)
+{
+	return c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
+		       "give lambda)", in->name, (long long)in->count);
 }
 
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name)
@@ -99,379 +107,19 @@ void c0_support_result_free(struct c0_support_result *r)
 	memset(r, 0, sizeof *r);
 }
 
-struct ctx {
-	struct c0_covop *op;
-	const double *C;
-	double trR, R2, HW;
-	double *Ax;
-	double lam;
-	double *part;        /* 4 per C0_SUM_BLOCK of the grid: the sums' blocks */
-};
-
-/* <x, C>, <x, A^T A x>, <x, n> and sum x over the grid (A^T A x in c->Ax),
- * in blocks (C0_SUM_BLOCK): s, from <x, n>, moves the iterates */
-static void grid_sums(struct ctx *c, const double *x, double out[4])
-{
-	const double *n = c->op->n, *C = c->C, *Ax = c->Ax;
-	const size_t L = (size_t)c->op->Ly * c->op->Lx, nb = (L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK;
-#pragma omp parallel for schedule(static) if (L > 100000)
-	for (size_t b = 0; b < nb; b++) {
-		const size_t i0 = b * C0_SUM_BLOCK, i1 = L - i0 < C0_SUM_BLOCK ? L : i0 + C0_SUM_BLOCK;
-		double xc = 0, xax = 0, xn = 0, x1 = 0;
-		for (size_t i = i0; i < i1; i++)
-			xc += x[i] * C[i], xax += x[i] * Ax[i], xn += x[i] * n[i], x1 += x[i];
-		c->part[4 * b] = xc, c->part[4 * b + 1] = xax, c->part[4 * b + 2] = xn, c->part[4 * b + 3] = x1;
-	}
-	out[0] = out[1] = out[2] = out[3] = 0;
-	for (size_t b = 0; b < nb; b++)
-		for (int k = 0; k < 4; k++)
-			out[k] += c->part[4 * b + k];
-}
-
-/* f(x) = min_s 1/2 ||R - M(x) - s I||^2 (s in closed form) and its gradient */
-static double smooth(void *vctx, const double *x, double *g)
-{
-	struct ctx *c = vctx;
-	const struct c0_covop *op = c->op;
-	const size_t L = (size_t)op->Ly * op->Lx;
-	c0_covop_normal(c->op, x, c->Ax);
-	double sum[4];
-	grid_sums(c, x, sum);
-	const double xc = sum[0], xax = sum[1], xn = sum[2];
-	double s = fmax(0, (c->trR - xn) / c->HW);
-#pragma omp parallel for if (L > 100000)
-	for (size_t i = 0; i < L; i++)
-		g[i] = c->Ax[i] + s * op->n[i] - c->C[i];
-	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
-}
-
-/* The same on a working set: x and g hold only the set's pixels
- * (ops/covnormal.h), the others are 0. */
-struct wctx {
-	struct ctx *c;
-	struct c0_covnormal N;
-	double *cw, *nw;     /* C and the column norms at the set's pixels */
-};
-
-static int ws_alloc(struct wctx *w, struct ctx *c)
-{
-	*w = (struct wctx){ c, { 0 }, NULL, NULL };
-	return c0_covnormal_init(&w->N, c->op);
-}
-
-static void ws_free(struct wctx *w)
-{
-	c0_covnormal_free(&w->N);
-	free(w->cw), free(w->nw);
-}
-
-/* The set := the pixels with in[i], in grid order; xw their values in x,
- * cw and nw those of C and the column norms */
-static int ws_set(struct wctx *w, const uint8_t *in, const double *x, double *xw)
-{
-	c0_covnormal_set(&w->N, in);
-	const size_t nws = w->N.nws, *ws = w->N.ws;
-	for (size_t k = 0; k < nws; k++)
-		xw[k] = x[ws[k]];
-	free(w->cw), free(w->nw);
-	w->cw = c0_alloc(nws, sizeof *w->cw), w->nw = c0_alloc(nws, sizeof *w->nw);
-	if (!w->cw || !w->nw)
-		return C0_ENOMEM;
-	for (size_t k = 0; k < nws; k++)
-		w->cw[k] = w->c->C[ws[k]], w->nw[k] = w->c->op->n[ws[k]];
-	return C0_OK;
-}
-
-static double smooth_ws(void *vctx, const double *xw, double *gw)
-{
-	struct wctx *w = vctx;
-	c0_covnormal_apply(&w->N, xw, gw);
-	double xc = 0, xax = 0, xn = 0;
-	for (size_t k = 0; k < w->N.nws; k++)
-		xc += xw[k] * w->cw[k], xax += xw[k] * gw[k], xn += xw[k] * w->nw[k];
-	const struct ctx *c = w->c;
-	const double s = fmax(0, (c->trR - xn) / c->HW);
-	for (size_t k = 0; k < w->N.nws; k++)
-		gw[k] += s * w->nw[k] - w->cw[k];
-	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
-}
-
-/* l1 by FISTA: a short run on the whole grid finds where the support can
- * be; then FISTA on the working set (pixels that are non-zero or whose
- * gradient would make them so), re-made every PIECE iterations and checked
- * on the whole grid whenever FISTA converges on it: pixels that would move
- * join, every pixel at 0 that is not pushed up leaves, and FISTA's momentum
- * is carried across. The set shrinks from the warm-up's blur (~5x the
- * support) towards the support, so the iterations get cheaper: at 512x512
- * the capped iterate's duality gap is 25x smaller, in 35 % less time, than
- * with a set kept until FISTA converged on it (docs/parameters.md).
- * fista (the default) takes the whole grid's step; pruned, on each piece,
- * the longest step safe on its set (longer, as the set shrinks). */
-#define WARMUP 30
-#define PIECE 100
-static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, int pruned, double *x,
-		    struct c0_fista_info *info)
-{
-	const struct c0_covop *op = ctx->op;
-	const size_t L = (size_t)op->Ly * op->Lx;
-	struct c0_fista_conf f0 = *fc;
-	f0.maxit = fc->maxit < WARMUP ? fc->maxit : WARMUP;
-	double *xp = c0_alloc(L, sizeof *xp), *pw = c0_alloc(L, sizeof *pw);
-	if (!xp || !pw) {
-		free(xp), free(pw);
-		return C0_ENOMEM;
-	}
-	info->prev = xp, info->theta = 1;
-	int st = c0_fista_nn(smooth, ctx, L, lip, NULL, ctx->lam, x, &f0, info);
-	info->prev = NULL;
-	int used = info->iters;
-	if (st || info->converged || used >= fc->maxit) {
-		free(xp), free(pw);
-		return st;
-	}
-	struct wctx w;
-	st = ws_alloc(&w, ctx);
-	double *xw = c0_alloc(L, sizeof *xw), *one = pruned ? c0_alloc(L, sizeof *one) : NULL, *g = ctx->Ax;
-	uint8_t *in = c0_alloc(L, 1);
-	const size_t *ws = w.N.ws;
-	if (st || !xw || (pruned && !one) || !in) {
-		st = C0_ENOMEM;
-		goto out;
-	}
-	struct c0_fista_info part = *info;
-	for (;;) {
-		/* the gradient on the whole grid: who would move? */
-		smooth(ctx, x, g);
-		/* join: a gradient that would move the pixel by more than rounding
-		 * (1e-3 lambda); leave: at 0 and not pushed up */
-		int grew = 0;
-		for (size_t i = 0; i < L; i++) {
-			const double m = g[i] + ctx->lam;
-			if (!in[i] && (x[i] > 0 || m < -1e-3 * ctx->lam))
-				in[i] = 1, grew = 1;
-			else if (in[i] && x[i] == 0 && m > 0)
-				in[i] = 0;
-		}
-		if (!grew && part.converged)
-			break;
-		if ((st = ws_set(&w, in, x, xw)))
-			break;
-		for (size_t k = 0; k < w.N.nws; k++)
-			pw[k] = xp[ws[k]];
-		part.prev = pw;
-		struct c0_fista_conf fw = *fc;
-		fw.maxit = fc->maxit - used < PIECE ? fc->maxit - used : PIECE;
-		part.hist = info->hist ? info->hist + used : NULL;
-		part.nhist = info->hist && info->nhist > used ? info->nhist - used : 0;
-		double lw = lip;
-		if (pruned) {
-			/* A^T A >= 0 entrywise, so its largest row sum on the set bounds
-			 * its largest eigenvalue there (Gershgorin) */
-			for (size_t k = 0; k < w.N.nws; k++)
-				one[k] = 1;
-			c0_covnormal_apply(&w.N, one, g);
-			double rs = 0;
-			for (size_t k = 0; k < w.N.nws; k++)
-				rs = fmax(rs, g[k]);
-			lw = fmin(lip, rs);
-		}
-		if ((st = c0_fista_nn(smooth_ws, &w, w.N.nws, lw, NULL, ctx->lam, xw, &fw, &part)))
-			break;
-		used += part.iters;
-		memset(x, 0, L * sizeof *x);
-		for (size_t k = 0; k < w.N.nws; k++)
-			x[ws[k]] = xw[k];
-		memset(xp, 0, L * sizeof *xp);
-		for (size_t k = 0; k < w.N.nws; k++)
-			xp[ws[k]] = pw[k];
-		if (used >= fc->maxit) {
-			part.converged = 0;
-			break;
-		}
-	}
-	info->iters = used, info->converged = part.converged, info->obj = part.obj;
-	info->restarts += part.restarts;
-out:
-	ws_free(&w);
-	free(xw), free(one), free(in);
-	free(xp), free(pw);
-	return st;
-}
-
-/* lambda = 0 with x free only on the mask (the noise variance on a given
- * support): FISTA on the mask's pixels alone, the whole grid's step */
-static int solve_masked(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, const uint8_t *mask, double *x,
-			struct c0_fista_info *info)
-{
-	const size_t L = (size_t)ctx->op->Ly * ctx->op->Lx;
-	struct wctx w;
-	int st = ws_alloc(&w, ctx);
-	double *xw = c0_alloc(L, sizeof *xw);
-	if (!st && xw && !(st = ws_set(&w, mask, x, xw))) {
-		st = c0_fista_nn(smooth_ws, &w, w.N.nws, lip, NULL, 0, xw, fc, info);
-		for (size_t k = 0; !st && k < w.N.nws; k++)
-			x[w.N.ws[k]] = xw[k];
-	} else if (!st)
-		st = C0_ENOMEM;
-	ws_free(&w);
-	free(xw);
-	return st;
-}
-
-/* Relative duality gap of the l1 problem at x >= 0 (with s in closed form):
- * the residual rho = R - A x - s I scaled into the dual feasible set,
- * theta = rho / max(1, max_a (A^T rho)_a / lam), gives
- *   D = <R, theta> - ||theta||^2 / 2 <= P* <= P = ||rho||^2 / 2 + lam sum x,
- * and every term is one of the sums the objective needs already. */
-static double gap(void *vctx, const double *x)
-{
-	struct ctx *c = vctx;
-	const struct c0_covop *op = c->op;
-	const size_t L = (size_t)op->Ly * op->Lx;
-	c0_covop_normal(c->op, x, c->Ax);
-	double sum[4];
-	grid_sums(c, x, sum);
-	const double xc = sum[0], xax = sum[1], xn = sum[2], x1 = sum[3];
-	const double s = fmax(0, (c->trR - xn) / c->HW);
-	double worst = 0;      /* max_a (A^T rho)_a = max_a -g_a */
-#pragma omp parallel for reduction(max : worst) if (L > 100000)
-	for (size_t i = 0; i < L; i++)
-		worst = fmax(worst, c->C[i] - c->Ax[i] - s * op->n[i]);
-	const double f = 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
-	const double P = f + c->lam * x1, k = fmax(1, worst / c->lam);
-	const double D = (c->R2 - xc - s * c->trR) / k - f / (k * k);
-	return (P - D) / fmax(P, 1e-300);
-}
-
-/* A tile solves with the whole image's normalisation and lambda, so that
- * every tile answers the same question. */
-struct scale {
-	double norm;     /* largest pixel variance of the image */
-	double lam;      /* absolute lambda (normalised units) */
-};
-
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double **band,
-		 const struct scale *g, struct c0_support_result *res);
-
-int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
-{
-	return solve(c, cov, NULL, NULL, NULL, res);
-}
-
-int c0_support_noise_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
-			   struct c0_support_result *res)
-{
-	struct c0_support_conf cc = *c;
-	cc.penalty = C0_PENALTY_L1;
-	if (cc.fista.tol < 0)    /* lambda = 0 on a mask: it converges, as before */
-		cc.fista.tol = C0_SUPPORT_TOL;
-	return solve(&cc, cov, mask, NULL, NULL, res);
-}
-
-/* band (or NULL): &cov->r, freed once read, before the solver's arrays are
- * allocated (a tile's band is 53 MB at 256 tiles, one per thread) */
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double **band,
-		 const struct scale *g, struct c0_support_result *res)
-{
-	double t0 = c0_now();
-	const int W = cov->W, H = cov->H, r = c->srf;
-	const size_t n = (size_t)W * H, L = n * r * r;
-	struct c0_covop op;
-	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), cov->d);
-	if (st)
-		return st;
-	double *C = c0_alloc(L, sizeof *C);
-	double *x = c0_alloc(L, sizeof *x), *Ax = c0_alloc(L, sizeof *Ax);
-	double *part = c0_alloc(4 * ((L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK), sizeof *part);
-	res->Ly = H * r, res->Lx = W * r, res->lag = cov->d, res->nlag = cov->nlag, res->frames = cov->frames;
-	res->mask = c0_alloc(L, 1);
-	res->rx = c0_alloc(L, sizeof *res->rx);
-	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
-	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!C || !x || !Ax || !part || !res->mask || !res->rx || !res->hist) {
-		st = C0_ENOMEM;
-		goto out;
-	}
-	/* normalise by the largest pixel variance, as the reference does, so that
-	 * lambda and tolerances do not depend on the camera's units */
-	double mx = 0;
-	for (size_t i = 0; i < n; i++)
-		mx = fmax(mx, cov->r[i]);
-	if (g)
-		mx = g->norm;
-	if (!(mx > 0)) {
-		st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
-		goto out;
-	}
-	res->norm = mx;
-	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, 0, part };
-	for (int l = 0; l < cov->nlag; l++) {
-		double w = c0_cov_weight(cov, l);
-		for (size_t i = 0; i < n; i++) {
-			double v = cov->r[(size_t)l * n + i] / mx;
-			ctx.R2 += w * v * v;
-			if (l == 0)
-				ctx.trR += v;
-		}
-	}
-	/* C = A^T (R / mx), without a normalised copy of the band */
-	c0_covop_adjoint(&op, cov, cov->r, C);
-	for (size_t i = 0; i < L; i++)
-		C[i] /= mx;
-	if (band)
-		free(*band), *band = NULL;
-	/* lambda_max: the smallest lambda for which x = 0 (with s = tr R / HW) is optimal */
-	double lm[2];
-	c0_lambda_max(C, 1, fmax(0, ctx.trR / ctx.HW), op.n, L, lm);
-	const double lmax = lm[c->penalty != C0_PENALTY_L1];
-	res->lambda_max = lmax;
-	res->lambda = mask ? 0 : g ? g->lam : lambda_rel(c) * lmax;
-	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
-	ctx.lam = res->lambda;
-	struct c0_fista_conf fc = { c->fista.maxit, c0_support_tol(c) };
-	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
-		if (mask)
-			st = solve_masked(&ctx, &fc, op.lip, mask, x, &info);
-		else if (c->penalty == C0_PENALTY_L1)
-			st = solve_l1(&ctx, &fc, op.lip, c->solver == C0_SUPPORT_PRUNED, x, &info);
-		else
-			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &fc, c->cel0_outer, fc.tol, &info);
-	}
-	if (st)
-		goto out;
-	res->iters = info.iters;
-	res->converged = lmax > res->lambda || mask ? info.converged : 1;
-	res->gap = c->penalty == C0_PENALTY_L1 && !mask && lmax > res->lambda ? gap(&ctx, x) : 0;
-	res->nhist = info.iters < res->nhist ? info.iters : res->nhist;
-	double xn = 0;
-	for (size_t i = 0; i < L; i++) {
-		res->mask[i] = x[i] > 0;
-		res->support_pixels += res->mask[i];
-		res->rx[i] = (float)(x[i] * mx);
-		xn += x[i] * op.n[i];
-	}
-	res->sigma2 = fmax(0, (ctx.trR - xn) / ctx.HW) * mx;
-out:
-	free(C), free(x), free(Ax), free(part);
-	c0_covop_free(&op);
-	res->t_solve = c0_now() - t0;
-	return st;
-}
-
 /* One pass; frames alternate between the nacc accumulators (1 or 2). */
 static int stream_cov(const struct c0_support_conf *c, struct c0_frames *in, int nacc, struct c0_cov *cov,
 		      double *seconds)
 {
 	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
 	if (!st && nacc == 2 && in->count < 6)
-		st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
-			     "give lambda)", in->name, (long long)in->count);
+		st = c0_support_fail_short(in);
 	if (st)
 		return st;
 	double t0 = c0_now();
 	struct c0_cov_acc *acc[2] = { NULL, NULL };
 	for (int k = 0; k < nacc && !st; k++)
-		st = acc_new(c, in->width, in->height, c0_support_lag(c), &acc[k]);
+		st = c0_support_acc_new(c, in->width, in->height, c0_support_lag(c), &acc[k]);
 	float *frame = st ? NULL : c0_alloc((size_t)in->width * in->height, sizeof *frame);
 	if (!st && !frame)
 		st = C0_ENOMEM;
@@ -557,7 +205,7 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
 		return st;
 	struct c0_cov_acc *acc = NULL;
-	st = acc_new(c, W, H, d, &acc);
+	st = c0_support_acc_new(c, W, H, d, &acc);
 	float *frame = st ? NULL : c0_alloc((size_t)W * H, sizeof *frame);
 	if (!st && !frame)
 		st = C0_ENOMEM;
@@ -637,7 +285,7 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 		cc.fista.maxit = FRC_MAXIT;
 	int st = C0_OK;
 	for (int k = 0; k < 2 && !st; k++)
-		st = solve(&cc, &half[k], NULL, NULL, NULL, &h[k]);
+		st = c0_support_solve(&cc, &half[k], &h[k]);
 	if (!st)
 		st = c0_frc_compute(h[0].rx, h[1].rx, res->Ly, res->Lx, &res->frc);
 	if (!st) {
@@ -659,7 +307,7 @@ static int check_norm(const char *name, double norm)
 		return c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
 			       name);
 	if (!(norm > 0))
-		return c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+		return c0_support_fail_flat();
 	return C0_OK;
 }
 
@@ -730,13 +378,13 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 /* One tile: its window's covariance from the accumulator (rows from ya),
  * solved with the image's scale. */
 static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tile *t,
-		      const struct scale *g, struct c0_support_result *tr)
+		      const struct c0_support_scale *g, struct c0_support_result *tr)
 {
 	struct c0_cov cov;
 	memset(tr, 0, sizeof *tr);
 	int st = c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &cov);
 	if (!st)
-		st = solve(c, &cov, NULL, &cov.r, g, tr);
+		st = c0_support_window_solve(c, &cov, NULL, &cov.r, g, tr);
 	if (!st)
 		tr->mean = cov.mean, cov.mean = NULL;
 	c0_cov_free(&cov);
@@ -747,7 +395,7 @@ static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, i
  * solvers' own loops then run serially, so a tile's numbers do not depend
  * on how many threads or processes share the work). */
 static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-		     int k0, int k1, const struct scale *g, struct c0_support_result *res, double *tile_s2, double *tile_stats)
+		     int k0, int k1, const struct c0_support_scale *g, struct c0_support_result *res, double *tile_s2, double *tile_stats)
 {
 	const int r = c->srf, Lx = tl->t[tl->n - 1].x0 + tl->t[tl->n - 1].w;
 	struct c0_first_fail fail = { 0 };
@@ -822,7 +470,7 @@ static void tile_hist_done(double *hist, double *h, int n, int st, struct c0_fir
  * subset's tiles solved at the rule's lambda (side by side, one per thread),
  * their interiors' peaks summed over tiles and ranks. Collective. */
 static int tiles_second(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-			int k0, int k1, const uint8_t *sub, const struct scale *g, double lmax, struct c0_support_result *res)
+			int k0, int k1, const uint8_t *sub, const struct c0_support_scale *g, double lmax, struct c0_support_result *res)
 {
 	struct c0_first_fail fail = { 0 };
 	struct c0_progress pr;
@@ -929,7 +577,7 @@ static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *a
  * value (docs/parameters.md). */
 #define PRECISION_PX (256 * 256)
 static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-			   int k0, int k1, struct c0_cov_acc **odd, const uint8_t *sub, const struct scale *g,
+			   int k0, int k1, struct c0_cov_acc **odd, const uint8_t *sub, const struct c0_support_scale *g,
 			   struct c0_support_result *res)
 {
 	/* which of the noise subset: spread evenly, interiors up to
@@ -984,7 +632,7 @@ static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *a
 		struct c0_cov_acc *o = odd[k - k0];
 		int st = j ? c0_cov_acc_window(o, 0, 0, t->h, t->w, &h) : c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &h);
 		if (!st) {
-			st = solve(&cc, &h, NULL, &h.r, g, &hr);
+			st = c0_support_window_solve(&cc, &h, NULL, &h.r, g, &hr);
 			c0_cov_free(&h);
 		}
 		for (int y = 0; !st && y < ih; y++)
@@ -1046,8 +694,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	const int automatic = !(c->lambda_rel > 0), halves = automatic || c->frc;
 	if (halves && in->count < 6) {
 		c0_tiling_free(&tl);
-		return c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
-			       "give lambda)", in->name, (long long)in->count);
+		return c0_support_fail_short(in);
 	}
 	int k0, k1, ya, yb, ia, ib;
 	c0_tiling_share(&tl, rank, size, &k0, &k1, &ya, &yb, &ia, &ib);
@@ -1061,13 +708,13 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	else if (halves)
 		spread(&tl, NULL, tl.n, SUBSET_PX, sub);
 	if (!st && rows > 0) {
-		st = acc_new(c, W, rows, d, &acc);
+		st = c0_support_acc_new(c, W, rows, d, &acc);
 		if (!st)
 			st = c0_cov_acc_set_block(acc, block);
 		size_t wmax = 0;
 		for (int k = k0; k < k1 && !st; k++) {
 			const struct c0_tile *t = &tl.t[k];
-			if (sub[k] && !(st = acc_new(c, t->w, t->h, d, &odd[k - k0])))
+			if (sub[k] && !(st = c0_support_acc_new(c, t->w, t->h, d, &odd[k - k0])))
 				st = c0_cov_acc_set_block(odd[k - k0], block);
 			wmax = sub[k] && (size_t)t->w * t->h > wmax ? (size_t)t->w * t->h : wmax;
 		}
@@ -1132,8 +779,8 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	}
 	/* lambda relative to the image's lambda_max: the largest of the tiles';
 	 * automatic: chosen from the noise of the subset's correlation images */
-	struct scale g = { norm, 0 };
-	double rel = lambda_rel(c), tn = c0_now(), l1 = 0, l0 = 0;
+	struct c0_support_scale g = { norm, 0 };
+	double rel = c0_support_lambda_rel(c), tn = c0_now(), l1 = 0, l0 = 0;
 	if (!st)
 		st = c0_comm_status(each_tile_noise(c, acc, ya, &tl, k0, k1, odd, norm, lm, hist));
 	if (!st) {
@@ -1155,7 +802,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	free(lm), free(hist);
 	if (!st && automatic && c->penalty == C0_PENALTY_L1) {
 		tn = c0_now();
-		st = tiles_second(c, acc, ya, &tl, k0, k1, sub, &(struct scale){ norm, rel * l1 }, l1, res);
+		st = tiles_second(c, acc, ya, &tl, k0, k1, sub, &(struct c0_support_scale){ norm, rel * l1 }, l1, res);
 		rel = res->cv.chosen_rel;
 		res->cv.seconds += c0_now() - tn;
 	}
