@@ -6,6 +6,7 @@
 #include "check_adjoint.h"
 #include "ops/covop.h"
 #include "ops/covnormal.h"
+#include "ops/covfit.h"
 #include "ops/covariance.h"
 #include "optics/psf.h"
 #include "stages/support.h"
@@ -477,6 +478,43 @@ static void test_covnormal(void)
 	c0_covop_free(&op);
 }
 
+/* The covariance fit on a working set gives the whole grid's objective and
+ * gradient (at its pixels) when x is 0 elsewhere, and a gap >= 0 */
+static void test_covfit(void)
+{
+	struct c0_covop op;
+	struct c0_cov cov;
+	double D[NP * NP];
+	CHECK(c0_covop_init(&op, NY, NX, R, SIG, 7) == C0_OK);
+	CHECK(random_cov(7, 30, &cov, D, 0) == C0_OK);
+	double *C = malloc(sizeof *C * NL), *Ax = malloc(sizeof *Ax * NL), part[4], *x = rnd(NL, 0);
+	double *g = malloc(sizeof *g * NL), *xw = malloc(sizeof *xw * NL), *gw = malloc(sizeof *gw * NL);
+	c0_covop_adjoint(&op, &cov, cov.r, C);
+	struct c0_covfit f = { &op, C, 0, 0, NP, Ax, 1e-3, part };
+	for (int p = 0; p < NP; p++)
+		f.trR += D[p * NP + p];
+	for (int p = 0; p < NP * NP; p++)
+		f.R2 += D[p] * D[p];
+	uint8_t in[NL];
+	for (int k = 0; k < NL; k++)
+		in[k] = k % 3 != 0, x[k] = in[k] ? 1e-3 * x[k] : 0;
+	const double fg = c0_covfit_smooth(&f, x, g);
+	struct c0_covfit_ws w;
+	CHECK(c0_covfit_ws_init(&w, &f) == C0_OK && c0_covfit_ws_set(&w, in, x, xw) == C0_OK);
+	CHECK(w.N.nws == (size_t)NL - (NL + 2) / 3);
+	const double fw = c0_covfit_ws_smooth(&w, xw, gw);
+	CHECK_REL(fw, fg, 1e-12);
+	double e = 0, m = 0;
+	for (size_t k = 0; k < w.N.nws; k++)
+		e = fmax(e, fabs(gw[k] - g[w.N.ws[k]])), m = fmax(m, fabs(g[w.N.ws[k]]));
+	CHECK_MSG(e < 1e-10 * m, "gradient on the set: %g of %g", e, m);
+	CHECK(c0_covfit_gap(&f, x) >= 0);
+	c0_covfit_ws_free(&w);
+	free(C), free(Ax), free(x), free(g), free(xw), free(gw);
+	c0_cov_free(&cov);
+	c0_covop_free(&op);
+}
+
 /* A failure inside a parallel loop reaches the caller with its own message
  * (the message is per thread; the tiles' loops rely on this). */
 static void test_first_fail(void)
@@ -797,6 +835,7 @@ int main(void)
 	RUN(test_covariance);
 	RUN(test_covariance_operator);
 	RUN(test_covnormal);
+	RUN(test_covfit);
 	RUN(test_pixel_guard);
 	RUN(test_first_fail);
 	RUN(test_wrong_inputs);
