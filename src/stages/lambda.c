@@ -198,7 +198,7 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	}
 	correlate(&op, a, norm, R, ca, &tra);
 	correlate(&op, b, norm, R, cb, &trb);
-	/* lambda_max of the mean of the halves, on both scales (as in support.c) */
+	/* lambda_max of the mean of the halves, on both scales (as in support_solve.c) */
 	const double s0 = fmax(0, 0.5 * (tra + trb) / (double)n);
 	for (size_t i = 0; i < L; i++)
 		d[i] = fabs(ca[i] - cb[i]) / 2, ca[i] = 0.5 * (ca[i] + cb[i]);
