@@ -237,6 +237,7 @@ struct stack {
 	int automatic, halves;     /* lambda from the data; the halves' bands needed */
 	double norm, rel;          /* the image's normalisation, lambda / lambda_max */
 	double *lm, *s2, *stats, *hist;   /* per tile: lambda_max (2), sigma2, stats (4); lambda's histograms */
+	double *obj;               /* per tile: its objective history (res->nhist) */
 };
 
 /* This process's share of the grid (its tiles, its rows) and the subset. */
@@ -290,7 +291,8 @@ static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
 	res->frames = k->in->count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!st && (!k->lm || !k->s2 || !k->stats || (k->automatic && !k->hist) || !res->hist))
+	k->obj = c0_alloc(nt * res->nhist, sizeof *k->obj);
+	if (!st && (!k->lm || !k->s2 || !k->stats || (k->automatic && !k->hist) || !res->hist || !k->obj))
 		st = C0_ENOMEM;
 	if (!(st = c0_comm_status(st))) {
 		c0_comm_max(&norm, 1);
@@ -357,21 +359,21 @@ static int stack_solve(struct stack *k, struct c0_support_result *res)
 	res->rx = c0_alloc((size_t)res->Ly * res->Lx, sizeof *res->rx);
 	res->mean = c0_alloc((size_t)k->in->width * k->in->height, sizeof *res->mean);
 	if (!st)
-		st = c0_comm_status(res->mask && res->rx && res->mean ? c0_support_tiles_solve(c, s, &g, res, k->s2, k->stats)
+		st = c0_comm_status(res->mask && res->rx && res->mean ? c0_support_tiles_solve(c, s, &g, res, k->s2, k->stats, k->obj)
 				    : C0_ENOMEM);
 	return st;
 }
 
 /* Rank 0 gathers the interiors and combines the tiles' numbers (each
- * tile's come from one rank, so sums over tiles are made in tile order,
- * whatever the ranks). Collective. */
+ * tile's come from one rank, so sums over ranks are exact and sums over
+ * tiles are made in tile order, whatever the ranks and threads). Collective. */
 static int stack_gather(struct stack *k, struct c0_support_result *res)
 {
 	const struct c0_tiling *tl = &k->s.tl;
 	const int W = k->in->width, r = k->c->srf, ia = k->s.ia, ib = k->s.ib;
 	c0_comm_sum(k->s2, tl->n);
 	c0_comm_sum(k->stats, 4 * tl->n);
-	c0_comm_sum(res->hist, res->nhist);
+	c0_comm_sum(k->obj, tl->n * res->nhist);
 	int st = c0_comm_gather_rows(res->mask, (size_t)W * r, ia * r, (ib - ia) * r);
 	if (!st)
 		st = c0_comm_gather_rows(res->rx, (size_t)W * r * sizeof(float), ia * r, (ib - ia) * r);
@@ -381,6 +383,9 @@ static int stack_gather(struct stack *k, struct c0_support_result *res)
 		return st;
 	double area = 0;
 	res->converged = 1;
+	for (int j = 0; j < tl->n; j++)
+		for (int i = 0; i < res->nhist; i++)
+			res->hist[i] += k->obj[(size_t)j * res->nhist + i];
 	for (int j = 0; j < tl->n; j++) {
 		const struct c0_tile *t = &tl->t[j];
 		const double *ts = k->stats + 4 * (size_t)j;
@@ -407,7 +412,9 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	if (st)
 		return st;
 	double t0 = c0_now();
-	if (k.s.tl.n == 1 && c0_comm_size() == 1) {
+	/* one tile: every process solves the whole image, as one process does
+	 * (the tiles' path normalises and chooses lambda its own way) */
+	if (k.s.tl.n == 1) {
 		c0_tiling_free(&k.s.tl);
 		return stack_whole(c, in, res);
 	}
@@ -431,7 +438,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	share_close(&k.s);
 	if (!st)
 		st = stack_gather(&k, res);
-	free(k.lm), free(k.hist), free(k.s2), free(k.stats);
+	free(k.lm), free(k.hist), free(k.s2), free(k.stats), free(k.obj);
 	c0_tiling_free(&k.s.tl);
 	res->t_solve = c0_now() - t1;
 	if (st)

@@ -74,6 +74,7 @@ int c0_support_tiles_precision(const struct c0_support_conf *c, struct c0_suppor
 			       const struct c0_support_scale *g, struct c0_support_result *res);
 /* Every tile solved at g: its interior into res's mask, rx and mean, its
  * noise variance into s2[k], its iterations, convergence, gap and
- * lambda_max into stats[4 k..], its objective added to res->hist. */
+ * lambda_max into stats[4 k..], its objective history into obj[k nhist..]. */
 int c0_support_tiles_solve(const struct c0_support_conf *c, struct c0_support_share *s,
-			   const struct c0_support_scale *g, struct c0_support_result *res, double *s2, double *stats);
+			   const struct c0_support_scale *g, struct c0_support_result *res, double *s2, double *stats,
+			   double *obj);

@@ -31,9 +31,9 @@ static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, i
 
 /* Tile t's solve tr kept: its interior (fine rows and columns inside the
  * window) into res (an image W camera pixels wide), its numbers into s2
- * and stats (4), its objective added to res->hist. */
+ * and stats (4), its objective into obj (res->nhist). */
 static void tile_keep(const struct c0_tile *t, int r, int W, const struct c0_support_result *tr,
-		      struct c0_support_result *res, double *s2, double *stats)
+		      struct c0_support_result *res, double *s2, double *stats, double *obj)
 {
 	const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
 	const size_t src = (size_t)(oy * r) * tr->Lx + (size_t)ox * r, ld = (size_t)W * r;
@@ -45,13 +45,13 @@ static void tile_keep(const struct c0_tile *t, int r, int W, const struct c0_sup
 		     tr->mean + (size_t)oy * t->w + ox, (size_t)t->w * sizeof(double), t->ih, (size_t)t->iw * sizeof(double));
 	*s2 = tr->sigma2;
 	stats[0] = tr->iters, stats[1] = tr->converged, stats[2] = tr->gap, stats[3] = tr->lambda_max;
-#pragma omp critical(c0_support_hist)
 	for (int i = 0; i < res->nhist; i++)      /* a finished tile keeps its last value */
-		res->hist[i] += tr->nhist ? tr->hist[i < tr->nhist ? i : tr->nhist - 1] : 0;
+		obj[i] = tr->nhist ? tr->hist[i < tr->nhist ? i : tr->nhist - 1] : 0;
 }
 
 int c0_support_tiles_solve(const struct c0_support_conf *c, struct c0_support_share *s,
-			   const struct c0_support_scale *g, struct c0_support_result *res, double *s2, double *stats)
+			   const struct c0_support_scale *g, struct c0_support_result *res, double *s2, double *stats,
+			   double *obj)
 {
 	const struct c0_tiling *tl = &s->tl;
 	const int k0 = s->k0, k1 = s->k1, ya = s->ya, W = tl->t[tl->n - 1].x0 + tl->t[tl->n - 1].w;
@@ -67,7 +67,7 @@ int c0_support_tiles_solve(const struct c0_support_conf *c, struct c0_support_sh
 		struct c0_support_result tr;
 		int st = tile_solve(c, s->acc, ya, &tl->t[k], g, &tr);
 		if (!st)
-			tile_keep(&tl->t[k], c->srf, W, &tr, res, &s2[k], stats + 4 * (size_t)k);
+			tile_keep(&tl->t[k], c->srf, W, &tr, res, &s2[k], stats + 4 * (size_t)k, obj + (size_t)k * res->nhist);
 		c0_first_fail_note(&fail, st);
 		c0_support_result_free(&tr);
 #pragma omp critical(c0_support_progress)
