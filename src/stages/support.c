@@ -1,18 +1,14 @@
 #include "stages/support_parts.h"
 #include "ops/covpool.h"
 #include "optics/psf.h"
-#include "core/c0math.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
 #include "core/progress.h"
 #include "core/comm.h"
-#include "stages/tiles.h"
 
 #include <math.h>
 #include <stdlib.h>
-#include <stdio.h>
-#include <omp.h>
 #include <string.h>
 
 int c0_support_lag(const struct c0_support_conf *c)

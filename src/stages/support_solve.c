@@ -11,7 +11,6 @@
 
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 /* join: a gradient g that would move the pixel by more than rounding
  * (1e-3 lambda); leave: at 0 and not pushed up. 1 when a pixel joined. */
