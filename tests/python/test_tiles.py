@@ -218,5 +218,6 @@ with tempfile.TemporaryDirectory() as tmp:
             if all(os.path.exists(os.path.join(o, "report.json")) for o in outs):
                 same = [same_outputs(outs[0], o) for o in outs[1:]]
                 check(all(same), "%s: 1 rank vs 2, 3 ranks identical: %r" % (what, same))
-                print("mpi: %s: %d files identical on 1, 2 and 3 ranks" % (what, len(os.listdir(outs[0]))))
+                if all(same):
+                    print("mpi: %s: %d files identical on 1, 2 and 3 ranks" % (what, len(os.listdir(outs[0]))))
 done()
