@@ -69,7 +69,8 @@ int c0_support_tiles_lambda(const struct c0_support_conf *c, struct c0_support_s
  * lambda, their peaks summed over tiles and ranks. Collective. */
 int c0_support_tiles_second(const struct c0_support_conf *c, struct c0_support_share *s,
 			    const struct c0_support_scale *g, double lmax, struct c0_support_result *res);
-/* The localisation precision from the subset's halves. Collective. */
+/* The localisation precision from the subset's halves. Collective: its
+ * status is every rank's. */
 int c0_support_tiles_precision(const struct c0_support_conf *c, struct c0_support_share *s,
 			       const struct c0_support_scale *g, struct c0_support_result *res);
 /* Every tile solved at g: its interior into res's mask, rx and mean, its

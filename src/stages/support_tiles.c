@@ -328,7 +328,9 @@ int c0_support_tiles_precision(const struct c0_support_conf *c, struct c0_suppor
 	for (int k = 0; m && k < k1 - k0; k++)
 		free(m[k]);
 	free(m), free(item), free(use);
-	if (!fail)
+	/* every rank sums, or none: a rank that failed must not leave the
+	 * others waiting in the sum */
+	if (!(fail = c0_comm_status(fail)))
 		precision_sum(c, tl, sums, res);
 	free(sums);
 	if (!fail)
