@@ -5,6 +5,8 @@
 #include "check.h"
 #include "check_adjoint.h"
 #include "ops/covop.h"
+#include "ops/covnormal.h"
+#include "ops/covfit.h"
 #include "ops/covariance.h"
 #include "optics/psf.h"
 #include "stages/support.h"
@@ -405,6 +407,114 @@ static void test_covariance_operator(void)
 	c0_covop_free(&op);
 }
 
+/* N = A^T A on a working set (ops/covnormal.h) as a linear operator on the
+ * set's pixels: self-adjoint, so forward and adjoint are the same */
+static void covnormal_apply(void *ctx, const double *x, double *y)
+{
+	c0_covnormal_apply(ctx, x, y);
+}
+
+/* P A^T A P v through the plain operators, v and out on the whole grid:
+ * forward then adjoint on cov's band (every pixel pair when its lag covers
+ * the grid), or the trimmed product c0_covop_normal when cov is NULL */
+static void plain_normal(struct c0_covop *op, const struct c0_cov *cov, const uint8_t *in, const double *v, double *out)
+{
+	const size_t L = (size_t)op->Ly * op->Lx;
+	double *x = malloc(sizeof *x * L);
+	for (size_t i = 0; i < L; i++)
+		x[i] = in[i] ? v[i] : 0;
+	if (cov) {
+		double *m = malloc(sizeof *m * cov->nlag * op->Ny * op->Nx);
+		c0_covop_forward(op, cov, x, m);
+		c0_covop_adjoint(op, cov, m, out);
+		free(m);
+	} else
+		c0_covop_normal(op, x, out);
+	for (size_t i = 0; i < L; i++)
+		out[i] = in[i] ? out[i] : 0;
+	free(x);
+}
+
+/* The working set's normal operator against the plain one on a random set:
+ * on the tiny grid with a PSF wide enough that its bands drop nothing
+ * (C0_COVOP_TRIM), against forward then adjoint over every pixel pair; on a
+ * grid large enough for several threads and sliding row buffers, against
+ * c0_covop_normal; and <N x, y> = <x, N y>. */
+static void test_covnormal(void)
+{
+	struct c0_covop op;
+	struct c0_cov cov;
+	double D[NP * NP];
+	CHECK(c0_covop_init(&op, NY, NX, R, 2.0, 7) == C0_OK);
+	CHECK(random_cov(7, 10, &cov, D, 0) == C0_OK);     /* its lags only: every pixel pair */
+	for (int big = 0; big < 2; big++) {
+		if (big) {
+			c0_covop_free(&op);
+			CHECK(c0_covop_init(&op, 48, 40, 4, SIG, 6) == C0_OK);
+		}
+		const size_t L = (size_t)op.Ly * op.Lx;
+		uint8_t *in = malloc(L);
+		double *v = rnd(L, 0), *ref = malloc(sizeof *ref * L), *vw = malloc(sizeof *vw * L);
+		double *nw = malloc(sizeof *nw * L), *got = calloc(L, sizeof *got);
+		for (size_t i = 0; i < L; i++)
+			in[i] = c0_rng_uniform(&rng) < 0.7;
+		struct c0_covnormal N;
+		CHECK(c0_covnormal_init(&N, &op) == C0_OK);
+		c0_covnormal_set(&N, in);
+		CHECK(N.nws > (big ? 20000 : 0) && N.nws < L);
+		for (size_t k = 0; k < N.nws; k++)
+			vw[k] = v[N.ws[k]];
+		c0_covnormal_apply(&N, vw, nw);
+		for (size_t k = 0; k < N.nws; k++)
+			got[N.ws[k]] = nw[k];
+		plain_normal(&op, big ? NULL : &cov, in, v, ref);
+		CHECK_MSG(maxdiff(got, ref, L) < 1e-10, "N v on %zu of %zu pixels: %g", N.nws, L, maxdiff(got, ref, L));
+		const struct c0_linop A = { N.nws, N.nws, &N, covnormal_apply, covnormal_apply };
+		CHECK_ADJOINT(&A, NULL, 1e-12);
+		c0_covnormal_free(&N);
+		free(in), free(v), free(ref), free(vw), free(nw), free(got);
+	}
+	c0_cov_free(&cov);
+	c0_covop_free(&op);
+}
+
+/* The covariance fit on a working set gives the whole grid's objective and
+ * gradient (at its pixels) when x is 0 elsewhere, and a gap >= 0 */
+static void test_covfit(void)
+{
+	struct c0_covop op;
+	struct c0_cov cov;
+	double D[NP * NP];
+	CHECK(c0_covop_init(&op, NY, NX, R, SIG, 7) == C0_OK);
+	CHECK(random_cov(7, 30, &cov, D, 0) == C0_OK);
+	double *C = malloc(sizeof *C * NL), *Ax = malloc(sizeof *Ax * NL), part[4], *x = rnd(NL, 0);
+	double *g = malloc(sizeof *g * NL), *xw = malloc(sizeof *xw * NL), *gw = malloc(sizeof *gw * NL);
+	c0_covop_adjoint(&op, &cov, cov.r, C);
+	struct c0_covfit f = { &op, C, 0, 0, NP, Ax, 1e-3, part };
+	for (int p = 0; p < NP; p++)
+		f.trR += D[p * NP + p];
+	for (int p = 0; p < NP * NP; p++)
+		f.R2 += D[p] * D[p];
+	uint8_t in[NL];
+	for (int k = 0; k < NL; k++)
+		in[k] = k % 3 != 0, x[k] = in[k] ? 1e-3 * x[k] : 0;
+	const double fg = c0_covfit_smooth(&f, x, g);
+	struct c0_covfit_ws w;
+	CHECK(c0_covfit_ws_init(&w, &f) == C0_OK && c0_covfit_ws_set(&w, in, x, xw) == C0_OK);
+	CHECK(w.N.nws == (size_t)NL - (NL + 2) / 3);
+	const double fw = c0_covfit_ws_smooth(&w, xw, gw);
+	CHECK_REL(fw, fg, 1e-12);
+	double e = 0, m = 0;
+	for (size_t k = 0; k < w.N.nws; k++)
+		e = fmax(e, fabs(gw[k] - g[w.N.ws[k]])), m = fmax(m, fabs(g[w.N.ws[k]]));
+	CHECK_MSG(e < 1e-10 * m, "gradient on the set: %g of %g", e, m);
+	CHECK(c0_covfit_gap(&f, x) >= 0);
+	c0_covfit_ws_free(&w);
+	free(C), free(Ax), free(x), free(g), free(xw), free(gw);
+	c0_cov_free(&cov);
+	c0_covop_free(&op);
+}
+
 /* A failure inside a parallel loop reaches the caller with its own message
  * (the message is per thread; the tiles' loops rely on this). */
 static void test_first_fail(void)
@@ -724,6 +834,8 @@ int main(void)
 	RUN(test_dense_identities);
 	RUN(test_covariance);
 	RUN(test_covariance_operator);
+	RUN(test_covnormal);
+	RUN(test_covfit);
 	RUN(test_pixel_guard);
 	RUN(test_first_fail);
 	RUN(test_wrong_inputs);

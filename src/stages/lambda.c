@@ -1,5 +1,5 @@
 #include "stages/lambda.h"
-#include "stages/support.h"
+#include "stages/support_parts.h"
 #include "ops/covop.h"
 #include "optics/psf.h"
 #include "core/clock.h"
@@ -177,10 +177,10 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	memset(out, 0, sizeof *out);
 	if (a->W != b->W || a->H != b->H || a->nlag != b->nlag)
 		return c0_fail(C0_EINVAL, "lambda: the two halves differ in size");
-	const int W = a->W, H = a->H, r = c->srf;
-	const size_t n = (size_t)W * H, L = n * r * r;
+	const int r = c->srf;
+	const size_t n = (size_t)a->W * a->H, L = n * r * r;
 	struct c0_covop op;
-	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), a->d);
+	int st = c0_support_covop(c, a, &op);
 	if (st)
 		return st;
 	double *R = c0_alloc((size_t)a->nlag * n, sizeof *R), *ca = c0_alloc(L, sizeof *ca);
@@ -193,12 +193,12 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	for (size_t i = 0; i < n; i++)
 		norm = fmax(norm, 0.5 * (a->r[i] + b->r[i]));
 	if (!(norm > 0)) {
-		st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+		st = c0_support_fail_flat();
 		goto out;
 	}
 	correlate(&op, a, norm, R, ca, &tra);
 	correlate(&op, b, norm, R, cb, &trb);
-	/* lambda_max of the mean of the halves, on both scales (as in support.c) */
+	/* lambda_max of the mean of the halves, on both scales (as in support_solve.c) */
 	const double s0 = fmax(0, 0.5 * (tra + trb) / (double)n);
 	for (size_t i = 0; i < L; i++)
 		d[i] = fabs(ca[i] - cb[i]) / 2, ca[i] = 0.5 * (ca[i] + cb[i]);
@@ -283,25 +283,20 @@ void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *
 int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, int iy, int ix, int ih,
 		       int iw, double lmax[2], double *hist)
 {
-	const int W = all->W, H = all->H, r = c->srf;
-	const size_t n = (size_t)W * H, L = n * r * r;
+	const int r = c->srf, Lx = all->W * r;
+	const size_t n = (size_t)all->W * all->H;
 	struct c0_covop op;
-	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), all->d);
+	int st = c0_support_covop(c, all, &op);
 	if (st)
 		return st;
-	double *C = c0_alloc(L, sizeof *C);
+	double *C = c0_alloc(n * r * r, sizeof *C), trR;
 	if (!C) {
 		c0_covop_free(&op);
 		return C0_ENOMEM;
 	}
-	/* as the tile's solve finds it (stages/support.c) */
-	double trR = 0;
-	for (size_t i = 0; i < n; i++)
-		trR += all->r[i] / norm;
-	c0_covop_adjoint(&op, all, all->r, C);
+	/* as the tile's solve finds it (stages/support_solve.c) */
+	c0_support_correlate(&op, all, norm, C, &trR, lmax);
 	const double s0 = fmax(0, trR / (double)n);
-	c0_lambda_max(C, norm, s0, op.n, L, lmax);
-	const int Lx = W * r;
 	for (int y = iy * r; hist && y < (iy + ih) * r; y++)
 		for (int x = ix * r; x < (ix + iw) * r; x++)
 			bin(hist + 2 * C0_LAMBDA_BINS, C[(size_t)y * Lx + x] / norm - s0 * op.n[(size_t)y * Lx + x]);
@@ -312,13 +307,12 @@ int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all
 
 int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *half, double **C, double **n)
 {
-	const int W = half->W, H = half->H, r = c->srf;
-	const size_t L = (size_t)W * H * r * r;
+	const size_t L = (size_t)half->W * half->H * c->srf * c->srf;
 	struct c0_covop op;
 	*C = NULL;
 	if (n)
 		*n = NULL;
-	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), half->d);
+	int st = c0_support_covop(c, half, &op);
 	if (st)
 		return st;
 	if ((*C = c0_alloc(L, sizeof **C)) && (!n || (*n = c0_alloc(L, sizeof **n)))) {

@@ -71,7 +71,7 @@ int c0_lambda_peaks(const struct c0_support_conf *c, const float *rx, double nor
  * lambda_max: out->chosen_rel becomes its lambda (kept when there is no peak). */
 void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *out);
 
-/* The tiled path (stages/support.c), where the band of the whole image is
+/* The tiled path (stages/support_tiles.c), where the band of the whole image is
  * kept for all frames, and the halves only for some tiles' windows.
  * A tile's lambda_max on the l1 and the l0 scale (lmax[0], lmax[1]) as its
  * solve finds it (normalisation norm); with hist, the correlation image over

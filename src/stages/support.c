@@ -1,19 +1,14 @@
-#include "stages/support.h"
-#include "ops/covop.h"
+#include "stages/support_parts.h"
 #include "ops/covpool.h"
 #include "optics/psf.h"
-#include "core/c0math.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
 #include "core/progress.h"
 #include "core/comm.h"
-#include "stages/tiles.h"
 
 #include <math.h>
 #include <stdlib.h>
-#include <stdio.h>
-#include <omp.h>
 #include <string.h>
 
 int c0_support_lag(const struct c0_support_conf *c)
@@ -47,8 +42,7 @@ double c0_support_guard_ratio(const struct c0_support_conf *c)
 	return g < 1 ? g : 1;
 }
 
-/* A covariance accumulator for c's streamed stacks: with its pixel guard. */
-static int acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a)
+int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a)
 {
 	int st = c0_cov_acc_new(W, H, d, a);
 	if (!st && c->guard)
@@ -56,9 +50,20 @@ static int acc_new(const struct c0_support_conf *c, int W, int H, int d, struct 
 	return st;
 }
 
-static double lambda_rel(const struct c0_support_conf *c)
+double c0_support_lambda_rel(const struct c0_support_conf *c)
 {
 	return c->lambda_rel > 0 ? c->lambda_rel : c0_support_default_lambda(c->penalty);
+}
+
+int c0_support_fail_flat(void)
+{
+	return c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+}
+
+int c0_support_fail_short(const struct c0_frames *in)
+{
+	return c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
+		       "give lambda)", in->name, (long long)in->count);
 }
 
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name)
@@ -98,734 +103,10 @@ void c0_support_result_free(struct c0_support_result *r)
 	memset(r, 0, sizeof *r);
 }
 
-struct ctx {
-	struct c0_covop *op;
-	const double *C;
-	double trR, R2, HW;
-	double *Ax;
-	double lam;
-	double *part;        /* 4 per C0_SUM_BLOCK of the grid: the sums' blocks */
-};
-
-/* <x, C>, <x, A^T A x>, <x, n> and sum x over the grid (A^T A x in c->Ax),
- * in blocks (C0_SUM_BLOCK): s, from <x, n>, moves the iterates */
-static void grid_sums(struct ctx *c, const double *x, double out[4])
-{
-	const double *n = c->op->n, *C = c->C, *Ax = c->Ax;
-	const size_t L = (size_t)c->op->Ly * c->op->Lx, nb = (L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK;
-#pragma omp parallel for schedule(static) if (L > 100000)
-	for (size_t b = 0; b < nb; b++) {
-		const size_t i0 = b * C0_SUM_BLOCK, i1 = L - i0 < C0_SUM_BLOCK ? L : i0 + C0_SUM_BLOCK;
-		double xc = 0, xax = 0, xn = 0, x1 = 0;
-		for (size_t i = i0; i < i1; i++)
-			xc += x[i] * C[i], xax += x[i] * Ax[i], xn += x[i] * n[i], x1 += x[i];
-		c->part[4 * b] = xc, c->part[4 * b + 1] = xax, c->part[4 * b + 2] = xn, c->part[4 * b + 3] = x1;
-	}
-	out[0] = out[1] = out[2] = out[3] = 0;
-	for (size_t b = 0; b < nb; b++)
-		for (int k = 0; k < 4; k++)
-			out[k] += c->part[4 * b + k];
-}
-
-/* f(x) = min_s 1/2 ||R - M(x) - s I||^2 (s in closed form) and its gradient */
-static double smooth(void *vctx, const double *x, double *g)
-{
-	struct ctx *c = vctx;
-	const struct c0_covop *op = c->op;
-	const size_t L = (size_t)op->Ly * op->Lx;
-	c0_covop_normal(c->op, x, c->Ax);
-	double sum[4];
-	grid_sums(c, x, sum);
-	const double xc = sum[0], xax = sum[1], xn = sum[2];
-	double s = fmax(0, (c->trR - xn) / c->HW);
-#pragma omp parallel for if (L > 100000)
-	for (size_t i = 0; i < L; i++)
-		g[i] = c->Ax[i] + s * op->n[i] - c->C[i];
-	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
-}
-
-/* The same on a working set: x and g hold only the pixels ws[0..nws), the
- * others are 0. A x = Hy X Hx costs 2 band products per stored pixel instead
- * of per grid pixel: the support is a few percent of the grid. The set is in
- * grid order, so each grid row's pixels are a run ws[rs[a]..rs[a+1]). */
-struct wctx {
-	struct ctx *c;
-	size_t *ws;          /* the set's grid indices */
-	size_t nws;
-	size_t *rs;          /* Ly + 1: row a's runs are run[rs[a]..rs[a+1]) */
-	size_t *run;         /* runs of adjacent columns: ws[run[j]..run[j+1]) */
-	int *col;            /* column of each ws pixel */
-	size_t *rg;          /* Ly + 1: row a's groups are grp[rg[a]..rg[a+1]) */
-	size_t *grp;         /* groups of up to 4 adjacent pixels of a run: ws[grp[g]..grp[g + 1]) */
-	double *cw, *nw;     /* C and the column norms at the set's pixels */
-	int nbuf;            /* threads that may share A^T A on the set */
-	struct tbuf *buf;    /* one each */
-};
-
-/* Rows of T = V Hx held by one thread: row base + j in slot j, zero outside
- * the columns [lo[j], hi[j]) its last scatter wrote. Three bands' worth of
- * rows and a gather block's: the rows kept are moved down about once per
- * two bands of output rows. */
-#define BUF_BANDS 3
-struct tbuf {
-	int rows;
-	double *T;           /* rows x TLD */
-	int *lo, *hi;
-	struct gitem *it;    /* GATHER_ROWS x GATHER_COLS */
-};
-/* The gather goes through blocks of output rows and columns, so that the
- * part of T it reads stays in the first-level cache. */
-#define GATHER_ROWS 16
-#define GATHER_COLS 96
-/* one group of the set to gather: its column of T from the band's first
- * row, its band row of Hy, the group */
-struct gitem {
-	const double *t, *h;
-	size_t g;
-};
-
-/* T's row stride: 3 columns past the grid's, never written, so that a group
- * of 4 at the row's end reads its lanes within the row */
-#define TLD(Lx) ((size_t)(Lx) + 3)
-
-static void ws_index(struct wctx *w)
-{
-	const int Ly = w->c->op->Ly, Lx = w->c->op->Lx;
-	size_t k = 0, j = 0, g = 0;
-	for (int a = 0; a < Ly; a++) {
-		w->rs[a] = j;
-		for (; k < w->nws && w->ws[k] < (size_t)(a + 1) * Lx; k++) {
-			w->col[k] = (int)(w->ws[k] - (size_t)a * Lx);
-			if (k == 0 || w->rs[a] == j || w->ws[k] != w->ws[k - 1] + 1)
-				w->run[j++] = k;
-		}
-	}
-	w->rs[Ly] = j, w->run[j] = k;
-	for (int a = 0; a < Ly; a++) {
-		w->rg[a] = g;
-		for (size_t r = w->rs[a]; r < w->rs[a + 1]; r++)
-			for (k = w->run[r]; k < w->run[r + 1]; k += 4)
-				w->grp[g++] = k;
-	}
-	w->rg[Ly] = g, w->grp[g] = w->nws;
-}
-
-static int ws_alloc(struct wctx *w, struct ctx *c)
-{
-	const size_t Ly = (size_t)c->op->Ly, L = Ly * c->op->Lx;
-	/* inside another team (tiles side by side) the set's loops run alone */
-	const int nbuf = omp_in_parallel() ? 1 : omp_get_max_threads();
-	*w = (struct wctx){ c, c0_alloc(L, sizeof(size_t)), 0, c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)),
-			    c0_alloc(L, sizeof(int)), c0_alloc(Ly + 1, sizeof(size_t)), c0_alloc(L + 1, sizeof(size_t)), NULL, NULL,
-			    nbuf, c0_alloc((size_t)nbuf, sizeof(struct tbuf)) };
-	int ok = w->ws && w->rs && w->run && w->col && w->rg && w->grp && w->buf;
-	for (int i = 0; ok && i < nbuf; i++) {
-		struct tbuf *b = &w->buf[i];
-		b->rows = BUF_BANDS * c->op->Hy.w + GATHER_ROWS;
-		b->T = c0_alloc((size_t)b->rows * TLD(c->op->Lx), sizeof(double));
-		b->lo = c0_alloc((size_t)b->rows, sizeof(int)), b->hi = c0_alloc((size_t)b->rows, sizeof(int));
-		b->it = c0_alloc(GATHER_ROWS * GATHER_COLS, sizeof *b->it);
-		ok = b->T && b->lo && b->hi && b->it;
-		for (int j = 0; ok && j < b->rows; j++)
-			b->lo[j] = c->op->Lx, b->hi[j] = 0;
-	}
-	return ok ? C0_OK : C0_ENOMEM;
-}
-
-static void ws_free(struct wctx *w)
-{
-	free(w->ws), free(w->rs), free(w->run), free(w->col), free(w->rg), free(w->grp), free(w->cw), free(w->nw);
-	for (int i = 0; w->buf && i < w->nbuf; i++)
-		free(w->buf[i].T), free(w->buf[i].lo), free(w->buf[i].hi), free(w->buf[i].it);
-	free(w->buf);
-}
-
-/* The set := the pixels with in[i], in grid order; xw their values in x,
- * cw and nw those of C and the column norms */
-static int ws_set(struct wctx *w, const uint8_t *in, const double *x, double *xw)
-{
-	const size_t L = (size_t)w->c->op->Ly * w->c->op->Lx;
-	w->nws = 0;
-	for (size_t i = 0; i < L; i++)
-		if (in[i])
-			xw[w->nws] = x[i], w->ws[w->nws++] = i;
-	ws_index(w);
-	free(w->cw), free(w->nw);
-	w->cw = c0_alloc(w->nws, sizeof *w->cw), w->nw = c0_alloc(w->nws, sizeof *w->nw);
-	if (!w->cw || !w->nw)
-		return C0_ENOMEM;
-	for (size_t k = 0; k < w->nws; k++)
-		w->cw[k] = w->c->C[w->ws[k]], w->nw[k] = w->c->op->n[w->ws[k]];
-	return C0_OK;
-}
-
-/* Row a of T = V Hx: the set's non-zero pixels in row a, scattered (Hx
- * symmetric: row b of Hx is its column b); [lo, hi) the columns written. */
-C0_HOT static void ws_row_scatter(const struct wctx *w, const struct c0_band *Hx, int a, const double *v, double *t,
-				  int *lo, int *hi)
-{
-	for (size_t k = w->run[w->rs[a]]; k < w->run[w->rs[a + 1]]; k++) {
-		if (v[k] == 0)
-			continue;
-		const int s = Hx->start[w->col[k]];
-		const double vk = v[k], *h = Hx->v + (size_t)w->col[k] * Hx->w;
-		double *tb = t + s;
-		for (int u = 0; u < Hx->w; u++)
-			tb[u] += vk * h[u];
-		*lo = *lo < s ? *lo : s, *hi = *hi > s + Hx->w ? *hi : s + Hx->w;
-	}
-}
-
-/* out = Hy T at the groups it[0..n): a column dot product per pixel, a
- * group of 4 adjacent pixels of a run in one vector, and four groups side
- * by side, whose sums are independent chains: one chain of Hy->w dependent
- * additions is bound by the addition's latency. Each lane sums in the
- * order of a scalar loop over u, so the grouping does not change a bit. */
-static inline void put_group(const struct wctx *w, size_t g, const c0_v4 *ax, double *out)
-{
-	for (size_t k = w->grp[g]; k < w->grp[g + 1]; k++)
-		out[k] = (*ax)[k - w->grp[g]];
-}
-C0_HOT static void ws_gather(const struct wctx *w, int hw, size_t ld, const struct gitem *it, int n, double *out)
-{
-	int i = 0;
-	for (; i + 4 <= n; i += 4) {
-		const double *t0 = it[i].t, *t1 = it[i + 1].t, *t2 = it[i + 2].t, *t3 = it[i + 3].t;
-		const double *h0 = it[i].h, *h1 = it[i + 1].h, *h2 = it[i + 2].h, *h3 = it[i + 3].h;
-		c0_v4 a0 = { 0, 0, 0, 0 }, a1 = a0, a2 = a0, a3 = a0, v0, v1, v2, v3;
-		for (int u = 0; u < hw; u++) {
-			const size_t o = (size_t)u * ld;
-			memcpy(&v0, t0 + o, sizeof v0), memcpy(&v1, t1 + o, sizeof v1);
-			memcpy(&v2, t2 + o, sizeof v2), memcpy(&v3, t3 + o, sizeof v3);
-			a0 += h0[u] * v0, a1 += h1[u] * v1, a2 += h2[u] * v2, a3 += h3[u] * v3;
-		}
-		put_group(w, it[i].g, &a0, out), put_group(w, it[i + 1].g, &a1, out);
-		put_group(w, it[i + 2].g, &a2, out), put_group(w, it[i + 3].g, &a3, out);
-	}
-	for (; i < n; i++) {
-		c0_v4 ax = { 0, 0, 0, 0 }, tu;
-		for (int u = 0; u < hw; u++) {
-			memcpy(&tu, it[i].t + (size_t)u * ld, sizeof tu);
-			ax += it[i].h[u] * tu;
-		}
-		put_group(w, it[i].g, &ax, out);
-	}
-}
-
-/* Slot j of b (row base + j of T) := row r of T: cleared, then scattered */
-static void buf_scatter(const struct wctx *w, struct tbuf *b, int j, int r, const double *v)
-{
-	const int Lx = w->c->op->Lx;
-	double *t = b->T + (size_t)j * TLD(Lx);
-	if (b->hi[j] > b->lo[j])
-		memset(t + b->lo[j], 0, sizeof *t * (size_t)(b->hi[j] - b->lo[j]));
-	b->lo[j] = Lx, b->hi[j] = 0;
-	ws_row_scatter(w, &w->c->op->Hx, r, v, t, &b->lo[j], &b->hi[j]);
-}
-
-/* Slot j := slot k's row (k > j) */
-static void buf_move(struct tbuf *b, int j, int k, int Lx)
-{
-	double *t = b->T + (size_t)j * TLD(Lx);
-	const double *f = b->T + (size_t)k * TLD(Lx);
-	if (b->hi[j] > b->lo[j])
-		memset(t + b->lo[j], 0, sizeof *t * (size_t)(b->hi[j] - b->lo[j]));
-	if (b->hi[k] > b->lo[k])
-		memcpy(t + b->lo[k], f + b->lo[k], sizeof *t * (size_t)(b->hi[k] - b->lo[k]));
-	b->lo[j] = b->lo[k], b->hi[j] = b->hi[k];
-}
-
-/* out = A^T A v on the working set: T = V Hx row by row, then Hy T at the
- * set's pixels row by row. Each thread takes a band of output rows and
- * holds only the rows of T that its next output rows reach (struct tbuf), so
- * that they stay in cache: the whole T, as large as the grid, went through
- * memory three times per product (cleared, scattered, gathered). A row of
- * T is made the same way wherever it is held, and each output from it in
- * the same order, so the numbers do not depend on the thread count. */
-static void normal_ws(struct wctx *w, const double *v, double *out)
-{
-	const struct c0_covop *op = w->c->op;
-	const struct c0_band *Hy = &op->Hy;
-	const int Ly = op->Ly, Lx = op->Lx;
-	const int par = w->nws > 20000 && w->nbuf > 1;
-#pragma omp parallel num_threads(w->nbuf) if (par)
-	{
-		const int nt = omp_get_num_threads(), id = omp_get_thread_num();
-		const int a0 = (int)((long long)Ly * id / nt), a1 = (int)((long long)Ly * (id + 1) / nt);
-		struct tbuf *b = &w->buf[id];
-		const size_t ld = TLD(Lx);
-		int base = a0 < a1 ? Hy->start[a0] : 0, next = base;   /* slots hold rows [base, next) */
-		for (int a = a0; a < a1; a += GATHER_ROWS) {
-			const int ae = a + GATHER_ROWS < a1 ? a + GATHER_ROWS : a1;
-			const int s = Hy->start[a], need = Hy->start[ae - 1] + Hy->w;
-			if (need - base > b->rows) {    /* slide: rows [s, next) to the first slots */
-				for (int r = s; r < next; r++)
-					buf_move(b, r - s, r - base, Lx);
-				base = s, next = next > s ? next : s;
-			}
-			for (; next < need; next++)
-				buf_scatter(w, b, next - base, next, v);
-			size_t cur[GATHER_ROWS];
-			for (int r = a; r < ae; r++)
-				cur[r - a] = w->rg[r];
-			for (int c0 = 0; c0 < Lx; c0 += GATHER_COLS) {
-				int n = 0;
-				for (int r = a; r < ae; r++) {
-					const double *tb = b->T + (size_t)(Hy->start[r] - base) * ld, *h = Hy->v + (size_t)r * Hy->w;
-					size_t *g = &cur[r - a];
-					for (; *g < w->rg[r + 1] && w->col[w->grp[*g]] < c0 + GATHER_COLS; ++*g)
-						b->it[n++] = (struct gitem){ tb + w->col[w->grp[*g]], h, *g };
-				}
-				ws_gather(w, Hy->w, ld, b->it, n, out);
-			}
-		}
-	}
-}
-
-static double smooth_ws(void *vctx, const double *xw, double *gw)
-{
-	struct wctx *w = vctx;
-	normal_ws(w, xw, gw);
-	double xc = 0, xax = 0, xn = 0;
-	for (size_t k = 0; k < w->nws; k++)
-		xc += xw[k] * w->cw[k], xax += xw[k] * gw[k], xn += xw[k] * w->nw[k];
-	const struct ctx *c = w->c;
-	const double s = fmax(0, (c->trR - xn) / c->HW);
-	for (size_t k = 0; k < w->nws; k++)
-		gw[k] += s * w->nw[k] - w->cw[k];
-	return 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
-}
-
-/* l1 by FISTA: a short run on the whole grid finds where the support can
- * be; then FISTA on the working set (pixels that are non-zero or whose
- * gradient would make them so), re-made every PIECE iterations and checked
- * on the whole grid whenever FISTA converges on it: pixels that would move
- * join, every pixel at 0 that is not pushed up leaves, and FISTA's momentum
- * is carried across. The set shrinks from the warm-up's blur (~5x the
- * support) towards the support, so the iterations get cheaper: at 512x512
- * the capped iterate's duality gap is 25x smaller, in 35 % less time, than
- * with a set kept until FISTA converged on it (docs/parameters.md).
- * fista (the default) takes the whole grid's step; pruned, on each piece,
- * the longest step safe on its set (longer, as the set shrinks). */
-#define WARMUP 30
-#define PIECE 100
-static int solve_l1(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, int pruned, double *x,
-		    struct c0_fista_info *info)
-{
-	const struct c0_covop *op = ctx->op;
-	const size_t L = (size_t)op->Ly * op->Lx;
-	struct c0_fista_conf f0 = *fc;
-	f0.maxit = fc->maxit < WARMUP ? fc->maxit : WARMUP;
-	double *xp = c0_alloc(L, sizeof *xp), *pw = c0_alloc(L, sizeof *pw);
-	if (!xp || !pw) {
-		free(xp), free(pw);
-		return C0_ENOMEM;
-	}
-	info->prev = xp, info->theta = 1;
-	int st = c0_fista_nn(smooth, ctx, L, lip, NULL, ctx->lam, x, &f0, info);
-	info->prev = NULL;
-	int used = info->iters;
-	if (st || info->converged || used >= fc->maxit) {
-		free(xp), free(pw);
-		return st;
-	}
-	struct wctx w;
-	st = ws_alloc(&w, ctx);
-	double *xw = c0_alloc(L, sizeof *xw), *one = pruned ? c0_alloc(L, sizeof *one) : NULL, *g = ctx->Ax;
-	uint8_t *in = c0_alloc(L, 1);
-	const size_t *ws = w.ws;
-	if (st || !xw || (pruned && !one) || !in) {
-		st = C0_ENOMEM;
-		goto out;
-	}
-	struct c0_fista_info part = *info;
-	for (;;) {
-		/* the gradient on the whole grid: who would move? */
-		smooth(ctx, x, g);
-		/* join: a gradient that would move the pixel by more than rounding
-		 * (1e-3 lambda); leave: at 0 and not pushed up */
-		int grew = 0;
-		for (size_t i = 0; i < L; i++) {
-			const double m = g[i] + ctx->lam;
-			if (!in[i] && (x[i] > 0 || m < -1e-3 * ctx->lam))
-				in[i] = 1, grew = 1;
-			else if (in[i] && x[i] == 0 && m > 0)
-				in[i] = 0;
-		}
-		if (!grew && part.converged)
-			break;
-		if ((st = ws_set(&w, in, x, xw)))
-			break;
-		for (size_t k = 0; k < w.nws; k++)
-			pw[k] = xp[ws[k]];
-		part.prev = pw;
-		struct c0_fista_conf fw = *fc;
-		fw.maxit = fc->maxit - used < PIECE ? fc->maxit - used : PIECE;
-		part.hist = info->hist ? info->hist + used : NULL;
-		part.nhist = info->hist && info->nhist > used ? info->nhist - used : 0;
-		double lw = lip;
-		if (pruned) {
-			/* A^T A >= 0 entrywise, so its largest row sum on the set bounds
-			 * its largest eigenvalue there (Gershgorin) */
-			for (size_t k = 0; k < w.nws; k++)
-				one[k] = 1;
-			normal_ws(&w, one, g);
-			double rs = 0;
-			for (size_t k = 0; k < w.nws; k++)
-				rs = fmax(rs, g[k]);
-			lw = fmin(lip, rs);
-		}
-		if ((st = c0_fista_nn(smooth_ws, &w, w.nws, lw, NULL, ctx->lam, xw, &fw, &part)))
-			break;
-		used += part.iters;
-		memset(x, 0, L * sizeof *x);
-		for (size_t k = 0; k < w.nws; k++)
-			x[ws[k]] = xw[k];
-		memset(xp, 0, L * sizeof *xp);
-		for (size_t k = 0; k < w.nws; k++)
-			xp[ws[k]] = pw[k];
-		if (used >= fc->maxit) {
-			part.converged = 0;
-			break;
-		}
-	}
-	info->iters = used, info->converged = part.converged, info->obj = part.obj;
-	info->restarts += part.restarts;
-out:
-	ws_free(&w);
-	free(xw), free(one), free(in);
-	free(xp), free(pw);
-	return st;
-}
-
-/* lambda = 0 with x free only on the mask (the noise variance on a given
- * support): FISTA on the mask's pixels alone, the whole grid's step */
-static int solve_masked(struct ctx *ctx, const struct c0_fista_conf *fc, double lip, const uint8_t *mask, double *x,
-			struct c0_fista_info *info)
-{
-	const size_t L = (size_t)ctx->op->Ly * ctx->op->Lx;
-	struct wctx w;
-	int st = ws_alloc(&w, ctx);
-	double *xw = c0_alloc(L, sizeof *xw);
-	if (!st && xw && !(st = ws_set(&w, mask, x, xw))) {
-		st = c0_fista_nn(smooth_ws, &w, w.nws, lip, NULL, 0, xw, fc, info);
-		for (size_t k = 0; !st && k < w.nws; k++)
-			x[w.ws[k]] = xw[k];
-	} else if (!st)
-		st = C0_ENOMEM;
-	ws_free(&w);
-	free(xw);
-	return st;
-}
-
-/* Relative duality gap of the l1 problem at x >= 0 (with s in closed form):
- * the residual rho = R - A x - s I scaled into the dual feasible set,
- * theta = rho / max(1, max_a (A^T rho)_a / lam), gives
- *   D = <R, theta> - ||theta||^2 / 2 <= P* <= P = ||rho||^2 / 2 + lam sum x,
- * and every term is one of the sums the objective needs already. */
-static double gap(void *vctx, const double *x)
-{
-	struct ctx *c = vctx;
-	const struct c0_covop *op = c->op;
-	const size_t L = (size_t)op->Ly * op->Lx;
-	c0_covop_normal(c->op, x, c->Ax);
-	double sum[4];
-	grid_sums(c, x, sum);
-	const double xc = sum[0], xax = sum[1], xn = sum[2], x1 = sum[3];
-	const double s = fmax(0, (c->trR - xn) / c->HW);
-	double worst = 0;      /* max_a (A^T rho)_a = max_a -g_a */
-#pragma omp parallel for reduction(max : worst) if (L > 100000)
-	for (size_t i = 0; i < L; i++)
-		worst = fmax(worst, c->C[i] - c->Ax[i] - s * op->n[i]);
-	const double f = 0.5 * c->R2 - xc - s * c->trR + 0.5 * xax + s * xn + 0.5 * s * s * c->HW;
-	const double P = f + c->lam * x1, k = fmax(1, worst / c->lam);
-	const double D = (c->R2 - xc - s * c->trR) / k - f / (k * k);
-	return (P - D) / fmax(P, 1e-300);
-}
-
-/* A tile solves with the whole image's normalisation and lambda, so that
- * every tile answers the same question. */
-struct scale {
-	double norm;     /* largest pixel variance of the image */
-	double lam;      /* absolute lambda (normalised units) */
-};
-
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double **band,
-		 const struct scale *g, struct c0_support_result *res);
-
-int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res)
-{
-	return solve(c, cov, NULL, NULL, NULL, res);
-}
-
-int c0_support_noise_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
-			   struct c0_support_result *res)
-{
-	struct c0_support_conf cc = *c;
-	cc.penalty = C0_PENALTY_L1;
-	if (cc.fista.tol < 0)    /* lambda = 0 on a mask: it converges, as before */
-		cc.fista.tol = C0_SUPPORT_TOL;
-	return solve(&cc, cov, mask, NULL, NULL, res);
-}
-
-/* band (or NULL): &cov->r, freed once read, before the solver's arrays are
- * allocated (a tile's band is 53 MB at 256 tiles, one per thread) */
-static int solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask, double **band,
-		 const struct scale *g, struct c0_support_result *res)
-{
-	double t0 = c0_now();
-	const int W = cov->W, H = cov->H, r = c->srf;
-	const size_t n = (size_t)W * H, L = n * r * r;
-	struct c0_covop op;
-	int st = c0_covop_init(&op, H, W, r, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), cov->d);
-	if (st)
-		return st;
-	double *C = c0_alloc(L, sizeof *C);
-	double *x = c0_alloc(L, sizeof *x), *Ax = c0_alloc(L, sizeof *Ax);
-	double *part = c0_alloc(4 * ((L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK), sizeof *part);
-	res->Ly = H * r, res->Lx = W * r, res->lag = cov->d, res->nlag = cov->nlag, res->frames = cov->frames;
-	res->mask = c0_alloc(L, 1);
-	res->rx = c0_alloc(L, sizeof *res->rx);
-	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
-	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!C || !x || !Ax || !part || !res->mask || !res->rx || !res->hist) {
-		st = C0_ENOMEM;
-		goto out;
-	}
-	/* normalise by the largest pixel variance, as the reference does, so that
-	 * lambda and tolerances do not depend on the camera's units */
-	double mx = 0;
-	for (size_t i = 0; i < n; i++)
-		mx = fmax(mx, cov->r[i]);
-	if (g)
-		mx = g->norm;
-	if (!(mx > 0)) {
-		st = c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
-		goto out;
-	}
-	res->norm = mx;
-	struct ctx ctx = { &op, C, 0, 0, (double)n, Ax, 0, part };
-	for (int l = 0; l < cov->nlag; l++) {
-		double w = c0_cov_weight(cov, l);
-		for (size_t i = 0; i < n; i++) {
-			double v = cov->r[(size_t)l * n + i] / mx;
-			ctx.R2 += w * v * v;
-			if (l == 0)
-				ctx.trR += v;
-		}
-	}
-	/* C = A^T (R / mx), without a normalised copy of the band */
-	c0_covop_adjoint(&op, cov, cov->r, C);
-	for (size_t i = 0; i < L; i++)
-		C[i] /= mx;
-	if (band)
-		free(*band), *band = NULL;
-	/* lambda_max: the smallest lambda for which x = 0 (with s = tr R / HW) is optimal */
-	double lm[2];
-	c0_lambda_max(C, 1, fmax(0, ctx.trR / ctx.HW), op.n, L, lm);
-	const double lmax = lm[c->penalty != C0_PENALTY_L1];
-	res->lambda_max = lmax;
-	res->lambda = mask ? 0 : g ? g->lam : lambda_rel(c) * lmax;
-	struct c0_fista_info info = { .hist = res->hist, .nhist = res->nhist };
-	ctx.lam = res->lambda;
-	struct c0_fista_conf fc = { c->fista.maxit, c0_support_tol(c) };
-	if (lmax > res->lambda || mask) {      /* else x = 0 is the answer */
-		if (mask)
-			st = solve_masked(&ctx, &fc, op.lip, mask, x, &info);
-		else if (c->penalty == C0_PENALTY_L1)
-			st = solve_l1(&ctx, &fc, op.lip, c->solver == C0_SUPPORT_PRUNED, x, &info);
-		else
-			st = c0_irl1_cel0(smooth, &ctx, L, op.lip, op.n, res->lambda, x, &fc, c->cel0_outer, fc.tol, &info);
-	}
-	if (st)
-		goto out;
-	res->iters = info.iters;
-	res->converged = lmax > res->lambda || mask ? info.converged : 1;
-	res->gap = c->penalty == C0_PENALTY_L1 && !mask && lmax > res->lambda ? gap(&ctx, x) : 0;
-	res->nhist = info.iters < res->nhist ? info.iters : res->nhist;
-	double xn = 0;
-	for (size_t i = 0; i < L; i++) {
-		res->mask[i] = x[i] > 0;
-		res->support_pixels += res->mask[i];
-		res->rx[i] = (float)(x[i] * mx);
-		xn += x[i] * op.n[i];
-	}
-	res->sigma2 = fmax(0, (ctx.trR - xn) / ctx.HW) * mx;
-out:
-	free(C), free(x), free(Ax), free(part);
-	c0_covop_free(&op);
-	res->t_solve = c0_now() - t0;
-	return st;
-}
-
-/* One pass; frames alternate between the nacc accumulators (1 or 2). */
-static int stream_cov(const struct c0_support_conf *c, struct c0_frames *in, int nacc, struct c0_cov *cov,
-		      double *seconds)
-{
-	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
-	if (!st && nacc == 2 && in->count < 6)
-		st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
-			     "give lambda)", in->name, (long long)in->count);
-	if (st)
-		return st;
-	double t0 = c0_now();
-	struct c0_cov_acc *acc[2] = { NULL, NULL };
-	for (int k = 0; k < nacc && !st; k++)
-		st = acc_new(c, in->width, in->height, c0_support_lag(c), &acc[k]);
-	float *frame = st ? NULL : c0_alloc((size_t)in->width * in->height, sizeof *frame);
-	if (!st && !frame)
-		st = C0_ENOMEM;
-	struct c0_progress pr;
-	c0_progress_begin(&pr, "covariance", (double)in->count);
-	for (int64_t t = 0; t < in->count && !st; t++) {
-		st = c0_frames_read(in, t, frame);
-		if (!st && c->frame_fn)
-			st = c->frame_fn(c->frame_ctx, t, frame, in->height, in->width);
-		if (!st)
-			st = c0_cov_acc_add(acc[t % nacc], frame);
-		c0_progress_update(&pr, (double)t + 1);
-	}
-	c0_progress_end(&pr);
-	free(frame);
-	for (int k = 0; k < nacc; k++) {
-		if (st)
-			c0_cov_acc_free(acc[k]);
-		else if ((st = c0_cov_acc_finish(acc[k], &cov[k])))
-			for (int j = k + 1; j < nacc; j++)
-				c0_cov_acc_free(acc[j]);
-	}
-	*seconds = c0_now() - t0;
-	return st;
-}
-
-int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov *cov, double *seconds)
-{
-	return stream_cov(c, in, 1, cov, seconds);
-}
-
-int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov half[2],
-			       double *seconds)
-{
-	return stream_cov(c, in, 2, half, seconds);
-}
-
-int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double **mean, int64_t *frames,
-		  double *seconds)
-{
-	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
-	if (st)
-		return st;
-	double t0 = c0_now();
-	const size_t n = (size_t)in->width * in->height;
-	float *frame = c0_alloc(n, sizeof *frame);
-	*mean = c0_alloc(n, sizeof **mean);
-	if (!frame || !*mean) {
-		free(frame), free(*mean), *mean = NULL;
-		return C0_ENOMEM;
-	}
-	struct c0_progress pr;
-	c0_progress_begin(&pr, "mean", (double)in->count);
-	for (int64_t t = 0; t < in->count && !st; t++) {
-		st = c0_frames_read(in, t, frame);
-		if (!st && c->frame_fn)
-			st = c->frame_fn(c->frame_ctx, t, frame, in->height, in->width);
-		for (size_t i = 0; !st && i < n; i++)
-			(*mean)[i] += frame[i];
-		c0_progress_update(&pr, (double)t + 1);
-	}
-	c0_progress_end(&pr);
-	free(frame);
-	for (size_t i = 0; !st && i < n; i++)
-		(*mean)[i] /= (double)in->count;
-	if (st)
-		free(*mean), *mean = NULL;
-	*frames = in->count;
-	*seconds = c0_now() - t0;
-	return st;
-}
-
-int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const uint8_t *mask, double **mean,
-		   int64_t *frames, double *sigma2, double *seconds)
-{
-	*mean = NULL, *frames = in->count, *sigma2 = 0, *seconds = 0;
-	const int W = in->width, H = in->height, r = c->srf, d = c0_support_lag(c);
-	int st = c0_support_check(c, W, H, in->count, in->name);
-	if (st)
-		return st;
-	double t0 = c0_now();
-	struct c0_tiling tl;
-	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
-		return st;
-	struct c0_cov_acc *acc = NULL;
-	st = acc_new(c, W, H, d, &acc);
-	float *frame = st ? NULL : c0_alloc((size_t)W * H, sizeof *frame);
-	if (!st && !frame)
-		st = C0_ENOMEM;
-	for (int64_t t = 0; t < in->count && !st; t++) {
-		st = c0_frames_read(in, t, frame);
-		if (!st && c->frame_fn)
-			st = c->frame_fn(c->frame_ctx, t, frame, H, W);
-		if (!st)
-			st = c0_cov_acc_add(acc, frame);
-	}
-	free(frame);
-	if (!st && in->count < 3)
-		st = c0_fail(C0_EINVAL, "%s: the covariance needs at least 3 frames", in->name);
-	if (!st)
-		c0_cov_acc_seal(acc);   /* the windows below only read */
-	*seconds = c0_now() - t0;
-	double *s2 = c0_alloc((size_t)tl.n, sizeof *s2);
-	*mean = c0_alloc((size_t)W * H, sizeof **mean);
-	if (!st && (!s2 || !*mean))
-		st = C0_ENOMEM;
-	struct c0_support_conf cc = *c;
-	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
-	struct c0_first_fail fail = { 0 };
-#pragma omp parallel for schedule(dynamic, 1) if (tl.n > 1)
-	for (int k = 0; k < (st ? 0 : tl.n); k++) {
-		const struct c0_tile *t = &tl.t[k];
-		struct c0_cov cov = { 0 };
-		struct c0_support_result tr;
-		memset(&tr, 0, sizeof tr);
-		const size_t Lw = (size_t)t->w * r;
-		uint8_t *m = malloc(Lw * t->h * r);
-		int ts = m ? c0_cov_acc_window(acc, t->y0, t->x0, t->h, t->w, &cov) : C0_ENOMEM;
-		for (int a = 0; !ts && a < t->h * r; a++)
-			memcpy(m + a * Lw, mask + (size_t)(t->y0 * r + a) * W * r + (size_t)t->x0 * r, Lw);
-		if (!ts)
-			ts = c0_support_noise_solve(&cc, &cov, m, &tr);
-		if (!ts) {
-			s2[k] = tr.sigma2;
-			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
-			for (int a = 0; a < t->ih; a++)
-				memcpy(*mean + (size_t)(t->iy0 + a) * W + t->ix0, cov.mean + (size_t)(oy + a) * t->w + ox,
-				       (size_t)t->iw * sizeof **mean);
-		}
-		c0_first_fail_note(&fail, ts);
-		c0_cov_free(&cov);
-		c0_support_result_free(&tr);
-		free(m);
-	}
-	if (!st)
-		st = c0_first_fail_raise(&fail);
-	double area = 0;
-	for (int k = 0; !st && k < tl.n; k++)   /* in tile order: the same sum on any schedule */
-		*sigma2 += s2[k] * tl.t[k].ih * tl.t[k].iw, area += (double)tl.t[k].ih * tl.t[k].iw;
-	if (!st)
-		*sigma2 /= area;
-	c0_cov_acc_free(acc);
-	free(s2);
-	c0_tiling_free(&tl);
-	if (st)
-		free(*mean), *mean = NULL;
-	return st;
-}
-
 /* Each half solved on its own (a warm start from the full solution would
- * make them agree) at the same relative lambda, with at most FRC_MAXIT
- * iterations; the FRC of their emitter variances, and the localisation
- * precision from how far their supports lie apart. */
-#define FRC_MAXIT 300
+ * make them agree) at the same relative lambda, with at most
+ * C0_SUPPORT_FRC_MAXIT iterations; the FRC of their emitter variances, and
+ * the localisation precision from how far their supports lie apart. */
 static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2], struct c0_support_result *res)
 {
 	double t0 = c0_now();
@@ -833,11 +114,11 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	memset(h, 0, sizeof h);
 	struct c0_support_conf cc = *c;
 	cc.lambda_rel = res->lambda_max > 0 ? res->lambda / res->lambda_max : c0_support_default_lambda(c->penalty);
-	if (cc.fista.maxit > FRC_MAXIT)
-		cc.fista.maxit = FRC_MAXIT;
+	if (cc.fista.maxit > C0_SUPPORT_FRC_MAXIT)
+		cc.fista.maxit = C0_SUPPORT_FRC_MAXIT;
 	int st = C0_OK;
 	for (int k = 0; k < 2 && !st; k++)
-		st = solve(&cc, &half[k], NULL, NULL, NULL, &h[k]);
+		st = c0_support_solve(&cc, &half[k], &h[k]);
 	if (!st)
 		st = c0_frc_compute(h[0].rx, h[1].rx, res->Ly, res->Lx, &res->frc);
 	if (!st) {
@@ -859,7 +140,7 @@ static int check_norm(const char *name, double norm)
 		return c0_fail(C0_EINVAL, "%s: the temporal variance is not finite (pixel values too large for the covariance sums)",
 			       name);
 	if (!(norm > 0))
-		return c0_fail(C0_EINVAL, "the stack does not fluctuate (zero temporal variance everywhere)");
+		return c0_support_fail_flat();
 	return C0_OK;
 }
 
@@ -927,493 +208,234 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 	return st;
 }
 
-/* One tile: its window's covariance from the accumulator (rows from ya),
- * solved with the image's scale. */
-static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tile *t,
-		      const struct scale *g, struct c0_support_result *tr)
-{
-	struct c0_cov cov;
-	memset(tr, 0, sizeof *tr);
-	int st = c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &cov);
-	if (!st)
-		st = solve(c, &cov, NULL, &cov.r, g, tr);
-	if (!st)
-		tr->mean = cov.mean, cov.mean = NULL;
-	c0_cov_free(&cov);
-	return st;
-}
-
-/* Runs fn over this process's tiles side by side (one tile per thread: the
- * solvers' own loops then run serially, so a tile's numbers do not depend
- * on how many threads or processes share the work). */
-static int each_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-		     int k0, int k1, const struct scale *g, struct c0_support_result *res, double *tile_s2, double *tile_stats)
-{
-	const int r = c->srf, Lx = tl->t[tl->n - 1].x0 + tl->t[tl->n - 1].w;
-	struct c0_first_fail fail = { 0 };
-	struct c0_progress pr;
-	int done = 0, lo = k0;       /* the tiles before lo are done */
-	uint8_t *fin = c0_alloc((size_t)(k1 - k0) + 1, 1);
-	if (!fin)
-		return C0_ENOMEM;
-	c0_progress_begin(&pr, "support (tiles)", k1 - k0);
-#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
-	for (int k = k0; k < k1; k++) {
-		const struct c0_tile *t = &tl->t[k];
-		struct c0_support_result tr;
-		int st = tile_solve(c, acc, ya, t, g, &tr);
-		if (!st) {
-			/* keep the interior: fine rows and columns inside the window */
-			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
-			for (int y = 0; y < t->ih * r; y++) {
-				const size_t src = (size_t)(oy * r + y) * tr.Lx + (size_t)ox * r;
-				const size_t dst = (size_t)(t->iy0 * r + y) * (Lx * r) + (size_t)t->ix0 * r;
-				memcpy(res->mask + dst, tr.mask + src, (size_t)t->iw * r);
-				memcpy(res->rx + dst, tr.rx + src, (size_t)t->iw * r * sizeof(float));
-			}
-			for (int y = 0; y < t->ih; y++)
-				memcpy(res->mean + (size_t)(t->iy0 + y) * Lx + t->ix0, tr.mean + (size_t)(oy + y) * t->w + ox,
-				       (size_t)t->iw * sizeof(double));
-			tile_s2[k] = tr.sigma2;
-			double *ts = tile_stats + 4 * (size_t)k;
-			ts[0] = tr.iters, ts[1] = tr.converged, ts[2] = tr.gap, ts[3] = tr.lambda_max;
-#pragma omp critical(c0_support_hist)
-			for (int i = 0; i < res->nhist; i++)      /* a finished tile keeps its last value */
-				res->hist[i] += tr.nhist ? tr.hist[i < tr.nhist ? i : tr.nhist - 1] : 0;
-		}
-		c0_first_fail_note(&fail, st);
-		c0_support_result_free(&tr);
-#pragma omp critical(c0_support_progress)
-		{
-			c0_progress_update(&pr, ++done);
-			/* tiles start in tile order, so every tile from lo on cuts its
-			 * window from row t[lo].y0 down: the band above goes back (it
-			 * shrinks faster than rx and the mask grow) */
-			for (fin[k - k0] = 1; lo < k1 && fin[lo - k0]; lo++)
-				;
-			if (lo < k1)
-				c0_cov_acc_drop_rows(acc, tl->t[lo].y0 - ya);
-		}
-	}
-	c0_progress_end(&pr);
-	free(fin);
-	return c0_first_fail_raise(&fail);
-}
-
-/* The end of one tile of the automatic lambda's loops, from its thread: its
- * histogram h (n counts, or NULL) added to hist when its work succeeded and
- * freed, its status noted, the progress advanced. */
-static void tile_hist_done(double *hist, double *h, int n, int st, struct c0_first_fail *fail, struct c0_progress *pr,
-			   int *done)
-{
-	if (!st && h) {
-		/* counts: the sum is exact in any order */
-#pragma omp critical(c0_support_hist_sum)
-		for (int i = 0; i < n; i++)
-			hist[i] += h[i];
-	}
-	free(h);
-	c0_first_fail_note(fail, st);
-#pragma omp critical(c0_support_progress)
-	c0_progress_update(pr, ++*done);
-}
-
-/* The automatic lambda's second step on tiles (stages/lambda.h): the noise
- * subset's tiles solved at the rule's lambda (side by side, one per thread),
- * their interiors' peaks summed over tiles and ranks. Collective. */
-static int tiles_second(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-			int k0, int k1, const uint8_t *sub, const struct scale *g, double lmax, struct c0_support_result *res)
-{
-	struct c0_first_fail fail = { 0 };
-	struct c0_progress pr;
-	int done = 0, nsub = 0;
-	double *hist = c0_alloc(C0_LAMBDA_BINS, sizeof *hist);
-	if (!hist)
-		c0_first_fail_note(&fail, C0_ENOMEM);
-	for (int k = k0; k < k1; k++)
-		nsub += sub[k];
-	c0_progress_begin(&pr, "support (lambda, first solve)", nsub);
-#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
-	for (int k = k0; k < k1; k++) {
-		if (!sub[k] || !hist)
-			continue;
-		const struct c0_tile *t = &tl->t[k];
-		struct c0_support_result tr = { 0 };
-		double *h = c0_alloc(C0_LAMBDA_BINS, sizeof *h);
-		int st = h ? tile_solve(c, acc, ya, t, g, &tr) : C0_ENOMEM;
-		if (!st)
-			st = c0_lambda_peaks(c, tr.rx, g->norm, t->h, t->w, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
-		c0_support_result_free(&tr);
-		tile_hist_done(hist, h, C0_LAMBDA_BINS, st, &fail, &pr, &done);
-	}
-	c0_progress_end(&pr);
-	int st = c0_comm_status(c0_first_fail_raise(&fail));
-	if (!st) {
-		c0_comm_sum(hist, C0_LAMBDA_BINS);
-		c0_lambda_second(hist, lmax, &res->cv);
-	}
-	free(hist);
-	return st;
-}
-
-/* The automatic lambda on tiles needs the odd frames' covariance too; it is
- * kept for a subset of the tiles only, spread evenly over the grid in tile
- * order, whose interiors hold at most SUBSET_PX camera pixels (every tile up
- * to 512x512 images; its band costs about a quarter of a 1024x1024 frame's).
- * The subset depends on the tile grid only. */
-#define SUBSET_PX (512 * 512)
-/* in[k] = 1 for m of the candidates cand[0..nc) (tile indices in tile order;
- * cand NULL: tiles 0..nc), spread evenly, with the largest m whose interiors
- * hold at most px pixels */
-static void spread(const struct c0_tiling *tl, const int *cand, int nc, double px_max, uint8_t *in)
-{
-	for (int m = nc; m >= 1; m--) {
-		double px = 0;
-		memset(in, 0, (size_t)tl->n);
-		for (int j = 0; j < m; j++) {
-			const int c = (int)(((2LL * j + 1) * nc) / (2 * m));
-			const struct c0_tile *t = &tl->t[cand ? cand[c] : c];
-			in[t - tl->t] = 1, px += (double)t->ih * t->iw;
-		}
-		if (px <= px_max || m == 1)
-			return;
-	}
-}
-
-/* Every tile's lambda_max on both scales (lm: 2 per tile); with hist, every
- * tile adds its correlation image, and the subset's halves (the even frames
- * from all and the odd ones) its noise (stages/lambda.h). */
-static int each_tile_noise(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-			   int k0, int k1, struct c0_cov_acc **odd, double norm, double *lm, double *hist)
-{
-	struct c0_first_fail fail = { 0 };
-	struct c0_progress pr;
-	int done = 0;
-	c0_progress_begin(&pr, "support (lambda)", k1 - k0);
-#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
-	for (int k = k0; k < k1; k++) {
-		const struct c0_tile *t = &tl->t[k];
-		struct c0_cov all, ev, od;
-		struct c0_cov_acc *o = hist ? odd[k - k0] : NULL;
-		double *h = hist ? c0_alloc(C0_LAMBDA_HIST, sizeof *h) : NULL;
-		int st = hist && !h ? C0_ENOMEM : c0_cov_acc_window(acc, t->y0 - ya, t->x0, t->h, t->w, &all);
-		if (!st) {
-			st = c0_lambda_tile_max(c, &all, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, lm + 2 * (size_t)k, h);
-			c0_cov_free(&all);
-		}
-		/* one half's band at a time: each gives its correlation image */
-		double *ca = NULL, *cb = NULL, *cn = NULL;
-		if (!st && o && !(st = c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &ev))) {
-			st = c0_lambda_tile_corr(c, &ev, &ca, &cn);
-			c0_cov_free(&ev);
-			if (!st && !(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od))) {
-				st = c0_lambda_tile_corr(c, &od, &cb, NULL);
-				c0_cov_free(&od);
-			}
-			if (!st)
-				c0_lambda_tile_noise(c, ca, cb, cn, t->w, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, h);
-		}
-		free(ca), free(cb), free(cn);
-		tile_hist_done(hist, h, C0_LAMBDA_HIST, st, &fail, &pr, &done);
-	}
-	c0_progress_end(&pr);
-	return c0_first_fail_raise(&fail);
-}
-
-/* The localisation precision on tiles: each subset tile's halves solved on
- * their own (at most FRC_MAXIT iterations, the image's scale and lambda),
- * their interiors' matched distances added in tile order (half_frc on one
- * tile), on part of the noise subset (PRECISION_PX). The halves are solved
- * side by side, one per thread, as the tiles are. No FRC: its
- * ring sums added over Hann-windowed tiles disagreed with the one-tile
- * value (docs/parameters.md). */
-#define PRECISION_PX (256 * 256)
-static int tiles_precision(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tiling *tl,
-			   int k0, int k1, struct c0_cov_acc **odd, const uint8_t *sub, const struct scale *g,
-			   struct c0_support_result *res)
-{
-	/* which of the noise subset: spread evenly, interiors up to
-	 * PRECISION_PX (all of them up to 256x256 images; each half solve costs
-	 * as much as a tile's whole solve) */
-	int nc = 0, *cand = c0_alloc((size_t)tl->n, sizeof *cand);
-	uint8_t *use = c0_alloc((size_t)tl->n, 1);
-	if (!cand || !use) {
-		free(cand), free(use);
-		return C0_ENOMEM;
-	}
-	for (int k = 0; k < tl->n; k++)
-		if (sub[k])
-			cand[nc++] = k;
-	if (nc)
-		spread(tl, cand, nc, PRECISION_PX, use);
-	free(cand);
-	double t0 = c0_now();
-	const int r = c->srf;
-	const double fine = c->pixel_nm / r;
-	const int rad = (int)ceil(0.5 * c->fwhm_nm / fine);
-	double *sums = c0_alloc(2 * (size_t)tl->n, sizeof *sums);   /* distance^2, matches */
-	struct c0_support_conf cc = *c;
-	if (cc.fista.maxit > FRC_MAXIT)
-		cc.fista.maxit = FRC_MAXIT;
-	/* work items: the two halves of each subset tile of this process */
-	int nw = 0;
-	int *item = c0_alloc(2 * (size_t)(k1 - k0) + 1, sizeof *item);
-	uint8_t **m = c0_alloc((size_t)(k1 - k0) + 1, sizeof *m);     /* both halves' interior masks */
-	int fail = sums && item && m ? C0_OK : C0_ENOMEM;
-	struct c0_first_fail ff = { 0 };
-	for (int k = k0; k < k1 && !fail; k++) {
-		const struct c0_tile *t = &tl->t[k];
-		if (!odd[k - k0] || !use[k])
-			continue;
-		if (!(m[k - k0] = c0_alloc(2 * (size_t)t->ih * r * t->iw * r, 1)))
-			fail = C0_ENOMEM;
-		item[nw++] = 2 * k, item[nw++] = 2 * k + 1;
-	}
-	/* side by side, one solve per thread (the solver's own loops then run
-	 * serially, as in each_tile): two solves at a time, as there */
-#pragma omp parallel for schedule(dynamic, 1) if (nw > 1 && !fail)
-	for (int w = 0; w < nw; w++) {
-		if (fail)
-			continue;
-		const int k = item[w] / 2, j = item[w] % 2;
-		const struct c0_tile *t = &tl->t[k];
-		struct c0_cov h;
-		struct c0_support_result hr;
-		memset(&hr, 0, sizeof hr);
-		const int ih = t->ih * r, iw = t->iw * r, oy = (t->iy0 - t->y0) * r, ox = (t->ix0 - t->x0) * r;
-		struct c0_cov_acc *o = odd[k - k0];
-		int st = j ? c0_cov_acc_window(o, 0, 0, t->h, t->w, &h) : c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &h);
-		if (!st) {
-			st = solve(&cc, &h, NULL, &h.r, g, &hr);
-			c0_cov_free(&h);
-		}
-		for (int y = 0; !st && y < ih; y++)
-			memcpy(m[k - k0] + ((size_t)j * ih + y) * iw, hr.mask + (size_t)(oy + y) * hr.Lx + ox, (size_t)iw);
-		c0_support_result_free(&hr);
-		c0_first_fail_note(&ff, st);
-	}
-	if (!fail)
-		fail = c0_first_fail_raise(&ff);
-	for (int k = k0; k < k1 && !fail; k++) {
-		const struct c0_tile *t = &tl->t[k];
-		const size_t n1 = (size_t)t->ih * r * t->iw * r;
-		if (m[k - k0])
-			c0_pair_sums(m[k - k0], m[k - k0] + n1, t->ih * r, t->iw * r, rad, &sums[2 * k], &sums[2 * k + 1]);
-	}
-	for (int k = 0; m && k < k1 - k0; k++)
-		free(m[k]);
-	free(m), free(item), free(use);
-	if (fail) {
-		free(sums);
-		return fail;
-	}
-	/* over ranks, then over tiles in tile order: the same sums for any split */
-	c0_comm_sum(sums, 2 * tl->n);
-	double s = 0, n = 0;
-	for (int k = 0; k < tl->n; k++)
-		s += sums[2 * k], n += sums[2 * k + 1];
-	res->precision_nm = n > 0 ? sqrt(s / n / 4) * fine / sqrt(2) : -1;
-	free(sums);
-	res->t_frc = c0_now() - t0;
-	return C0_OK;
-}
-
 int c0_support_tile_size(const struct c0_support_conf *c, int W, int H)
 {
 	int big = W > H ? W : H;
 	return c->tile > 0 ? c->tile : C0_SUPPORT_TILE < big ? C0_SUPPORT_TILE : big;
 }
 
+int c0_support_grid(const struct c0_support_conf *c, const struct c0_frames *in, struct c0_tiling *tl)
+{
+	const int W = in->width, H = in->height;
+	memset(tl, 0, sizeof *tl);
+	int st = c0_support_check(c, W, H, in->count, in->name);
+	return st ? st : c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * c0_support_lag(c), tl);
+}
+
+
+/* A stack on several tiles or processes (c0_support_stack), phase by
+ * phase: its share and accumulators, the image's scale, lambda, the tiles'
+ * solves, and rank 0's gathering. */
+struct stack {
+	const struct c0_support_conf *c;
+	struct c0_frames *in;
+	struct c0_support_share s;
+	int automatic, halves;     /* lambda from the data; the halves' bands needed */
+	double norm, rel;          /* the image's normalisation, lambda / lambda_max */
+	double *lm, *s2, *stats, *hist;   /* per tile: lambda_max (2), sigma2, stats (4); lambda's histograms */
+	double *obj;               /* per tile: its objective history (res->nhist) */
+};
+
+/* This process's share of the grid (its tiles, its rows) and the subset. */
+static int share_open(struct stack *k)
+{
+	struct c0_support_share *s = &k->s;
+	c0_tiling_share(&s->tl, c0_comm_rank(), c0_comm_size(), &s->k0, &s->k1, &s->ya, &s->yb, &s->ia, &s->ib);
+	s->odd = c0_alloc((size_t)(s->k1 - s->k0) + 1, sizeof *s->odd);
+	s->sub = c0_alloc((size_t)s->tl.n, 1);
+	if (!s->odd || !s->sub)
+		return C0_ENOMEM;
+	if (k->halves)
+		c0_support_subset(&s->tl, s->sub);
+	return C0_OK;
+}
+
+/* its bands and the subset (the grid stays) */
+static void share_close(struct c0_support_share *s)
+{
+	c0_cov_acc_free(s->acc), s->acc = NULL;
+	for (int j = 0; s->odd && j < s->k1 - s->k0; j++)
+		c0_cov_acc_free(s->odd[j]);
+	free(s->odd), free(s->sub);
+	s->odd = NULL, s->sub = NULL;
+}
+
+/* After the pass (its status st, collective): the bands sealed, the arrays
+ * of the phases below, and the image's normalisation, its largest pixel
+ * variance over every process's interiors. */
+static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
+{
+	const struct c0_support_conf *c = k->c;
+	struct c0_support_share *s = &k->s;
+	const int W = k->in->width, r = c->srf, d = c0_support_lag(c);
+	/* the tiles below only read them, some from two threads (the halves) */
+	if (!st && s->acc)
+		c0_cov_acc_seal(s->acc);
+	for (int j = 0; !st && j < s->k1 - s->k0; j++)
+		if (s->odd[j])
+			c0_cov_acc_seal(s->odd[j]);
+	c0_mem_release();    /* the blocks and the frame */
+	double norm = 0;
+	for (int y = s->ia; !st && y < s->ib; y++)
+		for (int x = 0; x < W; x++)
+			norm = fmax(norm, c0_cov_acc_variance(s->acc, y - s->ya, x));
+	const size_t nt = (size_t)s->tl.n;
+	k->lm = c0_alloc(2 * nt, sizeof *k->lm), k->s2 = c0_alloc(nt, sizeof *k->s2);
+	k->stats = c0_alloc(4 * nt, sizeof *k->stats);
+	k->hist = k->automatic ? c0_alloc(C0_LAMBDA_HIST, sizeof *k->hist) : NULL;
+	res->Ly = k->in->height * r, res->Lx = W * r, res->lag = d, res->nlag = c0_cov_lag_count(d);
+	res->frames = k->in->count;
+	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
+	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
+	k->obj = c0_alloc(nt * res->nhist, sizeof *k->obj);
+	if (!st && (!k->lm || !k->s2 || !k->stats || (k->automatic && !k->hist) || !res->hist || !k->obj))
+		st = C0_ENOMEM;
+	if (!(st = c0_comm_status(st))) {
+		c0_comm_max(&norm, 1);
+		st = check_norm(k->in->name, norm);
+	}
+	k->norm = norm;
+	return st;
+}
+
+/* lambda relative to the image's lambda_max: the largest of the tiles';
+ * automatic: chosen from the noise of the subset's correlation images,
+ * then for l1 from the peaks of a first solve. Collective. */
+static int stack_lambda(struct stack *k, struct c0_support_result *res)
+{
+	const struct c0_support_conf *c = k->c;
+	const int n = k->s.tl.n;
+	double tn = c0_now(), l1 = 0, l0 = 0;
+	k->rel = c0_support_lambda_rel(c);
+	int st = c0_comm_status(c0_support_tiles_lambda(c, &k->s, k->norm, k->lm, k->hist));
+	if (!st) {
+		c0_comm_max(k->lm, 2 * n);
+		for (int j = 0; j < n; j++)
+			l1 = fmax(l1, k->lm[2 * j]), l0 = fmax(l0, k->lm[2 * j + 1]);
+		res->lambda_max = c->penalty == C0_PENALTY_L1 ? l1 : l0;
+	}
+	if (!st && k->automatic) {
+		c0_comm_sum(k->hist, C0_LAMBDA_HIST);
+		if (!(l1 > 0))
+			st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
+		else
+			c0_lambda_tiles_choose(c, k->hist, l1, l0, &res->cv), k->rel = res->cv.chosen_rel, res->lambda_auto = 1;
+		for (int j = 0; j < n; j++)
+			res->cv.noise_tiles += k->s.sub[j];
+		res->cv.seconds = c0_now() - tn;
+	}
+	free(k->lm), free(k->hist);
+	k->lm = k->hist = NULL;
+	if (!st && k->automatic && c->penalty == C0_PENALTY_L1) {
+		tn = c0_now();
+		st = c0_support_tiles_second(c, &k->s, &(struct c0_support_scale){ k->norm, k->rel * l1 }, l1, res);
+		k->rel = res->cv.chosen_rel;
+		res->cv.seconds += c0_now() - tn;
+	}
+	return st;
+}
+
+/* The precision from the halves first, then their bands are freed before
+ * the tiles' solves. Collective. */
+static int stack_solve(struct stack *k, struct c0_support_result *res)
+{
+	const struct c0_support_conf *c = k->c;
+	struct c0_support_share *s = &k->s;
+	int st = C0_OK;
+	res->lambda = k->rel * res->lambda_max;
+	res->norm = k->norm;
+	const struct c0_support_scale g = { k->norm, res->lambda };
+	if (c->frc)
+		st = c0_comm_status(c0_support_tiles_precision(c, s, &g, res));
+	for (int j = 0; j < s->k1 - s->k0; j++)
+		c0_cov_acc_free(s->odd[j]), s->odd[j] = NULL;
+	c0_mem_release();     /* the odd bands and the halves' solves */
+	/* the results only now: the steps above fill freed memory again */
+	res->mask = c0_alloc((size_t)res->Ly * res->Lx, 1);
+	res->rx = c0_alloc((size_t)res->Ly * res->Lx, sizeof *res->rx);
+	res->mean = c0_alloc((size_t)k->in->width * k->in->height, sizeof *res->mean);
+	if (!st)
+		st = c0_comm_status(res->mask && res->rx && res->mean ? c0_support_tiles_solve(c, s, &g, res, k->s2, k->stats, k->obj)
+				    : C0_ENOMEM);
+	return st;
+}
+
+/* Rank 0 gathers the interiors and combines the tiles' numbers (each
+ * tile's come from one rank, so sums over ranks are exact and sums over
+ * tiles are made in tile order, whatever the ranks and threads). Collective. */
+static int stack_gather(struct stack *k, struct c0_support_result *res)
+{
+	const struct c0_tiling *tl = &k->s.tl;
+	const int W = k->in->width, r = k->c->srf, ia = k->s.ia, ib = k->s.ib;
+	c0_comm_sum(k->s2, tl->n);
+	c0_comm_sum(k->stats, 4 * tl->n);
+	c0_comm_sum(k->obj, tl->n * res->nhist);
+	int st = c0_comm_gather_rows(res->mask, (size_t)W * r, ia * r, (ib - ia) * r);
+	if (!st)
+		st = c0_comm_gather_rows(res->rx, (size_t)W * r * sizeof(float), ia * r, (ib - ia) * r);
+	if (!st)
+		st = c0_comm_gather_rows(res->mean, (size_t)W * sizeof(double), ia, ib - ia);
+	if (st)
+		return st;
+	double area = 0;
+	res->converged = 1;
+	for (int j = 0; j < tl->n; j++)
+		for (int i = 0; i < res->nhist; i++)
+			res->hist[i] += k->obj[(size_t)j * res->nhist + i];
+	for (int j = 0; j < tl->n; j++) {
+		const struct c0_tile *t = &tl->t[j];
+		const double *ts = k->stats + 4 * (size_t)j;
+		res->sigma2 += k->s2[j] * t->ih * t->iw, area += (double)t->ih * t->iw;
+		res->iters = ts[0] > res->iters ? (int)ts[0] : res->iters;
+		res->converged &= ts[1] > 0;
+		res->gap = fmax(res->gap, ts[2]);
+	}
+	res->sigma2 /= area;
+	res->nhist = res->iters < res->nhist ? res->iters : res->nhist;
+	for (size_t i = 0; i < (size_t)res->Ly * res->Lx; i++)
+		res->support_pixels += res->mask[i];
+	res->tiles = tl->n, res->tile = c0_support_tile_size(k->c, W, k->in->height);
+	if (!k->c->frc)
+		res->precision_nm = -1;
+	return C0_OK;
+}
+
 int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
-	const int W = in->width, H = in->height, r = c->srf, d = c0_support_lag(c);
-	int st = c0_support_check(c, W, H, in->count, in->name);
+	struct stack k = { .c = c, .in = in };
+	int st = c0_support_grid(c, in, &k.s.tl);
 	if (st)
 		return st;
 	double t0 = c0_now();
-	/* the tile grid (halo: two lags), and this process's share of it */
-	struct c0_tiling tl;
-	if ((st = c0_tiling_make(H, W, c0_support_tile_size(c, W, H), 2 * d, &tl)))
-		return st;
-	const int rank = c0_comm_rank(), size = c0_comm_size();
-	if (tl.n == 1 && size == 1) {
-		c0_tiling_free(&tl);
+	/* one tile: every process solves the whole image, as one process does
+	 * (the tiles' path normalises and chooses lambda its own way) */
+	if (k.s.tl.n == 1) {
+		c0_tiling_free(&k.s.tl);
 		return stack_whole(c, in, res);
 	}
 	/* several tiles or processes: the band of all frames, and for the
 	 * automatic lambda that of the odd frames on a subset of the tiles */
-	const int automatic = !(c->lambda_rel > 0), halves = automatic || c->frc;
-	if (halves && in->count < 6) {
-		c0_tiling_free(&tl);
-		return c0_fail(C0_EINVAL, "%s: %lld frames is too short to choose lambda from two halves (needs >= 6; "
-			       "give lambda)", in->name, (long long)in->count);
+	k.automatic = !(c->lambda_rel > 0), k.halves = k.automatic || c->frc;
+	if (k.halves && in->count < 6) {
+		c0_tiling_free(&k.s.tl);
+		return c0_support_fail_short(in);
 	}
-	int k0, k1, ya, yb, ia, ib;
-	c0_tiling_share(&tl, rank, size, &k0, &k1, &ya, &yb, &ia, &ib);
-	const int rows = yb - ya, block = c0_cov_block_frames((size_t)W * H);
-	/* one pass over the frames, each reading only this process's rows */
-	struct c0_cov_acc *acc = NULL, **odd = c0_alloc((size_t)(k1 - k0) + 1, sizeof *odd);
-	uint8_t *sub = c0_alloc((size_t)tl.n, 1);
-	float *frame = NULL, *win = NULL;
-	if (!odd || !sub)
-		st = C0_ENOMEM;
-	else if (halves)
-		spread(&tl, NULL, tl.n, SUBSET_PX, sub);
-	if (!st && rows > 0) {
-		st = acc_new(c, W, rows, d, &acc);
-		if (!st)
-			st = c0_cov_acc_set_block(acc, block);
-		size_t wmax = 0;
-		for (int k = k0; k < k1 && !st; k++) {
-			const struct c0_tile *t = &tl.t[k];
-			if (sub[k] && !(st = acc_new(c, t->w, t->h, d, &odd[k - k0])))
-				st = c0_cov_acc_set_block(odd[k - k0], block);
-			wmax = sub[k] && (size_t)t->w * t->h > wmax ? (size_t)t->w * t->h : wmax;
-		}
-		/* a frame hook (drift) needs whole frames */
-		if (!st && !(frame = c0_alloc((size_t)W * (c->frame_fn ? H : rows), sizeof *frame)))
-			st = C0_ENOMEM;
-		if (!st && wmax && !(win = c0_alloc(wmax, sizeof *win)))
-			st = C0_ENOMEM;
-		struct c0_progress pr;
-		c0_progress_begin(&pr, "covariance", (double)in->count);
-		for (int64_t t = 0; t < in->count && !st; t++) {
-			const float *mine = frame;     /* this process's rows */
-			if (c->frame_fn) {
-				st = c0_frames_read(in, t, frame);
-				if (!st)
-					st = c->frame_fn(c->frame_ctx, t, frame, H, W);
-				mine = frame + (size_t)ya * W;
-			} else {
-				st = c0_frames_read_rows(in, t, ya, rows, frame);
-			}
-			if (!st)
-				st = c0_cov_acc_add(acc, mine);
-			for (int k = k0; k < k1 && !st && t % 2; k++) {
-				const struct c0_tile *w = &tl.t[k];
-				if (!odd[k - k0])
-					continue;
-				for (int y = 0; y < w->h; y++)
-					memcpy(win + (size_t)y * w->w, mine + (size_t)(w->y0 - ya + y) * W + w->x0,
-					       (size_t)w->w * sizeof *win);
-				st = c0_cov_acc_add(odd[k - k0], win);
-			}
-			c0_progress_update(&pr, (double)t + 1);
-		}
-		c0_progress_end(&pr);
-		free(frame), free(win);
-	}
+	st = share_open(&k);
+	if (!st && k.s.yb > k.s.ya)
+		st = c0_support_stream_tiles(c, in, &k.s);
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
-	/* the tiles below only read them, some from two threads (the halves) */
-	if (!st && acc)
-		c0_cov_acc_seal(acc);
-	for (int k = 0; !st && k < k1 - k0; k++)
-		if (odd[k])
-			c0_cov_acc_seal(odd[k]);
-	c0_mem_release();    /* the blocks and the frame */
-	/* the image's normalisation: its largest pixel variance */
-	double norm = 0;
-	for (int y = ia; !st && y < ib; y++)
-		for (int x = 0; x < W; x++)
-			norm = fmax(norm, c0_cov_acc_variance(acc, y - ya, x));
-	const size_t L = (size_t)W * H * r * r, nt = (size_t)tl.n;
-	double *lm = c0_alloc(2 * nt, sizeof *lm), *s2 = c0_alloc(nt, sizeof *s2), *stats = c0_alloc(4 * nt, sizeof *stats);
-	double *hist = automatic ? c0_alloc(C0_LAMBDA_HIST, sizeof *hist) : NULL;
-	res->Ly = H * r, res->Lx = W * r, res->lag = d, res->nlag = c0_cov_lag_count(d), res->frames = in->count;
-	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
-	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
-	if (!st && (!lm || !s2 || !stats || (automatic && !hist) || !res->hist))
-		st = C0_ENOMEM;
-	if (!(st = c0_comm_status(st))) {
-		c0_comm_max(&norm, 1);
-		st = check_norm(in->name, norm);
-	}
-	/* lambda relative to the image's lambda_max: the largest of the tiles';
-	 * automatic: chosen from the noise of the subset's correlation images */
-	struct scale g = { norm, 0 };
-	double rel = lambda_rel(c), tn = c0_now(), l1 = 0, l0 = 0;
+	st = stack_scale(&k, st, res);
 	if (!st)
-		st = c0_comm_status(each_tile_noise(c, acc, ya, &tl, k0, k1, odd, norm, lm, hist));
-	if (!st) {
-		c0_comm_max(lm, 2 * tl.n);
-		for (int k = 0; k < tl.n; k++)
-			l1 = fmax(l1, lm[2 * k]), l0 = fmax(l0, lm[2 * k + 1]);
-		res->lambda_max = c->penalty == C0_PENALTY_L1 ? l1 : l0;
-	}
-	if (!st && automatic) {
-		c0_comm_sum(hist, C0_LAMBDA_HIST);
-		if (!(l1 > 0))
-			st = c0_fail(C0_EINVAL, "the stack's covariance correlates with no emitter position (lambda_max = 0)");
-		else
-			c0_lambda_tiles_choose(c, hist, l1, l0, &res->cv), rel = res->cv.chosen_rel, res->lambda_auto = 1;
-		for (int k = 0; k < tl.n; k++)
-			res->cv.noise_tiles += sub[k];
-		res->cv.seconds = c0_now() - tn;
-	}
-	free(lm), free(hist);
-	if (!st && automatic && c->penalty == C0_PENALTY_L1) {
-		tn = c0_now();
-		st = tiles_second(c, acc, ya, &tl, k0, k1, sub, &(struct scale){ norm, rel * l1 }, l1, res);
-		rel = res->cv.chosen_rel;
-		res->cv.seconds += c0_now() - tn;
-	}
-	if (!st) {
-		res->lambda = rel * res->lambda_max;
-		res->norm = norm;
-		g.lam = res->lambda;
-		/* the halves first, then their bands are freed before the tiles' solves */
-		if (c->frc)
-			st = c0_comm_status(tiles_precision(c, acc, ya, &tl, k0, k1, odd, sub, &g, res));
-		for (int k = 0; k < k1 - k0; k++)
-			c0_cov_acc_free(odd[k]), odd[k] = NULL;
-		c0_mem_release();     /* the odd bands and the halves' solves */
-		/* the results only now: the steps above fill freed memory again */
-		res->mask = c0_alloc(L, 1);
-		res->rx = c0_alloc(L, sizeof *res->rx);
-		res->mean = c0_alloc((size_t)W * H, sizeof *res->mean);
-		if (!st)
-			st = c0_comm_status(res->mask && res->rx && res->mean ? each_tile(c, acc, ya, &tl, k0, k1, &g, res, s2, stats)
-					    : C0_ENOMEM);
-	}
-	c0_cov_acc_free(acc);
-	for (int k = 0; odd && k < k1 - k0; k++)
-		c0_cov_acc_free(odd[k]);
-	free(odd), free(sub);
-	/* rank 0 gathers the interiors (each tile's numbers come from one rank,
-	 * so sums over tiles are made in tile order, whatever the ranks) */
-	if (!st) {
-		c0_comm_sum(s2, tl.n);
-		c0_comm_sum(stats, 4 * tl.n);
-		c0_comm_sum(res->hist, res->nhist);
-		st = c0_comm_gather_rows(res->mask, (size_t)W * r, ia * r, (ib - ia) * r);
-		if (!st)
-			st = c0_comm_gather_rows(res->rx, (size_t)W * r * sizeof(float), ia * r, (ib - ia) * r);
-		if (!st)
-			st = c0_comm_gather_rows(res->mean, (size_t)W * sizeof(double), ia, ib - ia);
-	}
-	if (!st) {
-		double area = 0;
-		res->converged = 1;
-		for (int k = 0; k < tl.n; k++) {
-			const struct c0_tile *t = &tl.t[k];
-			const double *ts = stats + 4 * (size_t)k;
-			res->sigma2 += s2[k] * t->ih * t->iw, area += (double)t->ih * t->iw;
-			res->iters = ts[0] > res->iters ? (int)ts[0] : res->iters;
-			res->converged &= ts[1] > 0;
-			res->gap = fmax(res->gap, ts[2]);
-		}
-		res->sigma2 /= area;
-		res->nhist = res->iters < res->nhist ? res->iters : res->nhist;
-		for (size_t i = 0; i < L; i++)
-			res->support_pixels += res->mask[i];
-		res->tiles = tl.n, res->tile = c0_support_tile_size(c, W, H);
-		if (!c->frc)
-			res->precision_nm = -1;
-	}
-	free(s2), free(stats);
-	c0_tiling_free(&tl);
+		st = stack_lambda(&k, res);
+	if (!st)
+		st = stack_solve(&k, res);
+	share_close(&k.s);
+	if (!st)
+		st = stack_gather(&k, res);
+	free(k.lm), free(k.hist), free(k.s2), free(k.stats), free(k.obj);
+	c0_tiling_free(&k.s.tl);
 	res->t_solve = c0_now() - t1;
 	if (st)
 		c0_support_result_free(res);

@@ -89,9 +89,11 @@ double c0_support_default_lambda(enum c0_penalty p);
  * interleaved halves (for the automatic lambda and the FRC), each process
  * reading its rows only, then solves the tiles side by side and keeps
  * their interiors. sigma2: the tiles' noise variances averaged over their
- * interiors; iters: the most of any tile; converged: every tile did. With
- * one tile (images up to the tile size) this is the plain whole-image
- * solve. Under MPI the result is complete on rank 0. */
+ * interiors; iters: the most of any tile; converged: every tile did;
+ * the objective: the tiles' summed in tile order. With one tile (images up
+ * to the tile size) this is the plain whole-image solve, which every
+ * process then makes alone. Under MPI the result is complete on rank 0,
+ * and the same on any number of processes. */
 int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *f, struct c0_support_result *res);
 /* Solves from a finished covariance (which is left unchanged). */
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res);

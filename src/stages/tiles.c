@@ -46,3 +46,9 @@ void c0_tiling_share(const struct c0_tiling *tl, int rank, int size, int *k0, in
 	const struct c0_tile *a = &tl->t[*k0], *b = &tl->t[*k1 - 1];
 	*y0 = a->y0, *y1 = b->y0 + b->h, *i0 = a->iy0, *i1 = b->iy0 + b->ih;
 }
+
+void c0_tile_copy(void *dst, size_t dld, const void *src, size_t sld, int h, size_t n)
+{
+	for (int y = 0; y < h; y++)
+		memcpy((char *)dst + (size_t)y * dld, (const char *)src + (size_t)y * sld, n);
+}

@@ -4,6 +4,7 @@
  * never on threads or processes, so results do not either. Processes take
  * contiguous runs of tile rows, so each reads one band of rows of a frame. */
 #pragma once
+#include <stddef.h>
 
 struct c0_tile {
 	int y0, x0, h, w;          /* window */
@@ -22,3 +23,6 @@ void c0_tiling_free(struct c0_tiling *tl);
  * no tile). */
 void c0_tiling_share(const struct c0_tiling *tl, int rank, int size, int *k0, int *k1, int *y0, int *y1, int *i0,
 		     int *i1);
+/* h rows of n bytes from src to dst, rows sld and dld bytes apart: a
+ * window or an interior cut from an image or pasted into one. */
+void c0_tile_copy(void *dst, size_t dld, const void *src, size_t sld, int h, size_t n);

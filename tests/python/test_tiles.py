@@ -14,7 +14,11 @@
   from the affinity mask (the report records both, and the MPI rank count);
 - a tile smaller than the PSF band or larger than the image is refused with
   one line, leaving nothing behind;
-- with MPI: 'run' on 1 and 2 ranks writes identical files (automatic lambda, the same).
+- with MPI: 'run' on 1 and 2 ranks writes identical files (automatic lambda, the same);
+  'run' on an image smaller than one tile, and 'support' on exactly one
+  tile and on tiles whose rows do not split evenly over the ranks, with
+  drift on and off, write identical files on 1, 2 and 3 ranks, report.json
+  included (less its timings, paths and rank count).
 
 usage: test_tiles.py COL0RME [MPIRUN]
 """
@@ -53,6 +57,30 @@ def pages(path):
 
 def same_files(a, b, names):
     return all(np.array_equal(pages(os.path.join(a, n)), pages(os.path.join(b, n))) for n in names)
+
+
+VOLATILE = {"timings_s", "created", "argv", "versions", "omp_wait_policy", "threads", "wall_s", "cpu_s", "seconds",
+            "mpi_ranks"}
+
+
+def report(d):
+    """report.json less what changes from run to run (timings, paths, the rank count)"""
+    def strip(x):
+        if isinstance(x, dict):
+            return {k: strip(v) for k, v in x.items() if k not in VOLATILE and not k.endswith("_s")}
+        if isinstance(x, list):
+            return [strip(v) for v in x]
+        return x.replace(d, "DIR") if isinstance(x, str) else x
+    return strip(json.load(open(os.path.join(d, "report.json"))))
+
+
+def same_outputs(a, b):
+    """every file byte for byte, report.json as report() reads it"""
+    names = sorted(os.listdir(a))
+    if names != sorted(os.listdir(b)):
+        return False
+    return all(report(a) == report(b) if n == "report.json" else
+               open(os.path.join(a, n), "rb").read() == open(os.path.join(b, n), "rb").read() for n in names)
 
 
 with tempfile.TemporaryDirectory() as tmp:
@@ -164,4 +192,32 @@ with tempfile.TemporaryDirectory() as tmp:
             check(all(s["lambda_rule"] == "automatic" for s in sup[0] + sup[1]) and
                   [s["lambda"] for s in sup[0]] == [s["lambda"] for s in sup[1]], "automatic lambda on 1 and 2 ranks")
             print("mpi: %d files identical on 1 and 2 ranks" % len(names))
+        # 1, 2 and 3 ranks: smaller than one tile (issue: the ranks took the
+        # tiles' path, one process the whole image's), exactly one tile, and
+        # 3x3 tiles (3 tile rows: 2 ranks split them 1 + 2, 3 ranks 1 + 1 + 1)
+        sim3 = os.path.join(tmp, "mpi_sim")
+        p = cli("simulate", "-o", sim3, "--width", "48", "--height", "48", "--frames", "120", "--angles", "62,66",
+                "--seed", "2", "--drift-nm", "60,-40")
+        check(p.returncode == 0, "simulate: " + p.stderr)
+        stacks = [os.path.join(sim3, "stack_q0%d.tif" % q) for q in (1, 2)]
+        cases = (("run, smaller than one tile", ["run", "--angles", "62,66", "--matirf-iterations", "300"] + stacks),
+                 ("support, one tile, no drift", ["support", "--tile", "48", "--iterations", "300", "--no-drift",
+                                                  stacks[0]]),
+                 ("support, 3x3 tiles", ["support", "--tile", "16", "--iterations", "300", stacks[0]]),
+                 ("support, 3x3 tiles, no drift, cel0", ["support", "--tile", "16", "--iterations", "60",
+                                                         "--reweightings", "2", "--penalty", "cel0", "--no-drift",
+                                                         stacks[0]]))
+        for i, (what, a) in enumerate(cases):
+            outs = []
+            for n in (1, 2, 3):
+                o = os.path.join(tmp, "mpi_case%d_%d" % (i, n))
+                pre = (MPIRUN, "--allow-run-as-root", "--oversubscribe", "-np", str(n))
+                p = cli(a[0], "--fwhm", "229", "--pixel-size", "100", *a[1:], "-o", o, pre=pre, env=env)
+                check(p.returncode == 0, "%s, mpirun -np %d: %s" % (what, n, p.stderr[-2000:]))
+                outs.append(o)
+            if all(os.path.exists(os.path.join(o, "report.json")) for o in outs):
+                same = [same_outputs(outs[0], o) for o in outs[1:]]
+                check(all(same), "%s: 1 rank vs 2, 3 ranks identical: %r" % (what, same))
+                if all(same):
+                    print("mpi: %s: %d files identical on 1, 2 and 3 ranks" % (what, len(os.listdir(outs[0]))))
 done()

@@ -1,0 +1,255 @@
+/* The support step's passes over a stack's frames: the covariance (and its
+ * two interleaved halves), the temporal mean, the noise variance on a known
+ * support, and the tiled stack's band of rows, all through one frame loop. */
+#include "stages/support_parts.h"
+#include "core/clock.h"
+#include "core/err.h"
+#include "core/mem.h"
+#include "core/progress.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* Every frame of in, after c's frame hook, its rows [y0, y0 + ny) to
+ * use(ctx, t, rows); with band and no hook (which needs whole frames) only
+ * those rows are read. what: the progress line's stage (NULL: none). */
+typedef int (*frame_use)(void *ctx, int64_t t, const float *rows);
+static int each_frame(const struct c0_support_conf *c, struct c0_frames *in, int band, int y0, int ny,
+		      const char *what, frame_use use, void *ctx)
+{
+	const int W = in->width, H = in->height, whole = !band || c->frame_fn;
+	float *frame = c0_alloc((size_t)W * (whole ? H : ny), sizeof *frame);
+	if (!frame)
+		return C0_ENOMEM;
+	const float *mine = whole ? frame + (size_t)y0 * W : frame;
+	struct c0_progress pr;
+	if (what)
+		c0_progress_begin(&pr, what, (double)in->count);
+	int st = C0_OK;
+	for (int64_t t = 0; t < in->count && !st; t++) {
+		if (whole) {
+			st = c0_frames_read(in, t, frame);
+			if (!st && c->frame_fn)
+				st = c->frame_fn(c->frame_ctx, t, frame, H, W);
+		} else {
+			st = c0_frames_read_rows(in, t, y0, ny, frame);
+		}
+		if (!st)
+			st = use(ctx, t, mine);
+		if (what)
+			c0_progress_update(&pr, (double)t + 1);
+	}
+	if (what)
+		c0_progress_end(&pr);
+	free(frame);
+	return st;
+}
+
+/* frames alternate between the accumulators */
+struct alternate {
+	struct c0_cov_acc **acc;
+	int n;
+};
+
+static int add_alternate(void *ctx, int64_t t, const float *rows)
+{
+	struct alternate *a = ctx;
+	return c0_cov_acc_add(a->acc[t % a->n], rows);
+}
+
+/* One pass; frames alternate between the nacc accumulators (1 or 2). */
+static int stream_cov(const struct c0_support_conf *c, struct c0_frames *in, int nacc, struct c0_cov *cov,
+		      double *seconds)
+{
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
+	if (!st && nacc == 2 && in->count < 6)
+		st = c0_support_fail_short(in);
+	if (st)
+		return st;
+	double t0 = c0_now();
+	struct c0_cov_acc *acc[2] = { NULL, NULL };
+	for (int k = 0; k < nacc && !st; k++)
+		st = c0_support_acc_new(c, in->width, in->height, c0_support_lag(c), &acc[k]);
+	if (!st)
+		st = each_frame(c, in, 0, 0, in->height, "covariance", add_alternate, &(struct alternate){ acc, nacc });
+	for (int k = 0; k < nacc; k++) {
+		if (st)
+			c0_cov_acc_free(acc[k]);
+		else if ((st = c0_cov_acc_finish(acc[k], &cov[k])))
+			for (int j = k + 1; j < nacc; j++)
+				c0_cov_acc_free(acc[j]);
+	}
+	*seconds = c0_now() - t0;
+	return st;
+}
+
+int c0_stack_covariance(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov *cov, double *seconds)
+{
+	return stream_cov(c, in, 1, cov, seconds);
+}
+
+int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames *in, struct c0_cov half[2],
+			       double *seconds)
+{
+	return stream_cov(c, in, 2, half, seconds);
+}
+
+/* sum[i] += frame[i] over n pixels */
+struct sum {
+	double *sum;
+	size_t n;
+};
+
+static int add_sum(void *ctx, int64_t t, const float *rows)
+{
+	(void)t;
+	const struct sum *s = ctx;
+	for (size_t i = 0; i < s->n; i++)
+		s->sum[i] += rows[i];
+	return C0_OK;
+}
+
+int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double **mean, int64_t *frames,
+		  double *seconds)
+{
+	int st = c0_support_check(c, in->width, in->height, in->count, in->name);
+	if (st)
+		return st;
+	double t0 = c0_now();
+	const size_t n = (size_t)in->width * in->height;
+	if (!(*mean = c0_alloc(n, sizeof **mean)))
+		return C0_ENOMEM;
+	st = each_frame(c, in, 0, 0, in->height, "mean", add_sum, &(struct sum){ *mean, n });
+	for (size_t i = 0; !st && i < n; i++)
+		(*mean)[i] /= (double)in->count;
+	if (st)
+		free(*mean), *mean = NULL;
+	*frames = in->count;
+	*seconds = c0_now() - t0;
+	return st;
+}
+
+static int add_one(void *ctx, int64_t t, const float *rows)
+{
+	(void)t;
+	return c0_cov_acc_add(ctx, rows);
+}
+
+/* c0_stack_noise on tile t: s2 its noise variance, its interior's mean
+ * into the image's (W camera pixels wide) */
+static int noise_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, const struct c0_tile *t,
+		      const uint8_t *mask, int W, double *s2, double *mean)
+{
+	const int r = c->srf;
+	struct c0_cov cov = { 0 };
+	struct c0_support_result tr;
+	memset(&tr, 0, sizeof tr);
+	const size_t Lw = (size_t)t->w * r;
+	uint8_t *m = malloc(Lw * t->h * r);
+	int st = m ? c0_cov_acc_window(acc, t->y0, t->x0, t->h, t->w, &cov) : C0_ENOMEM;
+	if (!st) {
+		c0_tile_copy(m, Lw, mask + (size_t)(t->y0 * r) * W * r + (size_t)t->x0 * r, (size_t)W * r, t->h * r, Lw);
+		st = c0_support_noise_solve(c, &cov, m, &tr);
+	}
+	if (!st) {
+		*s2 = tr.sigma2;
+		const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+		c0_tile_copy(mean + (size_t)t->iy0 * W + t->ix0, (size_t)W * sizeof *mean,
+			     cov.mean + (size_t)oy * t->w + ox, (size_t)t->w * sizeof *mean, t->ih, (size_t)t->iw * sizeof *mean);
+	}
+	c0_cov_free(&cov);
+	c0_support_result_free(&tr);
+	free(m);
+	return st;
+}
+
+int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const uint8_t *mask, double **mean,
+		   int64_t *frames, double *sigma2, double *seconds)
+{
+	*mean = NULL, *frames = in->count, *sigma2 = 0, *seconds = 0;
+	const int W = in->width, H = in->height;
+	struct c0_tiling tl;
+	int st = c0_support_grid(c, in, &tl);
+	if (st)
+		return st;
+	double t0 = c0_now();
+	struct c0_cov_acc *acc = NULL;
+	st = c0_support_acc_new(c, W, H, c0_support_lag(c), &acc);
+	if (!st)
+		st = each_frame(c, in, 0, 0, H, NULL, add_one, acc);
+	if (!st && in->count < 3)
+		st = c0_fail(C0_EINVAL, "%s: the covariance needs at least 3 frames", in->name);
+	if (!st)
+		c0_cov_acc_seal(acc);   /* the windows below only read */
+	*seconds = c0_now() - t0;
+	double *s2 = c0_alloc((size_t)tl.n, sizeof *s2);
+	*mean = c0_alloc((size_t)W * H, sizeof **mean);
+	if (!st && (!s2 || !*mean))
+		st = C0_ENOMEM;
+	struct c0_support_conf cc = *c;
+	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
+	struct c0_first_fail fail = { 0 };
+#pragma omp parallel for schedule(dynamic, 1) if (tl.n > 1)
+	for (int k = 0; k < (st ? 0 : tl.n); k++)
+		c0_first_fail_note(&fail, noise_tile(&cc, acc, &tl.t[k], mask, W, &s2[k], *mean));
+	if (!st)
+		st = c0_first_fail_raise(&fail);
+	double area = 0;
+	for (int k = 0; !st && k < tl.n; k++)   /* in tile order: the same sum on any schedule */
+		*sigma2 += s2[k] * tl.t[k].ih * tl.t[k].iw, area += (double)tl.t[k].ih * tl.t[k].iw;
+	if (!st)
+		*sigma2 /= area;
+	c0_cov_acc_free(acc);
+	free(s2);
+	c0_tiling_free(&tl);
+	if (st)
+		free(*mean), *mean = NULL;
+	return st;
+}
+
+/* the tiled stack's pass: all frames into s->acc, and the odd ones' windows
+ * into the subset's accumulators */
+struct tiles_pass {
+	struct c0_support_share *s;
+	int W;
+	float *win;
+};
+
+static int add_tiles(void *ctx, int64_t t, const float *mine)
+{
+	const struct tiles_pass *p = ctx;
+	const struct c0_support_share *s = p->s;
+	int st = c0_cov_acc_add(s->acc, mine);
+	for (int k = s->k0; k < s->k1 && !st && t % 2; k++) {
+		const struct c0_tile *w = &s->tl.t[k];
+		if (!s->odd[k - s->k0])
+			continue;
+		c0_tile_copy(p->win, (size_t)w->w * sizeof *p->win, mine + (size_t)(w->y0 - s->ya) * p->W + w->x0,
+			     (size_t)p->W * sizeof *p->win, w->h, (size_t)w->w * sizeof *p->win);
+		st = c0_cov_acc_add(s->odd[k - s->k0], p->win);
+	}
+	return st;
+}
+
+int c0_support_stream_tiles(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_share *s)
+{
+	const int W = in->width, rows = s->yb - s->ya, d = c0_support_lag(c);
+	const int block = c0_cov_block_frames((size_t)W * in->height);
+	int st = c0_support_acc_new(c, W, rows, d, &s->acc);
+	if (!st)
+		st = c0_cov_acc_set_block(s->acc, block);
+	size_t wmax = 0;
+	for (int k = s->k0; k < s->k1 && !st; k++) {
+		const struct c0_tile *t = &s->tl.t[k];
+		if (s->sub[k] && !(st = c0_support_acc_new(c, t->w, t->h, d, &s->odd[k - s->k0])))
+			st = c0_cov_acc_set_block(s->odd[k - s->k0], block);
+		wmax = s->sub[k] && (size_t)t->w * t->h > wmax ? (size_t)t->w * t->h : wmax;
+	}
+	struct tiles_pass p = { s, W, NULL };
+	if (!st && wmax && !(p.win = c0_alloc(wmax, sizeof *p.win)))
+		st = C0_ENOMEM;
+	if (!st)
+		st = each_frame(c, in, 1, s->ya, rows, "covariance", add_tiles, &p);
+	free(p.win);
+	return st;
+}
