@@ -595,10 +595,10 @@ static void test_refusals(void)
 	CHECK(c0_matirf_check(&c, 2, bad) == C0_EINVAL && strstr(c0_errmsg(), "critical"));
 	CHECK(c0_matirf_check(&c, 1, ANG) == C0_EINVAL && strstr(c0_errmsg(), "angles"));
 	c.dz_nm = 0;
-	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "z_range_nm"));
+	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "z0_nm"));
 	c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 	c.coarse = -1;
-	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "matirf_coarse"));
+	CHECK(c0_matirf_check(&c, 5, ANG) == C0_EINVAL && strstr(c0_errmsg(), "coarse"));
 }
 
 int main(void)

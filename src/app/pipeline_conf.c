@@ -121,8 +121,37 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	return st ? st : c0_intensity_check(&s->intensity);
 }
 
+/* The MA-TIRF parameters by their run names (the stage's own check names
+ * its fields, which a run's user never sees). */
+static int matirf_params(const struct c0_run_conf *c)
+{
+	const double *z = c->z_range_nm;
+	if (!(z[2] > 0) || !(z[1] > z[0]) || !(z[0] >= 0) || !isfinite(z[1]))
+		return c0_fail(C0_EINVAL, "z_range_nm %g,%g,%g: need 0 <= min < max and a positive step (nm)", z[0], z[1], z[2]);
+	if ((z[1] - z[0]) / z[2] > 512)
+		return c0_fail(C0_EINVAL, "z_range_nm: more than 512 depth bins");
+	if (!(c->psf_fwhm_nm >= 0 && isfinite(c->psf_fwhm_nm)))
+		return c0_fail(C0_EINVAL, "psf_fwhm_nm %g: must be a positive, finite number of nm (0: no deconvolution)", c->psf_fwhm_nm);
+	if (!(c->background_smooth >= 0))
+		return c0_fail(C0_EINVAL, "background_smooth %g: must be >= 0", c->background_smooth);
+	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->axial_weight >= 0 && isfinite(c->axial_weight)) ||
+	    !(c->sparsity >= 0 && isfinite(c->sparsity)))
+		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: must be finite and >= 0", c->kappa,
+			       c->axial_weight, c->sparsity);
+	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
+		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
+	if (c->matirf_iterations < 1)
+		return c0_fail(C0_EINVAL, "matirf_iterations %d: must be at least 1", c->matirf_iterations);
+	if (!(c->matirf_tol >= 0 && isfinite(c->matirf_tol)))
+		return c0_fail(C0_EINVAL, "matirf_tol %g: must be >= 0", c->matirf_tol);
+	return C0_OK;
+}
+
 int c0_run_conf_matirf_check(const struct c0_run_conf *c, const struct c0_matirf_conf *m, int nimages)
 {
+	int st = matirf_params(c);
+	if (st)
+		return st;
 	if (c->nangles != nimages)
 		return c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, nimages);
 	if (c->ngains && c->ngains != nimages)

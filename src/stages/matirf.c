@@ -28,24 +28,24 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 			return c0_fail_prefix(C0_EINVAL, "angles");
 	}
 	if (!(c->dz_nm > 0) || !(c->z1_nm > c->z0_nm) || !(c->z0_nm >= 0) || !isfinite(c->z1_nm))
-		return c0_fail(C0_EINVAL, "z_range_nm %g,%g,%g: need 0 <= min < max and a positive step (nm)", c->z0_nm, c->z1_nm, c->dz_nm);
+		return c0_fail(C0_EINVAL, "matirf: depth bins z0_nm %g, z1_nm %g, dz_nm %g: need 0 <= z0 < z1 and dz > 0", c->z0_nm, c->z1_nm, c->dz_nm);
 	if ((c->z1_nm - c->z0_nm) / c->dz_nm > 512)
-		return c0_fail(C0_EINVAL, "z_range_nm: more than 512 depth bins");
+		return c0_fail(C0_EINVAL, "matirf: more than 512 depth bins");
 	if (!(c->bg_smooth >= 0))
-		return c0_fail(C0_EINVAL, "matirf_background_smooth %g: must be >= 0", c->bg_smooth);
+		return c0_fail(C0_EINVAL, "matirf: bg_smooth %g: must be >= 0", c->bg_smooth);
 	if (!(c->psf_sigma_px >= 0) || c->psf_sigma_px > 12)
-		return c0_fail(C0_EINVAL, "psf_fwhm_nm: a PSF of %g pixels sigma: must be finite, in [0, 12]", c->psf_sigma_px);
+		return c0_fail(C0_EINVAL, "matirf: psf_sigma_px %g: must be finite, in [0, 12]", c->psf_sigma_px);
 	if (!(c->gamma > 0))
 		return c0_fail(C0_EINVAL, "matirf: gamma %g must be > 0", c->gamma);
 	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
-		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: must be finite and >= 0", c->kappa, c->wz,
+		return c0_fail(C0_EINVAL, "matirf: kappa %g, wz %g, sparsity %g: must be finite and >= 0", c->kappa, c->wz,
 			       c->sparsity);
 	if (c->coarse < 0 || c->coarse > 8)
-		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be 0..8", c->coarse);
+		return c0_fail(C0_EINVAL, "matirf: coarse %d: must be 0..8", c->coarse);
 	if (c->pdhg.maxit < 1)
-		return c0_fail(C0_EINVAL, "matirf_iterations %d: must be at least 1", c->pdhg.maxit);
+		return c0_fail(C0_EINVAL, "matirf: pdhg.maxit %d: must be at least 1", c->pdhg.maxit);
 	if (!(c->pdhg.tol >= 0 && isfinite(c->pdhg.tol)) || !(c->pdhg.relax > 0 && c->pdhg.relax < 2))
-		return c0_fail(C0_EINVAL, "matirf_tol %g: must be >= 0 (relaxation %g in (0, 2))", c->pdhg.tol, c->pdhg.relax);
+		return c0_fail(C0_EINVAL, "matirf: pdhg.tol %g: must be >= 0 (relaxation %g in (0, 2))", c->pdhg.tol, c->pdhg.relax);
 	return C0_OK;
 }
 
