@@ -27,29 +27,21 @@ void c0_run_conf_free(struct c0_run_conf *c)
 	free(c);
 }
 
-int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)
+static int support(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
+		   struct c0_result *r, const void *arg)
 {
-	struct c0_frames f[C0_MAX_STACKS];
-	struct c0_stage_confs sc;
-	struct c0_result *r;
-	int st = c0_pipe_begin("support", c, stacks, n, f, &sc, &r);
-	if (st)
-		return st;
+	(void)arg;
 	r->nsup = n;
 	for (int i = 0; i < n; i++)
 		r->sup[i] = i;
-	r->pixel_nm = sc.support.pixel_nm, r->srf = sc.support.srf;
-	if (c->drift)
-		st = c0_step_drift(r, f, n);
-	if (!st)
-		st = c0_step_support(r, &sc.support, f);
-	c0_stacks_close(f, n);
-	if (st) {
-		c0_result_free(r);
-		return st;
-	}
-	*out = r;
-	return C0_OK;
+	r->pixel_nm = sc->support.pixel_nm, r->srf = sc->support.srf;
+	int st = c->drift ? c0_step_drift(r, f, n) : C0_OK;
+	return st ? st : c0_step_support(r, &sc->support, f);
+}
+
+int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)
+{
+	return c0_pipe_run("support", c, stacks, n, support, NULL, out);
 }
 
 int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n, int h, int w, struct c0_result **out)

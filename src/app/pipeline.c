@@ -177,8 +177,9 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
 }
 
 static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
-	       struct c0_result *r)
+	       struct c0_result *r, const void *arg)
 {
+	(void)arg;
 	const struct c0_stage_confs s = *sc;
 	int only[C0_MAX_STACKS] = { 0 }, tirf[C0_MAX_STACKS];
 	struct c0_run_conf ct;
@@ -207,18 +208,5 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 
 int c0_run(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)
 {
-	struct c0_frames f[C0_MAX_STACKS];
-	struct c0_stage_confs sc;
-	struct c0_result *r;
-	int st = c0_pipe_begin("run", c, stacks, n, f, &sc, &r);
-	if (st)
-		return st;
-	st = run(c, &sc, f, n, r);
-	c0_stacks_close(f, n);
-	if (st) {
-		c0_result_free(r);
-		return st;
-	}
-	*out = r;
-	return C0_OK;
+	return c0_pipe_run("run", c, stacks, n, run, NULL, out);
 }

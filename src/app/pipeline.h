@@ -79,6 +79,13 @@ int c0_stacks_check(const struct c0_support_conf *sc, const struct c0_frames *f,
 int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
 		  struct c0_frames *f, struct c0_stage_confs *sc, struct c0_result **out);
 
+/* c0_pipe_begin, then body on the open stacks, then the stacks closed; the
+ * result in *out, or freed when body fails. */
+typedef int (*c0_pipe_body)(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
+			    struct c0_result *r, const void *arg);
+int c0_pipe_run(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
+		c0_pipe_body body, const void *arg, struct c0_result **out);
+
 /* Drift over all n stacks of f in order (stages/drift.h); the later steps
  * undo it frame by frame. */
 int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n);

@@ -34,27 +34,21 @@ static int load_mask(const char *path, const struct c0_frames *f, int srf, uint8
 	return st;
 }
 
+static int intensity(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
+		     struct c0_result *r, const void *support)
+{
+	(void)n;
+	int st = load_mask(support, &f[0], c->srf, &r->mask, &r->Ly, &r->Lx);
+	return st ? st : c0_step_intensity(r, &sc->intensity, &sc->support, f, c->nnoise_variance ? c->noise_variance : NULL, 0);
+}
+
 int c0_run_intensity_files(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, const char *support,
 			   struct c0_result **out)
 {
 	*out = NULL;
 	if (c->nnoise_variance && c->nnoise_variance != n)
 		return c0_fail(C0_EINVAL, "noise_variance: %d values for %d stacks", c->nnoise_variance, n);
-	struct c0_frames f[C0_MAX_STACKS];
-	struct c0_stage_confs sc;
-	struct c0_result *r = NULL;
-	int st = c0_pipe_begin("intensity", c, stacks, n, f, &sc, &r);
-	if (st)
-		return st;
-	st = load_mask(support, &f[0], c->srf, &r->mask, &r->Ly, &r->Lx);
-	if (!st)
-		st = c0_step_intensity(r, &sc.intensity, &sc.support, f, c->nnoise_variance ? c->noise_variance : NULL, 0);
-	c0_stacks_close(f, n);
-	if (st)
-		c0_result_free(r);
-	else
-		*out = r;
-	return st;
+	return c0_pipe_run("intensity", c, stacks, n, intensity, support, out);
 }
 
 int c0_run_matirf_files(const struct c0_run_conf *c, char *const *paths, int n, struct c0_result **out)

@@ -84,3 +84,22 @@ int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct
 		c0_stacks_close(f, n);
 	return st;
 }
+
+int c0_pipe_run(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
+		c0_pipe_body body, const void *arg, struct c0_result **out)
+{
+	struct c0_frames f[C0_MAX_STACKS];
+	struct c0_stage_confs sc;
+	struct c0_result *r;
+	*out = NULL;
+	int st = c0_pipe_begin(command, c, stacks, n, f, &sc, &r);
+	if (st)
+		return st;
+	st = body(c, &sc, f, n, r, arg);
+	c0_stacks_close(f, n);
+	if (st)
+		c0_result_free(r);
+	else
+		*out = r;
+	return st;
+}
