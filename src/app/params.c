@@ -36,7 +36,7 @@ static const struct c0_param table[] = {
 	NUM(tile, C0_P_INT, "tile", "PX", "support and intensity tile side in camera pixels (tiles overlap by two lags)", "256, or the image when smaller"),
 	ROW(drift, C0_P_ENUM, 0, 0, "off|on", "drift", "on|off", "estimate lateral drift from block means and undo it before the covariance and the means", "on"),
 	ROW(pixel_guard, C0_P_ENUM, 0, 0, "off|on", "pixel-guard", "on|off", "clip each pixel's variance to what its covariances with its neighbours allow (noisy sCMOS pixels)", "on"),
-	NUM(frc, C0_P_FLAG, "frc", "0|1", "solve each half of the frames too, for the FRC resolution and the localisation precision", "1"),
+	NUM(frc, C0_P_FLAG, "frc", "0|1", "solve each half of the frames too, for the localisation precision and the halves' FRC curve", "1"),
 	/* intensity and background */
 	ENUM(background, "none|constant|smooth", "background", "background model", "smooth"),
 	NUM(beta, C0_P_DOUBLE, "beta", "B", "background smoothness weight", "20"),

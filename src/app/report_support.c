@@ -1,5 +1,5 @@
 /* The support step's part of report.json: each stack's estimates, its
- * automatic lambda (rule, curve) and FRC, and the step's parameters. */
+ * automatic lambda (rule, curve), FRC curve and precision, and the step's parameters. */
 #include "app/report_steps.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -46,22 +46,17 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 	c0_report_add_array(cu, "noise_above", v->curve_noise, C0_LAMBDA_CURVE);
 }
 
+/* The halves' FRC as a curve only: on simulated lines a known distance apart
+ * its 1/7 crossing does not follow what is resolved (docs/guide.md, section 5,
+ * bench/frc_validation.py), so no resolution is drawn from it. */
 static int frc(cJSON *o, const struct c0_support_result *s, const struct c0_support_conf *c)
 {
 	const double fine = c->pixel_nm / c->srf;
 	cJSON *fr = cJSON_AddObjectToObject(o, "frc");
 	cJSON_AddStringToObject(fr, "images", "emitter variances of the even and the odd frames (fine grid), Hann window");
-	cJSON_AddNumberToObject(fr, "threshold", 1.0 / 7);
-	if (s->frc_nm > 0)
-		cJSON_AddNumberToObject(fr, "resolution_nm", s->frc_nm);
-	else {   /* no crossing: a bound, never a resolution of 0 */
-		char note[160];
-		snprintf(note, sizeof note, "stays above 1/7 up to the fine grid's Nyquist frequency: finer than 2 fine "
-			 "pixels = %.3g nm, which this grid cannot tell apart", 2 * fine);
-		cJSON_AddNullToObject(fr, "resolution_nm");
-		cJSON_AddNumberToObject(fr, "resolution_bound_nm", 2 * fine);
-		cJSON_AddStringToObject(fr, "note", note);
-	}
+	cJSON_AddStringToObject(fr, "note", "how far the halves agree per spatial frequency, not a resolution: the halves "
+				"share the fine grid the sparse solve picks, and on two simulated lines a known distance apart "
+				"the curve's 1/7 crossing does not follow which are resolved (docs/guide.md, section 5)");
 	double *fq = c0_alloc((size_t)s->frc.n, sizeof *fq);
 	if (!fq)
 		return C0_ENOMEM;

@@ -105,8 +105,9 @@ void c0_support_result_free(struct c0_support_result *r)
 
 /* Each half solved on its own (a warm start from the full solution would
  * make them agree) at the same relative lambda, with at most
- * C0_SUPPORT_FRC_MAXIT iterations; the FRC of their emitter variances, and
- * the localisation precision from how far their supports lie apart. */
+ * C0_SUPPORT_FRC_MAXIT iterations; the FRC curve of their emitter variances
+ * (no resolution is read from it: docs/guide.md, section 5), and the
+ * localisation precision from how far their supports lie apart. */
 static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2], struct c0_support_result *res)
 {
 	double t0 = c0_now();
@@ -123,7 +124,6 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 		st = c0_frc_compute(h[0].rx, h[1].rx, res->Ly, res->Lx, &res->frc);
 	if (!st) {
 		const double fine = c->pixel_nm / c->srf;
-		res->frc_nm = res->frc.resolution_px * fine;
 		/* match within the PSF's half width at half maximum */
 		double p = c0_pair_precision(h[0].mask, h[1].mask, res->Ly, res->Lx, (int)ceil(0.5 * c->fwhm_nm / fine));
 		res->precision_nm = p < 0 ? -1 : p * fine / sqrt(2);

@@ -29,7 +29,7 @@ struct c0_support_conf {
 	int cel0_outer;            /* 10 reweightings */
 	enum c0_support_solver solver; /* l1: fista (the whole grid's step) or pruned (the working set's) */
 	int frc;                   /* 1: also solve each half of the frames (on its own, at most 300
-				    * iterations) for the FRC resolution and the localisation precision */
+				    * iterations) for the localisation precision and the FRC curve */
 	int tile;                  /* tile side in camera pixels; 0: C0_SUPPORT_TILE (or the image when smaller) */
 	c0_frame_fn frame_fn;      /* NULL: frames as read */
 	void *frame_ctx;
@@ -74,7 +74,7 @@ struct c0_support_result {
 	int lambda_auto;           /* lambda chosen from the data (stages/lambda.h): */
 	struct c0_lambda_result cv;/* its inputs and time */
 	struct c0_frc frc;         /* of the emitter variances of the two halves (fine grid), with frc */
-	double frc_nm, t_frc;      /* its 1/7 resolution (0: does not cross up to the fine grid's Nyquist), seconds */
+	double t_frc;              /* seconds of the half solves, their FRC and the precision */
 	double precision_nm;       /* localisation sd per axis from the halves' supports (c0_pair_precision),
 				    * for all frames (the halves' / sqrt 2); -1: unknown */
 	int tiles, tile;           /* tile count and side (camera pixels) */
