@@ -38,7 +38,7 @@ int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, i
 	r->nsup = n;
 	for (int i = 0; i < n; i++)
 		r->sup[i] = i;
-	r->pixel_nm = sc.support.pixel_nm, r->srf = sc.support.srf;
+	r->pixel_nm = sc.support.grid.pixel_nm, r->srf = sc.support.grid.srf;
 	if (c->drift)
 		st = c0_step_drift(r, f, n);
 	if (!st)
