@@ -36,7 +36,7 @@ int main(int argc, char **argv)
 	if (c0_frames_open(&rd, p))
 		return fprintf(stderr, "%s\n", c0_errmsg()), 1;
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = getenv("PIXEL") ? atof(getenv("PIXEL")) : rd.pixel_nm, c.fwhm_nm = atof(argv[2]);
+	c.grid.pixel_nm = getenv("PIXEL") ? atof(getenv("PIXEL")) : rd.pixel_nm, c.grid.fwhm_nm = atof(argv[2]);
 	if (argc > 3 && !strcmp(argv[3], "cel0"))
 		c.penalty = C0_PENALTY_CEL0;
 	struct c0_cov half[2], cov;
@@ -53,7 +53,7 @@ int main(int argc, char **argv)
 		for (int64_t i = 0; i < in.width * in.height; i++)
 			tm[i] = t[i] > 0;
 	}
-	const int margin = 3 * c.srf;
+	const int margin = 3 * c.grid.srf;
 	struct c0_lambda_result cv;
 	if (c0_lambda_auto(&c, &half[0], &half[1], &cv))
 		return fprintf(stderr, "%s\n", c0_errmsg()), 1;

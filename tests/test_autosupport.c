@@ -267,7 +267,7 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 	struct c0_frames rd;
 	CHECK(c0_frames_open(&rd, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229, c.frc = 0, c.lambda_rel = lambda_rel, c.tile = tile_px;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229, c.frc = 0, c.lambda_rel = lambda_rel, c.tile = tile_px;
 	if (d)
 		c.frame_fn = c0_drift_frame_fn, c.frame_ctx = c0_drift_hook(d, 0);
 	struct c0_support_result res;
@@ -386,9 +386,9 @@ static void test_lambda_peaks(void)
 {
 	enum { NY = 7, NX = 6, RR = 4, LY = NY * RR, LX = NX * RR };
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229, c.srf = RR;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229, c.grid.srf = RR;
 	struct c0_covop op;
-	CHECK(c0_covop_init(&op, NY, NX, RR, c0_psf_sigma_px(c.fwhm_nm, c.pixel_nm), 3) == C0_OK);
+	CHECK(c0_covop_init(&op, NY, NX, RR, c0_grid_sigma_px(&c.grid), 3) == C0_OK);
 	float rx[LY * LX];
 	for (int i = 0; i < LY * LX; i++)
 		rx[i] = c0_rng_uniform(&rng) < 0.15 ? (float)(1 + 9 * c0_rng_uniform(&rng)) : 0;
@@ -572,7 +572,7 @@ static void test_bad_input(void)
 	CHECK(c0_frames_open(&f, p) == C0_OK);
 	CHECK(c0_drift_estimate(&dc, &f, 1, &d) == C0_EINVAL && strstr(c0_errmsg(), "too short") && !d);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229;
 	struct c0_support_result res;
 	CHECK(c0_support_stack(&c, &f, &res) == C0_EINVAL && strstr(c0_errmsg(), "too short to choose lambda"));
 	c0_frames_close(&f);

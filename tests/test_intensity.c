@@ -106,7 +106,7 @@ static void test_discrepancy(void)
 	for (int i = 0; i < Ny * Nx; i++)
 		y[i] += 100 + sqrt(sigma2 / T) * c0_rng_normal(&rng);
 	struct c0_intensity_conf c = C0_INTENSITY_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 0.97 * 100 / 0.42466090014400953;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 0.97 * 100 / 0.42466090014400953;
 	struct c0_intensity_result res;
 	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) == C0_OK);
 	/* relative (the default): the floor is the residual at the smallest mu */
@@ -129,7 +129,7 @@ static void test_discrepancy(void)
 	m[5] = 1;
 	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, 0, &res) != C0_OK && strstr(c0_errmsg(), "noise variance"));
 	c0_intensity_result_free(&res);
-	c.fwhm_nm = 0;
+	c.grid.fwhm_nm = 0;
 	CHECK(c0_intensity_solve(&c, y, Ny, Nx, T, m, sigma2, &res) != C0_OK && strstr(c0_errmsg(), "fwhm_nm"));
 	c0_psi_omega_free(&P);
 	free(m), free(x), free(y);
@@ -171,7 +171,7 @@ static void test_simulated(void)
 		m[i] |= mo > 0;
 	}
 	struct c0_intensity_conf c = C0_INTENSITY_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229;
 	struct c0_intensity_result res;
 	/* noise variance: read noise + mean Poisson level */
 	double sig2 = 64;

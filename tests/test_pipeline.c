@@ -38,10 +38,12 @@ static void test_conf(void)
 	struct c0_support_conf sd = C0_SUPPORT_DEFAULTS;
 	struct c0_intensity_conf id = C0_INTENSITY_DEFAULTS;
 	struct c0_matirf_conf md = C0_MATIRF_DEFAULTS;
-	CHECK(s.support.srf == sd.srf && s.support.penalty == sd.penalty && s.support.lambda_rel == sd.lambda_rel &&
+	CHECK(s.support.grid.srf == sd.grid.srf && s.support.penalty == sd.penalty && s.support.lambda_rel == sd.lambda_rel &&
 	      s.support.lag == sd.lag && s.support.fista.maxit == sd.fista.maxit && s.support.fista.tol == sd.fista.tol &&
 	      s.support.cel0_outer == sd.cel0_outer);
-	CHECK(s.intensity.srf == id.srf && s.intensity.background == id.background && s.intensity.beta == id.beta &&
+	CHECK(s.support.grid.pixel_nm == 100 && s.support.grid.fwhm_nm == 229 && s.intensity.grid.pixel_nm == 100 &&
+	      s.intensity.grid.fwhm_nm == 229);   /* one grid for both stages */
+	CHECK(s.intensity.grid.srf == id.grid.srf && s.intensity.background == id.background && s.intensity.beta == id.beta &&
 	      s.intensity.nu == id.nu && s.intensity.mu == id.mu && s.intensity.tol == id.tol &&
 	      s.intensity.maxit == id.maxit && s.intensity.graph_radius == id.graph_radius);
 	CHECK(!memcmp(&s.matirf.tirf, &md.tirf, sizeof md.tirf) && s.matirf.z0_nm == md.z0_nm && s.matirf.z1_nm == md.z1_nm &&

@@ -532,15 +532,19 @@ static void test_first_fail(void)
 static void test_wrong_inputs(void)
 {
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229;
 	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_OK);
+	/* the grid: sigma 0.972 camera pixels, lag ceil(6 sigma) = 6 unless given, fine pixel 25 nm */
+	CHECK(fabs(c0_grid_sigma_px(&c.grid) - 0.9725) < 1e-4 && c0_grid_fine_nm(&c.grid) == 25);
+	CHECK(c0_support_lag(&c) == 6 && c0_grid_lag(&c.grid, 3) == 3);
+	CHECK(c0_grid_check(&(struct c0_grid){ 100, 5, 4 }) == C0_EINVAL && strstr(c0_errmsg(), "camera pixels"));
 	CHECK(c0_support_check(&c, 10, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "smaller than the PSF band"));
 	CHECK(c0_support_check(&c, 64, 64, 2, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "at least 3"));
-	c.pixel_nm = 0;
+	c.grid.pixel_nm = 0;
 	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "pixel_nm"));
-	c.pixel_nm = 100, c.fwhm_nm = -1;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = -1;
 	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "fwhm_nm"));
-	c.fwhm_nm = 229, c.srf = 0;
+	c.grid.fwhm_nm = 229, c.grid.srf = 0;
 	CHECK(c0_support_check(&c, 64, 64, 500, "s.tif") == C0_EINVAL && strstr(c0_errmsg(), "srf"));
 }
 
@@ -566,9 +570,9 @@ static double masked_f(void *v, const double *x, double *g)
 
 static double masked_sigma2(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *m)
 {
-	const size_t n = (size_t)cov->W * cov->H, L = n * c->srf * c->srf;
+	const size_t n = (size_t)cov->W * cov->H, L = n * c->grid.srf * c->grid.srf;
 	struct c0_covop op;
-	CHECK(c0_covop_init(&op, cov->H, cov->W, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), cov->d) == C0_OK);
+	CHECK(c0_covop_init(&op, cov->H, cov->W, c->grid.srf, c0_grid_sigma_px(&c->grid), cov->d) == C0_OK);
 	double mx = 0, *C = calloc(L, sizeof *C), *x = calloc(L, sizeof *x), *Ax = calloc(L, sizeof *Ax);
 	for (size_t i = 0; i < n; i++)
 		mx = fmax(mx, cov->r[i]);
@@ -603,7 +607,7 @@ static void test_noise_variance(void)
 	struct c0_sim_scene *sc;
 	c0_sim_scene_new(&s, em, ne, 0, &sc);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229;
 	struct c0_cov_acc *a;
 	c0_cov_acc_new(32, 32, c0_support_lag(&c), &a);
 	double ph[32 * 32];
@@ -684,7 +688,7 @@ static double solve_obj(const struct c0_support_conf *c, const struct c0_cov *co
 static void test_solver_converges(void)
 {
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229, c.lambda_rel = 1e-2, c.solver = C0_SUPPORT_PRUNED, c.fista.maxit = 5000;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229, c.lambda_rel = 1e-2, c.solver = C0_SUPPORT_PRUNED, c.fista.maxit = 5000;
 	struct c0_cov cov;
 	sim_cov(48, 4, &c, &cov);
 	struct c0_support_result p, t, f, d, lg;
@@ -721,11 +725,11 @@ static void test_pixel_guard(void)
 {
 	enum { W = 16, H = 12, RR = 4 };
 	struct c0_support_conf sc = C0_SUPPORT_DEFAULTS;
-	sc.pixel_nm = 100, sc.fwhm_nm = 229, sc.srf = RR;
+	sc.grid.pixel_nm = 100, sc.grid.fwhm_nm = 229, sc.grid.srf = RR;
 	const double g = c0_support_guard_ratio(&sc), s2 = 50;
 	CHECK(g > 0.5 && g < 0.7);
 	struct c0_covop op;
-	CHECK(c0_covop_init(&op, H, W, RR, c0_psf_sigma_px(sc.fwhm_nm, sc.pixel_nm), 3) == C0_OK);
+	CHECK(c0_covop_init(&op, H, W, RR, c0_grid_sigma_px(&sc.grid), 3) == C0_OK);
 	const size_t n = (size_t)W * H, L = n * RR * RR;
 	double *x = calloc(L, sizeof *x), *v0 = malloc(n * sizeof *v0);
 	for (int dense = 0; dense < 2; dense++) {
@@ -804,7 +808,7 @@ static void test_accuracy(void)
 	struct c0_frames fr;
 	CHECK(c0_frames_open(&fr, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
-	c.pixel_nm = 100, c.fwhm_nm = 229;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229;
 	struct c0_support_result res;
 	CHECK(c0_support_stack(&c, &fr, &res) == C0_OK);
 	c0_frames_close(&fr);

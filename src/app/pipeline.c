@@ -68,9 +68,9 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 	const int nq = ct->nangles, Ly = r->Ly, Lx = r->Lx;
 	const size_t L = (size_t)Ly * Lx, Nc = r->ires[0].Ny * (size_t)r->ires[0].Nx;
 	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 }, *guide = NULL;
-	const double fine = s->support.pixel_nm / s->support.srf;
+	const double fine = c0_grid_fine_nm(&s->support.grid);
 	const int h = (int)lround((s->pool_nm / fine - 1) / 2), guided = h > 0 && s->pool_range_nm > 0;
-	const int hg = guided ? (int)lround((C0_DEPTH_GUIDE_FWHM * s->support.fwhm_nm / fine - 1) / 2) : 0;
+	const int hg = guided ? (int)lround((C0_DEPTH_GUIDE_FWHM * s->support.grid.fwhm_nm / fine - 1) / 2) : 0;
 	int st = C0_OK;
 	for (int i = 0; !st && i < nq; i++) {
 		const int q = tirf[i];
@@ -103,7 +103,7 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 			       guided ? 2 * hg + 1 : 0);
 	if (!st && ct->baseline)
 		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
-				    s->support.pixel_nm, 1);
+				    s->support.grid.pixel_nm, 1);
 	for (int i = 0; i < nq; i++)
 		free(own[i]), free(pooled[i]), free(base[i]);
 	return st;
@@ -192,7 +192,7 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 				       q + 1, r->names[q], c->angles[q], crit);
 	if (!st)
 		st = support_stacks(c, only, n, r);
-	r->pixel_nm = s.support.pixel_nm, r->srf = s.support.srf;
+	r->pixel_nm = s.support.grid.pixel_nm, r->srf = s.support.grid.srf;
 	if (!st && c->drift)
 		st = c0_step_drift(r, f, n);
 	if (!st)

@@ -86,7 +86,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	if (!(c->depth_pool_range_nm >= -1 && isfinite(c->depth_pool_range_nm)))
 		return c0_fail(C0_EINVAL, "depth_pool_range_nm %g: must be a depth difference in nm (0: every pixel of the window, -1: the default, %d)",
 			       c->depth_pool_range_nm, C0_DEPTH_POOL_RANGE_NM);
-	s->support = (struct c0_support_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf, .penalty = c->penalty,
+	const struct c0_grid grid = { pixel_nm, fwhm, c->srf };
+	s->support = (struct c0_support_conf){ .grid = grid, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
 					       .fista = { c->iterations != -1 ? c->iterations
 							  : c->support_solver == C0_SUPPORT_PRUNED ? C0_PRUNED_MAXIT : C0_FISTA_MAXIT,
@@ -94,7 +95,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 					       .cel0_outer = c->reweightings,
 					       .solver = c->support_solver,
 					       .frc = c->frc, .tile = c->tile, .guard = c->pixel_guard };
-	s->intensity = (struct c0_intensity_conf){ .pixel_nm = pixel_nm, .fwhm_nm = fwhm, .srf = c->srf,
+	s->intensity = (struct c0_intensity_conf){ .grid = grid,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
 						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE,
@@ -117,7 +118,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	    c->nnoise_variance > C0_MAX_STACKS)
 		return c0_fail(C0_EINVAL, "nangles %d / ngains %d / nsupport_stacks %d / nnoise_variance %d: must be 0..%d",
 			       c->nangles, c->ngains, c->nsupport_stacks, c->nnoise_variance, C0_MAX_STACKS);
-	int st = c0_psf_check(pixel_nm, fwhm, c->srf);
+	int st = c0_grid_check(&grid);
 	return st ? st : c0_intensity_check(&s->intensity);
 }
 

@@ -23,8 +23,8 @@
 /* model (ny x nx) = G_y X G_x^T + b */
 static int forward(const struct c0_rundir *d, const float *x, const float *b, double *model)
 {
-	const int ny = d->ny, nx = d->nx, r = d->srf, Ly = ny * r, Lx = nx * r;
-	const double sigma = c0_psf_sigma_px(d->fwhm_nm, d->pixel_nm);
+	const int ny = d->ny, nx = d->nx, r = d->grid.srf, Ly = ny * r, Lx = nx * r;
+	const double sigma = c0_grid_sigma_px(&d->grid);
 	struct c0_band gy = { 0 }, gx = { 0 };
 	double *X = c0_alloc((size_t)Ly * Lx, sizeof *X), *tmp = c0_alloc((size_t)Ly * nx, sizeof *tmp);
 	int st = X && tmp ? C0_OK : C0_ENOMEM;

@@ -10,6 +10,7 @@
  * parameters, timings, command) and report_page.c (the page). */
 #pragma once
 #include "col0rme.h"
+#include "optics/grid.h"
 #include <cjson/cJSON.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -51,9 +52,9 @@ struct c0_rundir {
 	const char *dir;
 	cJSON *rep;
 	int n;                           /* stacks (report.json's "intensity", else "support") */
-	int ny, nx, srf;                 /* camera grid (from the file grid) and super-resolution factor */
-	const char *grid;
-	double pixel_nm, fwhm_nm;        /* camera pixel, PSF */
+	int ny, nx;                      /* camera grid (from the file grid_file) */
+	const char *grid_file;
+	struct c0_grid grid;             /* camera pixel, PSF, super-resolution factor */
 	float *mean[C0_MAX_STACKS];      /* mean_qNN.tif, camera grid (NULL: not written) */
 	float *bg[C0_MAX_STACKS];        /* background_qNN.tif, camera grid */
 	float *err[C0_MAX_STACKS];       /* the residual (report_errmap.c), camera grid */

@@ -182,7 +182,7 @@ void c0_fig_mean(struct c0_html *h, const struct c0_rundir *d)
 	for (int q = 0; q < d->n; q++) {
 		char cap[512];
 		stack_caption(d, q, cap, sizeof cap);
-		panel(h, d->mean[q], d->ny, d->nx, d->pixel_nm, GREY, c0_quantile(d->mean[q], L, 0.005),
+		panel(h, d->mean[q], d->ny, d->nx, d->grid.pixel_nm, GREY, c0_quantile(d->mean[q], L, 0.005),
 		      c0_quantile(d->mean[q], L, 0.995), cap);
 	}
 	c0_html_add(h, "</div></section>\n");
@@ -196,7 +196,7 @@ void c0_fig_render(struct c0_html *h, const struct c0_rundir *d)
 	}
 	section(h, "render", "Super-resolved render", "Each stack's intensity splatted with a Gaussian of the localisation "
 		"precision (render.tif), grey from 0 to its 99.9th percentile.");
-	const int Ly = d->ny * d->srf, Lx = d->nx * d->srf;
+	const int Ly = d->ny * d->grid.srf, Lx = d->nx * d->grid.srf;
 	const size_t L = (size_t)Ly * Lx;
 	for (int q = 0; q < d->n; q++) {
 		char cap[512];
@@ -207,7 +207,7 @@ void c0_fig_render(struct c0_html *h, const struct c0_rundir *d)
 			h->st = h->st ? h->st : st;
 			return;
 		}
-		panel(h, img, Ly, Lx, d->pixel_nm / d->srf, GREY, 0, c0_quantile(img, L, 0.999), cap);
+		panel(h, img, Ly, Lx, c0_grid_fine_nm(&d->grid), GREY, 0, c0_quantile(img, L, 0.999), cap);
 		free(img);
 	}
 	c0_html_add(h, "</div></section>\n");
@@ -328,7 +328,7 @@ void c0_fig_errmap(struct c0_html *h, const struct c0_rundir *d)
 		for (size_t i = 0; i < L; i++)
 			z[i] = sds ? (float)(d->err[q][i] / d->es[q].noise_sd) : d->err[q][i];
 		stack_caption(d, q, cap, sizeof cap);
-		panel(h, z, d->ny, d->nx, d->pixel_nm, DIVERGING, 0, s > 0 ? s : 1, cap);
+		panel(h, z, d->ny, d->nx, d->grid.pixel_nm, DIVERGING, 0, s > 0 ? s : 1, cap);
 	}
 	if (!z && !h->st)
 		h->st = -1;

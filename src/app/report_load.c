@@ -27,7 +27,7 @@ static int exists(const struct c0_rundir *d, const char *name)
 	return !path_of(d, name, p, sizeof p) && !stat(p, &s);
 }
 
-/* name as planes images of ny x nx (the size of d->grid's file) */
+/* name as planes images of ny x nx (the size of d->grid_file) */
 static int load(const struct c0_rundir *d, const char *name, int64_t planes, int ny, int nx, float **img)
 {
 	char p[4400];
@@ -40,7 +40,7 @@ static int load(const struct c0_rundir *d, const char *name, int64_t planes, int
 	if (in.width != nx || in.height != ny || in.pages != planes) {
 		free(*img), *img = NULL;
 		return c0_fail(C0_EINVAL, "%s: %lldx%lldx%lld, expected %dx%dx%lld (%s's grid, srf and stacks)", p,
-			       (long long)in.width, (long long)in.height, (long long)in.pages, nx, ny, (long long)planes, d->grid);
+			       (long long)in.width, (long long)in.height, (long long)in.pages, nx, ny, (long long)planes, d->grid_file);
 	}
 	return C0_OK;
 }
@@ -58,7 +58,7 @@ static int check(const struct c0_rundir *d, const char *name, int64_t planes, in
 	const struct c0_tiff_info *in = c0_tiff_get_info(t);
 	if (in->width != nx || in->height != ny || in->pages != planes)
 		st = c0_fail(C0_EINVAL, "%s: %lldx%lldx%lld, expected %dx%dx%lld (%s's grid, srf and stacks)", p,
-			     (long long)in->width, (long long)in->height, (long long)in->pages, nx, ny, (long long)planes, d->grid);
+			     (long long)in->width, (long long)in->height, (long long)in->pages, nx, ny, (long long)planes, d->grid_file);
 	c0_tiff_close(t);
 	return st;
 }
@@ -109,16 +109,16 @@ static int read_grid(struct c0_rundir *d)
 										: "support_parameters";
 	char k[64];
 	snprintf(k, sizeof k, "%s.pixel_size_nm", sec);
-	d->pixel_nm = c0_json_num(r, k, 0);
+	d->grid.pixel_nm = c0_json_num(r, k, 0);
 	snprintf(k, sizeof k, "%s.fwhm_nm", sec);
-	d->fwhm_nm = c0_json_num(r, k, 0);
+	d->grid.fwhm_nm = c0_json_num(r, k, 0);
 	snprintf(k, sizeof k, "%s.srf", sec);
-	d->srf = (int)c0_json_num(r, k, 0);
+	d->grid.srf = (int)c0_json_num(r, k, 0);
 	const cJSON *in = c0_json_at(r, "intensity"), *su = c0_json_at(r, "support");
 	d->n = cJSON_IsArray(in) ? cJSON_GetArraySize(in) : cJSON_IsArray(su) ? cJSON_GetArraySize(su) : 0;
 	if (d->n > C0_MAX_STACKS)
 		return c0_fail(C0_EINVAL, "%s/report.json: %d stacks, at most %d", d->dir, d->n, C0_MAX_STACKS);
-	if (d->n && !(d->pixel_nm > 0 && d->fwhm_nm > 0 && d->srf >= 1 && d->srf <= 16))
+	if (d->n && !(d->grid.pixel_nm > 0 && d->grid.fwhm_nm > 0 && d->grid.srf >= 1 && d->grid.srf <= 16))
 		return c0_fail(C0_EINVAL, "%s/report.json: no pixel size, FWHM and srf in \"%s\"", d->dir, sec);
 	if (!d->n)
 		return C0_OK;
@@ -128,7 +128,7 @@ static int read_grid(struct c0_rundir *d)
 	const char *first = exists(d, "mean_q01.tif") || !cJSON_IsArray(in) ? "mean_q01.tif" : "background_q01.tif";
 	if (!cJSON_IsArray(in) && !exists(d, first))
 		return C0_OK;   /* a support run from before mean_qNN.tif: no images */
-	d->grid = first;
+	d->grid_file = first;
 	int st = path_of(d, first, p, sizeof p);
 	if (!st && !exists(d, first))
 		return c0_fail(C0_EIO, "%s: missing (report.json says this run wrote it)", p);
@@ -141,7 +141,7 @@ static int read_grid(struct c0_rundir *d)
 
 static int load_stacks(struct c0_rundir *d)
 {
-	const int ny = d->ny, nx = d->nx, Ly = ny * d->srf, Lx = nx * d->srf;
+	const int ny = d->ny, nx = d->nx, Ly = ny * d->grid.srf, Lx = nx * d->grid.srf;
 	const int inten = c0_json_at(d->rep, "intensity") != NULL;
 	int means = 0, st = C0_OK;
 	for (int q = 0; q < d->n && !means; q++) {   /* all or none (runs before mean_qNN.tif have none) */

@@ -51,7 +51,7 @@ static void header(struct c0_html *h, const struct c0_rundir *d)
 	c0_html_escape(h, ver ? ver : "?");
 	if (d->n && d->ny)
 		c0_html_printf(h, " \u00b7 %d stack%s of %d\u00d7%d pixels of %g nm, fine grid %g nm (\u00d7%d)", d->n,
-			       d->n > 1 ? "s" : "", d->nx, d->ny, d->pixel_nm, d->pixel_nm / d->srf, d->srf);
+			       d->n > 1 ? "s" : "", d->nx, d->ny, d->grid.pixel_nm, c0_grid_fine_nm(&d->grid), d->grid.srf);
 	c0_html_add(h, "</p><nav><a href=\"#warnings\">warnings</a><a href=\"#mean\">mean</a><a href=\"#render\">render</a>"
 		       "<a href=\"#depth\">depth</a><a href=\"#error-map\">error map</a><a href=\"#lambda\">\u03bb</a>"
 		       "<a href=\"#drift\">drift</a><a href=\"#bleach\">bleaching</a><a href=\"#frc\">FRC</a>"
@@ -86,7 +86,7 @@ static int write_errors(const struct c0_rundir *d, int *written)
 			continue;
 		char path[4400];
 		snprintf(path, sizeof path, "%s/error_q%02d.tif", d->dir, q + 1);
-		struct c0_tiff_wopts o = { .width = d->nx, .height = d->ny, .dtype = C0_F32, .pixel_size_nm = d->pixel_nm,
+		struct c0_tiff_wopts o = { .width = d->nx, .height = d->ny, .dtype = C0_F32, .pixel_size_nm = d->grid.pixel_nm,
 					   .software = "col0rme report: data mean - forward model of the estimate" };
 		int st = c0_tiff_save_f32(path, &o, d->err[q]);
 		if (st)

@@ -77,9 +77,9 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 	for (int i = 0; i < r->n; i++)
 		cJSON_AddItemToArray(arr, intensity_stack(r->names[i], &r->ires[i], ic, frames[i], tc[i]));
 	cJSON *p = cJSON_AddObjectToObject(rep, "intensity_parameters");
-	cJSON_AddNumberToObject(p, "pixel_size_nm", ic->pixel_nm);   /* the forward model, for report.html's error map */
-	cJSON_AddNumberToObject(p, "fwhm_nm", ic->fwhm_nm);
-	cJSON_AddNumberToObject(p, "srf", ic->srf);
+	cJSON_AddNumberToObject(p, "pixel_size_nm", ic->grid.pixel_nm);   /* the forward model, for report.html's error map */
+	cJSON_AddNumberToObject(p, "fwhm_nm", ic->grid.fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", ic->grid.srf);
 	static const char *bg[] = { "none", "constant", "smooth" };
 	cJSON_AddStringToObject(p, "background", bg[ic->background]);
 	cJSON_AddNumberToObject(p, "beta", ic->beta);
@@ -173,7 +173,7 @@ static void psf_image(cJSON *p, const struct c0_run_conf *c, const struct c0_sta
 {
 	cJSON *o = cJSON_AddObjectToObject(p, "psf_image");
 	cJSON_AddStringToObject(o, "file", c->psf_image);
-	cJSON_AddNumberToObject(o, "pixel_size_nm", s->psf_pixel_nm > 0 ? s->psf_pixel_nm : s->support.pixel_nm);
+	cJSON_AddNumberToObject(o, "pixel_size_nm", s->psf_pixel_nm > 0 ? s->psf_pixel_nm : s->support.grid.pixel_nm);
 	cJSON_AddStringToObject(o, "pixel_size_from", s->psf_pixel_nm > 0 ? "its calibration" : "the stacks (the image has none)");
 	cJSON_AddNumberToObject(o, "fwhm_px", s->psf.fwhm_px);
 	cJSON_AddNumberToObject(o, "centre_x_px", s->psf.cx);
@@ -188,10 +188,10 @@ void c0_report_run_params(cJSON *rep, const struct c0_run_conf *c, const struct 
 {
 	cJSON *p = cJSON_AddObjectToObject(rep, "parameters");
 	cJSON_AddStringToObject(p, "mode", three_d ? "3D" : "2D");
-	cJSON_AddNumberToObject(p, "pixel_size_nm", s->support.pixel_nm);
-	cJSON_AddNumberToObject(p, "fine_pixel_nm", s->support.pixel_nm / s->support.srf);
-	cJSON_AddNumberToObject(p, "fwhm_nm", s->support.fwhm_nm);
-	cJSON_AddNumberToObject(p, "srf", s->support.srf);
+	cJSON_AddNumberToObject(p, "pixel_size_nm", s->support.grid.pixel_nm);
+	cJSON_AddNumberToObject(p, "fine_pixel_nm", c0_grid_fine_nm(&s->support.grid));
+	cJSON_AddNumberToObject(p, "fwhm_nm", s->support.grid.fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", s->support.grid.srf);
 	if (three_d) {
 		cJSON_AddNumberToObject(p, "depth_pool_nm", s->pool_nm);
 		cJSON_AddNumberToObject(p, "depth_pool_range_nm", s->pool_range_nm);

@@ -51,7 +51,7 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
  * bench/frc_validation.py), so no resolution is drawn from it. */
 static int frc(cJSON *o, const struct c0_support_result *s, const struct c0_support_conf *c)
 {
-	const double fine = c->pixel_nm / c->srf;
+	const double fine = c0_grid_fine_nm(&c->grid);
 	cJSON *fr = cJSON_AddObjectToObject(o, "frc");
 	cJSON_AddStringToObject(fr, "images", "emitter variances of the even and the odd frames (fine grid), Hann window");
 	cJSON_AddStringToObject(fr, "note", "how far the halves agree per spatial frequency, not a resolution: the halves "
@@ -108,9 +108,9 @@ cJSON *c0_report_support_stack(const char *name, const struct c0_support_result 
 void c0_report_support_params(cJSON *rep, const struct c0_support_conf *c)
 {
 	cJSON *p = cJSON_AddObjectToObject(rep, "support_parameters");
-	cJSON_AddNumberToObject(p, "pixel_size_nm", c->pixel_nm);
-	cJSON_AddNumberToObject(p, "fwhm_nm", c->fwhm_nm);
-	cJSON_AddNumberToObject(p, "srf", c->srf);
+	cJSON_AddNumberToObject(p, "pixel_size_nm", c->grid.pixel_nm);
+	cJSON_AddNumberToObject(p, "fwhm_nm", c->grid.fwhm_nm);
+	cJSON_AddNumberToObject(p, "srf", c->grid.srf);
 	cJSON_AddStringToObject(p, "penalty", c->penalty == C0_PENALTY_L1 ? "l1" : "cel0");
 	cJSON_AddNumberToObject(p, "max_iterations", c->fista.maxit);
 	cJSON_AddNumberToObject(p, "tol", c0_support_tol(c));

@@ -136,7 +136,7 @@ static void warn_pixels(struct c0_html *h, const struct c0_rundir *d, struct not
 
 static void warn_drift(struct c0_html *h, const struct c0_rundir *d, struct notes *w)
 {
-	double mx = c0_json_num(d->rep, "drift.max_nm", 0), px = d->pixel_nm;
+	double mx = c0_json_num(d->rep, "drift.max_nm", 0), px = d->grid.pixel_nm;
 	int side = d->ny < d->nx ? d->ny : d->nx;
 	if (!(mx > 0 && px > 0 && side > 0))
 		return;

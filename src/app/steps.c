@@ -87,7 +87,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		cJSON_AddItemToArray(arr, o);
 	}
 	c0_report_support_params(r->rep, &cc);
-	r->pixel_nm = cc.pixel_nm, r->srf = cc.srf;
+	r->pixel_nm = cc.grid.pixel_nm, r->srf = cc.grid.srf;
 	int st = support_union(r);
 	if (!st)
 		cJSON_AddNumberToObject(r->timings, "support", c0_now() - t);
@@ -178,9 +178,9 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	const struct c0_support_result *known[C0_MAX_STACKS] = { 0 };
 	for (int k = 0; r->sres && k < r->nsup; k++)
 		known[r->sup[k]] = &r->sres[k];
-	if (f[0].height * sc->srf != r->Ly || f[0].width * sc->srf != r->Lx)
+	if (f[0].height * sc->grid.srf != r->Ly || f[0].width * sc->grid.srf != r->Lx)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels at srf %d do not match the %dx%d support", f[0].name, f[0].width,
-			       f[0].height, sc->srf, r->Lx, r->Ly);
+			       f[0].height, sc->grid.srf, r->Lx, r->Ly);
 	int64_t frames[C0_MAX_STACKS];
 	double tc[C0_MAX_STACKS], t = c0_now();
 	int sts[C0_MAX_STACKS];
@@ -201,7 +201,7 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 			return st;
 		}
 	free(msg);
-	r->pixel_nm = ic->pixel_nm, r->srf = ic->srf;
+	r->pixel_nm = ic->grid.pixel_nm, r->srf = ic->grid.srf;
 	c0_report_intensity(r->rep, r, ic, frames, tc);
 	cJSON_AddNumberToObject(r->timings, "intensity", c0_now() - t);
 	return C0_OK;

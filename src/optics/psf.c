@@ -5,23 +5,6 @@
 #include <math.h>
 #include <stddef.h>
 
-int c0_psf_check(double pixel_nm, double fwhm_nm, int srf)
-{
-	if (!(pixel_nm > 0 && isfinite(pixel_nm)))
-		return c0_fail(C0_EINVAL, "pixel_nm %g: must be a positive number of nm", pixel_nm);
-	if (!(fwhm_nm > 0 && isfinite(fwhm_nm)))
-		return c0_fail(C0_EINVAL, "fwhm_nm %g: must be a positive number of nm", fwhm_nm);
-	/* the banded covariance, the PSF tables and their integer widths are
-	 * sized by FWHM / pixel: outside this range the input is not a
-	 * microscope image sampled by its camera */
-	if (!(fwhm_nm >= C0_PSF_MIN_PX * pixel_nm && fwhm_nm <= C0_PSF_MAX_PX * pixel_nm))
-		return c0_fail(C0_EINVAL, "fwhm_nm %g: %.3g camera pixels of %g nm; must be %g to %g pixels", fwhm_nm, fwhm_nm / pixel_nm,
-			       pixel_nm, C0_PSF_MIN_PX, C0_PSF_MAX_PX);
-	if (srf < 1 || srf > 16)
-		return c0_fail(C0_EINVAL, "srf %d: must be 1..16", srf);
-	return C0_OK;
-}
-
 int c0_fwhm_from_na(double emission_nm, double na, double n_glass, double *fwhm_nm)
 {
 	if (!(emission_nm > 0 && isfinite(emission_nm)))

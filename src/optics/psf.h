@@ -3,10 +3,7 @@
 #pragma once
 #include "core/band.h"
 
-/* The parameters every grid shares: pixel size and FWHM positive (nm),
- * super-resolution factor 1..16; errors name the option. */
-int c0_psf_check(double pixel_nm, double fwhm_nm, int srf);
-/* The FWHM range c0_psf_check accepts, in camera pixels. */
+/* The FWHM range c0_grid_check (optics/grid.h) accepts, in camera pixels. */
 #define C0_PSF_MIN_PX 0.1
 #define C0_PSF_MAX_PX 100.0
 /* FWHM 0.51 lambda / NA (emission in nm), with 0 < NA < n_glass. */

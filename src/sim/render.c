@@ -143,7 +143,7 @@ void c0_sim_render(const struct c0_sim_scene *s, int t, double *ph)
 	const int W = c->width, H = c->height, K = s->K;
 	for (int i = 0; i < W * H; i++)
 		ph[i] = s->bg[i];
-	double dwx[64], dwy[64];   /* K <= 2 ceil(cutoff sigma) + 2 (checked by c0_psf_check) */
+	double dwx[64], dwy[64];   /* K <= 2 ceil(cutoff sigma) + 2 (checked by c0_grid_check) */
 	for (int e = 0; e < s->nem; e++) {
 		double a = s->amp[e] * s->on[(size_t)e * c->frames + t];
 		if (a == 0)

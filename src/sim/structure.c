@@ -1,7 +1,7 @@
 /* Sample structures: worm-like-chain filaments in 3D, or a CSV of emitters. */
 #define _POSIX_C_SOURCE 200809L
 #include "sim/sim.h"
-#include "optics/psf.h"
+#include "optics/grid.h"
 #include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -57,7 +57,7 @@ int c0_sim_check(const struct c0_sim_conf *c)
 		return c0_fail(C0_EINVAL, "width %d / height %d: at least 8x8 pixels", c->width, c->height);
 	if (c->frames < 1)
 		return c0_fail(C0_EINVAL, "frames %d: must be at least 1", c->frames);
-	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
+	int st = c0_grid_check(&(struct c0_grid){ c->pixel_nm, c->fwhm_nm, c->srf });
 	if (st)
 		return st;
 	if (c->nangles < 1 || c->nangles > C0_MAX_ANGLES)

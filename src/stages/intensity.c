@@ -14,7 +14,7 @@
 
 int c0_intensity_check(const struct c0_intensity_conf *c)
 {
-	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
+	int st = c0_grid_check(&c->grid);
 	if (st)
 		return st;
 	if (!(c->beta >= 0 && isfinite(c->beta)) || !(c->nu >= 0 && isfinite(c->nu)) || !(c->mu >= 0 && isfinite(c->mu)))
@@ -209,7 +209,7 @@ static void bg_normal(void *ctx, const double *in, double *out)
 static int background_only(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx,
 			   struct c0_intensity_result *res)
 {
-	const int NN = Ny * Nx, r = c->srf;
+	const int NN = Ny * Nx, r = c->grid.srf;
 	res->Ly = Ny * r, res->Lx = Nx * r, res->Ny = Ny, res->Nx = Nx, res->dp_status = -1;
 	res->x = c0_alloc((size_t)NN * r * r, sizeof *res->x);
 	res->b = c0_alloc((size_t)NN, sizeof *res->b);
@@ -265,7 +265,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
 {
-	const int r = c->srf, Lx = Nx * r, halo = 2 * (int)ceil(6 * c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm));
+	const int r = c->grid.srf, Lx = Nx * r, halo = 2 * c0_grid_lag(&c->grid, 0);
 	struct c0_tiling tl;
 	int st = c0_tiling_make(Ny, Nx, c->tile, halo, &tl);
 	if (st)
@@ -346,7 +346,7 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 {
 	int st;
 	struct prob p = { .c = c, .ybar = ybar, .NN = Ny * Nx };
-	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), mask, c->graph_radius)))
+	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->grid.srf, c0_grid_sigma_px(&c->grid), mask, c->graph_radius)))
 		return st;
 	p.n = p.P.n;
 	p.nb = c->background == C0_BG_SMOOTH ? p.NN : c->background == C0_BG_CONSTANT ? 1 : 0;

@@ -9,6 +9,7 @@
  * nothing smooths (docs/parameters.md). mu by the discrepancy principle:
  *   ||Psi x + b - ybar||^2 = nu^2 H W sigma2 / T. */
 #pragma once
+#include "optics/grid.h"
 #include "solve/cg.h"
 
 #include <stdint.h>
@@ -16,8 +17,7 @@
 #include "col0rme.h"   /* enum c0_background */
 
 struct c0_intensity_conf {
-	double pixel_nm, fwhm_nm;  /* required */
-	int srf;                   /* 4 */
+	struct c0_grid grid;       /* pixel_nm, fwhm_nm required; srf 4 */
 	enum c0_background background; /* smooth */
 	double beta;               /* 20: background smoothness (coarse grid) */
 	double nu;                 /* 1; 0 means sqrt(T), the reference's choice (docs/parameters.md) */
@@ -29,7 +29,7 @@ struct c0_intensity_conf {
 	int tile;                  /* 0: one solve on the whole image; else tiles of this side (camera
 				    * pixels) with a halo of two PSF lags, each with its own mu */
 };
-#define C0_INTENSITY_DEFAULTS { 0, 0, 4, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0 }
+#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0 }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {

@@ -177,7 +177,7 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	memset(out, 0, sizeof *out);
 	if (a->W != b->W || a->H != b->H || a->nlag != b->nlag)
 		return c0_fail(C0_EINVAL, "lambda: the two halves differ in size");
-	const int r = c->srf;
+	const int r = c->grid.srf;
 	const size_t n = (size_t)a->W * a->H, L = n * r * r;
 	struct c0_covop op;
 	int st = c0_support_covop(c, a, &op);
@@ -233,8 +233,8 @@ out:
 int c0_lambda_peaks(const struct c0_support_conf *c, const float *rx, double norm, int Ny, int Nx, int iy, int ix,
 		    int ih, int iw, double *hist)
 {
-	const int r = c->srf, Ly = Ny * r, Lx = Nx * r;
-	const double sigma = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
+	const int r = c->grid.srf, Ly = Ny * r, Lx = Nx * r;
+	const double sigma = c0_grid_sigma_px(&c->grid);
 	/* ||psi_a||^2 = ny[ay] nx[ax], the window's PSF factors' column norms as
 	 * the solve's (ops/covop.h) */
 	struct c0_band Gy = { 0 }, Gx = { 0 };
@@ -283,7 +283,7 @@ void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *
 int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all, double norm, int iy, int ix, int ih,
 		       int iw, double lmax[2], double *hist)
 {
-	const int r = c->srf, Lx = all->W * r;
+	const int r = c->grid.srf, Lx = all->W * r;
 	const size_t n = (size_t)all->W * all->H;
 	struct c0_covop op;
 	int st = c0_support_covop(c, all, &op);
@@ -307,7 +307,7 @@ int c0_lambda_tile_max(const struct c0_support_conf *c, const struct c0_cov *all
 
 int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *half, double **C, double **n)
 {
-	const size_t L = (size_t)half->W * half->H * c->srf * c->srf;
+	const size_t L = (size_t)half->W * half->H * c->grid.srf * c->grid.srf;
 	struct c0_covop op;
 	*C = NULL;
 	if (n)
@@ -330,7 +330,7 @@ int c0_lambda_tile_corr(const struct c0_support_conf *c, const struct c0_cov *ha
 void c0_lambda_tile_noise(const struct c0_support_conf *c, const double *ca, const double *cb, const double *n, int W,
 			  double norm, int iy, int ix, int ih, int iw, double *hist)
 {
-	const int r = c->srf, Lx = W * r;
+	const int r = c->grid.srf, Lx = W * r;
 	for (int y = iy * r; y < (iy + ih) * r; y++)
 		for (int x = ix * r; x < (ix + iw) * r; x++) {
 			const size_t i = (size_t)y * Lx + x;

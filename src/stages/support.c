@@ -13,7 +13,7 @@
 
 int c0_support_lag(const struct c0_support_conf *c)
 {
-	return c->lag > 0 ? c->lag : (int)ceil(6 * c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm));
+	return c0_grid_lag(&c->grid, c->lag);
 }
 
 double c0_support_default_lambda(enum c0_penalty p)
@@ -30,7 +30,7 @@ double c0_support_tol(const struct c0_support_conf *c)
 
 double c0_support_guard_ratio(const struct c0_support_conf *c)
 {
-	const double sigma = c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm);
+	const double sigma = c0_grid_sigma_px(&c->grid);
 	double g = INFINITY, w[3];
 	/* a source inside pixel 0 (others give larger ratios: the pixel is
 	 * then on their Gaussian's flank or tail) */
@@ -68,9 +68,9 @@ int c0_support_fail_short(const struct c0_frames *in)
 
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name)
 {
-	if (!(c->pixel_nm > 0))
-		return c0_fail(C0_EINVAL, "pixel_nm %g: must be positive (nm; not found in %s's calibration)", c->pixel_nm, name);
-	int st = c0_psf_check(c->pixel_nm, c->fwhm_nm, c->srf);
+	if (!(c->grid.pixel_nm > 0))
+		return c0_fail(C0_EINVAL, "pixel_nm %g: must be positive (nm; not found in %s's calibration)", c->grid.pixel_nm, name);
+	int st = c0_grid_check(&c->grid);
 	if (st)
 		return st;
 	if (!(c->lambda_rel >= 0 && c->lambda_rel < 1))
@@ -123,9 +123,9 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	if (!st)
 		st = c0_frc_compute(h[0].rx, h[1].rx, res->Ly, res->Lx, &res->frc);
 	if (!st) {
-		const double fine = c->pixel_nm / c->srf;
+		const double fine = c0_grid_fine_nm(&c->grid);
 		/* match within the PSF's half width at half maximum */
-		double p = c0_pair_precision(h[0].mask, h[1].mask, res->Ly, res->Lx, (int)ceil(0.5 * c->fwhm_nm / fine));
+		double p = c0_pair_precision(h[0].mask, h[1].mask, res->Ly, res->Lx, (int)ceil(0.5 * c->grid.fwhm_nm / fine));
 		res->precision_nm = p < 0 ? -1 : p * fine / sqrt(2);
 	}
 	c0_support_result_free(&h[0]), c0_support_result_free(&h[1]);
@@ -267,7 +267,7 @@ static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
 {
 	const struct c0_support_conf *c = k->c;
 	struct c0_support_share *s = &k->s;
-	const int W = k->in->width, r = c->srf, d = c0_support_lag(c);
+	const int W = k->in->width, r = c->grid.srf, d = c0_support_lag(c);
 	/* the tiles below only read them, some from two threads (the halves) */
 	if (!st && s->acc)
 		c0_cov_acc_seal(s->acc);
@@ -366,7 +366,7 @@ static int stack_solve(struct stack *k, struct c0_support_result *res)
 static int stack_gather(struct stack *k, struct c0_support_result *res)
 {
 	const struct c0_tiling *tl = &k->s.tl;
-	const int W = k->in->width, r = k->c->srf, ia = k->s.ia, ib = k->s.ib;
+	const int W = k->in->width, r = k->c->grid.srf, ia = k->s.ia, ib = k->s.ib;
 	c0_comm_sum(k->s2, tl->n);
 	c0_comm_sum(k->stats, 4 * tl->n);
 	c0_comm_sum(k->obj, tl->n * res->nhist);

@@ -8,6 +8,7 @@
 #include "stages/lambda.h"
 #include "eval/frc.h"
 #include "io/frames.h"
+#include "optics/grid.h"
 
 #include <stdint.h>
 
@@ -18,9 +19,7 @@
 typedef int (*c0_frame_fn)(void *ctx, int64_t t, float *frame, int H, int W);
 
 struct c0_support_conf {
-	double pixel_nm;           /* camera pixel size (required) */
-	double fwhm_nm;            /* PSF FWHM (required) */
-	int srf;                   /* 4: fine grid factor r */
+	struct c0_grid grid;       /* pixel_nm, fwhm_nm required; srf 4 */
 	enum c0_penalty penalty;   /* l1 */
 	double lambda_rel;         /* lambda / lambda_max; 0: automatic (stages/lambda.h) when the stack is
 				    * streamed, else the penalty's fixed default (c0_support_default_lambda) */
@@ -36,7 +35,7 @@ struct c0_support_conf {
 	int guard;                 /* 1: streamed covariances clip each pixel's variance (c0_cov_guard
 				    * with c0_support_guard_ratio) */
 };
-#define C0_SUPPORT_DEFAULTS { 0, 0, 4, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1 }
+#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1 }
 /* g of c0_cov_guard for this PSF: the smallest mean ratio of a point
  * source's signal in a pixel's 4 neighbours to its signal in the pixel,
  * over positions in and around the pixel (0.6 at 229 nm / 100 nm). */

@@ -132,7 +132,7 @@ static int solve_masked(struct c0_covfit *ctx, const struct c0_fista_conf *fc, d
 
 int c0_support_covop(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_covop *op)
 {
-	return c0_covop_init(op, cov->H, cov->W, c->srf, c0_psf_sigma_px(c->fwhm_nm, c->pixel_nm), cov->d);
+	return c0_covop_init(op, cov->H, cov->W, c->grid.srf, c0_grid_sigma_px(&c->grid), cov->d);
 }
 
 void c0_support_correlate(struct c0_covop *op, const struct c0_cov *cov, double norm, double *C, double *trR,
@@ -222,7 +222,7 @@ int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov
 			    double **band, const struct c0_support_scale *g, struct c0_support_result *res)
 {
 	double t0 = c0_now();
-	const int W = cov->W, H = cov->H, r = c->srf;
+	const int W = cov->W, H = cov->H, r = c->grid.srf;
 	const size_t n = (size_t)W * H, L = n * r * r;
 	struct c0_covop op;
 	int st = c0_support_covop(c, cov, &op);

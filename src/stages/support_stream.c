@@ -140,7 +140,7 @@ static int add_one(void *ctx, int64_t t, const float *rows)
 static int noise_tile(const struct c0_support_conf *c, struct c0_cov_acc *acc, const struct c0_tile *t,
 		      const uint8_t *mask, int W, double *s2, double *mean)
 {
-	const int r = c->srf;
+	const int r = c->grid.srf;
 	struct c0_cov cov = { 0 };
 	struct c0_support_result tr;
 	memset(&tr, 0, sizeof tr);

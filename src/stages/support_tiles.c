@@ -67,7 +67,7 @@ int c0_support_tiles_solve(const struct c0_support_conf *c, struct c0_support_sh
 		struct c0_support_result tr;
 		int st = tile_solve(c, s->acc, ya, &tl->t[k], g, &tr);
 		if (!st)
-			tile_keep(&tl->t[k], c->srf, W, &tr, res, &s2[k], stats + 4 * (size_t)k, obj + (size_t)k * res->nhist);
+			tile_keep(&tl->t[k], c->grid.srf, W, &tr, res, &s2[k], stats + 4 * (size_t)k, obj + (size_t)k * res->nhist);
 		c0_first_fail_note(&fail, st);
 		c0_support_result_free(&tr);
 #pragma omp critical(c0_support_progress)
@@ -252,7 +252,7 @@ static uint8_t *precision_subset(const struct c0_tiling *tl, const uint8_t *sub)
 static int half_solve(const struct c0_support_conf *c, struct c0_support_share *s, int k, int j,
 		      const struct c0_support_scale *g, uint8_t *m)
 {
-	const int r = c->srf;
+	const int r = c->grid.srf;
 	const struct c0_tile *t = &s->tl.t[k];
 	struct c0_cov h;
 	struct c0_support_result hr;
@@ -275,7 +275,7 @@ static int half_solve(const struct c0_support_conf *c, struct c0_support_share *
 static void precision_sum(const struct c0_support_conf *c, const struct c0_tiling *tl, double *sums,
 			  struct c0_support_result *res)
 {
-	const double fine = c->pixel_nm / c->srf;
+	const double fine = c0_grid_fine_nm(&c->grid);
 	c0_comm_sum(sums, 2 * tl->n);
 	double s = 0, n = 0;
 	for (int k = 0; k < tl->n; k++)
@@ -287,12 +287,12 @@ int c0_support_tiles_precision(const struct c0_support_conf *c, struct c0_suppor
 			       const struct c0_support_scale *g, struct c0_support_result *res)
 {
 	const struct c0_tiling *tl = &s->tl;
-	const int k0 = s->k0, k1 = s->k1, r = c->srf;
+	const int k0 = s->k0, k1 = s->k1, r = c->grid.srf;
 	uint8_t *use = precision_subset(tl, s->sub);
 	if (!use)
 		return C0_ENOMEM;
 	double t0 = c0_now();
-	const int rad = (int)ceil(0.5 * c->fwhm_nm / (c->pixel_nm / r));
+	const int rad = (int)ceil(0.5 * c->grid.fwhm_nm / c0_grid_fine_nm(&c->grid));
 	double *sums = c0_alloc(2 * (size_t)tl->n, sizeof *sums);   /* distance^2, matches */
 	struct c0_support_conf cc = *c;
 	if (cc.fista.maxit > C0_SUPPORT_FRC_MAXIT)
