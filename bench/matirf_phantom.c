@@ -7,7 +7,9 @@
  * noise, and the brightness dimmed to a fifth outside a grid of 3-pixel
  * lines every 8 pixels, fine detail that the blur takes away.
  *   matirf_phantom [--blur FWHM_NM] OUTDIR N NOISE ANGLE...
- * writes OUTDIR/img_qNN.tif (float32) and OUTDIR/truth_depth.tif (nm). */
+ * writes OUTDIR/img_qNN.tif (float32), OUTDIR/truth_depth.tif (nm) and
+ * OUTDIR/truth_brightness.tif (the sum over depth of the true volume, in the
+ * images' units at W = 1). */
 #include "optics/tirf.h"
 #include "optics/psf.h"
 #include "io/tiff.h"
@@ -102,6 +104,13 @@ int main(int argc, char **argv)
 	}
 	snprintf(path, sizeof path, "%s/truth_depth.tif", argv[1]);
 	if (c0_tiff_save_f32(path, &o, depth)) {
+		fprintf(stderr, "matirf_phantom: %s\n", c0_errmsg());
+		return 1;
+	}
+	for (int i = 0; i < n * n; i++)
+		img[i] = (float)amp[i];
+	snprintf(path, sizeof path, "%s/truth_brightness.tif", argv[1]);
+	if (c0_tiff_save_f32(path, &o, img)) {
 		fprintf(stderr, "matirf_phantom: %s\n", c0_errmsg());
 		return 1;
 	}

@@ -2,7 +2,8 @@
 a baseline measured in the same run). Run from the repository root after
 scripts/setup.sh:  /usr/bin/python3 bench/run.py [--quick]
 (--quick skips the 256x256 cases: support, intensity, dense MA-TIRF, and the
-350x350 MA-TIRF rows; --matirf350 runs only those;
+350x350 MA-TIRF rows; --matirf350 runs only those, --matirf-psf only their
+plain against --psf-fwhm rows;
 --large adds whole camera frames: support on 1024x1024x500 and 2048x2048x200,
 run on 5 angles of 512x512x500, each against the single-tile path measured in
 the same run where it fits, thread scaling and a run next to a busy process;
@@ -56,10 +57,11 @@ def row(what, size, secs, thr, mem, ratio=""):
     print(" | ".join(rows[-1]), file=sys.stderr, flush=True)   # as it comes: the table waits for the end
 
 
-def matirf350(tmp):
+def matirf350(tmp, psf_only=False):
     # MA-TIRF at the size of the public example: a 350x350 dense phantom, the
     # example's 13 angles (equally spaced in NA 1.3478..1.4244), bins 0-300 nm.
-    # The solvers against each other; 1 vs 2 threads; Hessian-Schatten.
+    # The solvers against each other; 1 vs 2 threads; Hessian-Schatten;
+    # plain against --psf-fwhm (psf_only: just those rows).
     import math
     import numpy as np
     import tifffile
@@ -77,6 +79,14 @@ def matirf350(tmp):
         rep["mem"], rep["cpu"] = mem, LAST_CPU[0]
         return dt, rep, tifffile.imread(os.path.join(o, "depth.tif"))
 
+    def desc(r, d):
+        return "%.1f CPU-s, %d its (+%d coarse), %s, rel. change %.1e, objective %.6g, depth err %.1f nm (signed %+.1f)" % (
+            r["cpu"], r["iterations"], r.get("coarse_iterations", 0), "converged" if r["converged"] else "NOT converged",
+            r["final_relative_change"], r["objective"], np.median(np.abs(d - truth)), np.median(d - truth))
+    if psf_only:
+        matirf_psf(tmp, ang13, mt, desc, imgs, truth)
+        return
+
     # apg with the coarse start (the default) against the previous defaults:
     # apg cold (TV), diag (TV before that) and exact (Hessian), measured in
     # the same run, interleaved twice (the faster of each)
@@ -91,10 +101,6 @@ def matirf350(tmp):
     tb, rb, db = best["diag"]   # the baseline: the default with TV two steps back
     tc, rc, dc = best["apg cold"]
 
-    def desc(r, d):
-        return "%.1f CPU-s, %d its (+%d coarse), %s, rel. change %.1e, objective %.6g, depth err %.1f nm" % (
-            r["cpu"], r["iterations"], r.get("coarse_iterations", 0), "converged" if r["converged"] else "NOT converged",
-            r["final_relative_change"], r["objective"], np.median(np.abs(d - truth)))
     for what, tag in (("diag solver (default with TV before apg; baseline)", "diag"),
                       ("exact solver (previous default with the Hessian)", "exact"),
                       ("apg solver, cold start (previous default)", "apg cold"),
@@ -118,10 +124,17 @@ def matirf350(tmp):
             "%.2fx faster (%.2fx CPU) than exact; depth vs exact: median %.2f nm" %
             (base[0] / t, base[1]["cpu"] / r["cpu"], np.median(np.abs(d - base[2]))) if base else "baseline")
         base = base or (t, r, d)
+    matirf_psf(tmp, ang13, mt, desc, imgs, truth)
+
+
+def matirf_psf(tmp, ang13, mt, desc, imgs, truth):
     # deconvolution (issue 33): the phantom blurred by a 240 nm PSF, with a grid
     # of fine lines for the blur to take away; plain apg against apg with
-    # --psf-fwhm (the default solver) and against diag with it (the solver
-    # --psf-fwhm took before), each the faster of two interleaved runs
+    # --psf-fwhm at its default kappa (1e-3 with --psf-fwhm, issue 33 item 3),
+    # at the plain default kappa 0.03 (the same problem's regularisation: the
+    # solver's cost) and against diag with it (the solver --psf-fwhm took
+    # before), each the faster of two interleaved runs
+    import tifffile
     phb = os.path.join(tmp, "phantom350_blur")
     os.mkdir(phb)
     subprocess.run([os.path.join(BUILD, "bench", "matirf_phantom"), "--blur", "240", phb, "350", "0.03"] + ang13.split(","),
@@ -133,22 +146,24 @@ def matirf350(tmp):
         t = tifffile.imread(os.path.join(o, "volume.tif")).sum(axis=0)
         return float(((4 * t[1:-1, 1:-1] - t[:-2, 1:-1] - t[2:, 1:-1] - t[1:-1, :-2] - t[1:-1, 2:]) ** 2).sum())
     psf = ["--psf-fwhm", "240", "--pixel-size", "100"]
-    runs = {"plain": [], "psf": psf, "psf diag": psf + ["--matirf-solver", "diag"]}
+    runs = {"plain": [], "psf": psf, "psf k0.03": psf + ["--kappa", "0.03"],
+            "psf diag": psf + ["--kappa", "0.03", "--matirf-solver", "diag"]}
     best = {}
     for rnd in range(2):
         for tag, extra in runs.items():
-            dt, rep, dep = mt("b_" + tag.replace(" ", "_"), extra)
-            rep["detail"] = detail(os.path.join(tmp, "mt350_b_" + tag.replace(" ", "_")))
+            t = "b_" + tag.replace(" ", "_")
+            dt, rep, dep = mt(t, extra)
+            rep["detail"] = detail(os.path.join(tmp, "mt350_" + t))
             if tag not in best or rep["cpu"] < best[tag][1]["cpu"]:
                 best[tag] = (dt, rep, dep)
     tp, rp, dp = best["plain"]
-    for what, tag in (("plain apg (baseline)", "plain"), ("apg with --psf-fwhm 240 (default)", "psf"),
-                      ("diag with --psf-fwhm 240 (before)", "psf diag")):
+    for what, tag in (("plain apg (baseline, kappa 0.03)", "plain"), ("apg with --psf-fwhm 240 (default, kappa 1e-3)", "psf"),
+                      ("apg with --psf-fwhm 240, kappa 0.03", "psf k0.03"),
+                      ("diag with --psf-fwhm 240, kappa 0.03 (before)", "psf diag")):
         t, r, d = best[tag]
         row("matirf, 350x350 phantom blurred by 240 nm, " + what, "350x350x15 x13", t,
             desc(r, d) + ", detail %.3g" % r["detail"], r["mem"],
             "" if tag == "plain" else "%.2fx the plain CPU, %.2fx its fine detail" % (r["cpu"] / rp["cpu"], r["detail"] / rp["detail"]))
-
 
 def support_row(what, d, w, T, extra=(), env=None, base=None, vs="the baseline"):
     """one 'support' run on d/stack_q01.tif; returns its seconds"""
@@ -215,9 +230,9 @@ def table():
         print(" | ".join(str(c).ljust(w) for c, w in zip(r, widths)))
 
 
-if "--matirf350" in sys.argv:   # only the MA-TIRF rows at the public example's size
+if "--matirf350" in sys.argv or "--matirf-psf" in sys.argv:   # only the MA-TIRF rows at the public example's size
     with tempfile.TemporaryDirectory() as tmp:
-        matirf350(tmp)
+        matirf350(tmp, "--matirf350" not in sys.argv)
     table()
     sys.exit(0)
 

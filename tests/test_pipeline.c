@@ -51,6 +51,22 @@ static void test_conf(void)
 	      s.matirf.sparsity == md.sparsity && s.matirf.pdhg.maxit == md.pdhg.maxit && s.matirf.pdhg.tol == md.pdhg.tol &&
 	      s.matirf.pdhg.relax == md.pdhg.relax && s.matirf.fused == md.fused);
 	CHECK(s.pool_nm == C0_DEPTH_POOL_FWHM * 229 && s.pool_range_nm == C0_DEPTH_POOL_RANGE_NM);
+	/* kappa -1: the plain default, or the deconvolution's with psf_fwhm_nm
+	 * (matirf only: run does not deconvolve); a given kappa is kept */
+	struct c0_matirf_conf m;
+	c.psf_fwhm_nm = 240;
+	c0_run_conf_matirf(&c, &m);
+	CHECK(c.kappa == -1 && m.kappa == C0_MATIRF_KAPPA_DECONV && C0_MATIRF_KAPPA_DECONV != md.kappa);
+	CHECK(c0_run_conf_stages(&c, 100, &s) == C0_OK && s.matirf.kappa == md.kappa);
+	c.kappa = 0.02;
+	c0_run_conf_matirf(&c, &m);
+	CHECK(m.kappa == 0.02);
+	c.kappa = -2;
+	c0_run_conf_matirf(&c, &m);
+	CHECK(c0_run_conf_matirf_check(&c, &m, c.nangles) == C0_EINVAL && strstr(c0_errmsg(), "kappa -2"));
+	c.kappa = -1, c.psf_fwhm_nm = 0;
+	c0_run_conf_matirf(&c, &m);
+	CHECK(c0_run_conf_matirf_check(&c, &m, c.nangles) == C0_OK || !strstr(c0_errmsg(), "kappa"));
 	c.depth_pool_range_nm = -2;
 	CHECK(c0_run_conf_stages(&c, 100, &s) == C0_EINVAL && strstr(c0_errmsg(), "depth_pool_range_nm"));
 	c.depth_pool_range_nm = -1;

@@ -50,7 +50,10 @@ void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
 	*m = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 	m->tirf = (struct c0_tirf){ c->n_glass, c->n_sample, c->wavelength_nm, c->s_fraction };
 	m->z0_nm = c->z_range_nm[0], m->z1_nm = c->z_range_nm[1], m->dz_nm = c->z_range_nm[2];
-	m->reg = c->reg, m->kappa = c->kappa, m->wz = c->axial_weight, m->sparsity = c->sparsity;
+	m->reg = c->reg, m->wz = c->axial_weight, m->sparsity = c->sparsity;
+	/* -1: the default of the mode, measured per mode (docs/parameters.md);
+	 * any other negative value is refused by c0_run_conf_matirf_check */
+	m->kappa = c->kappa != -1 ? c->kappa : c->psf_fwhm_nm > 0 ? C0_MATIRF_KAPPA_DECONV : m->kappa;
 	m->pdhg.maxit = c->matirf_iterations, m->pdhg.tol = c->matirf_tol;
 	/* measured: apg takes half the CPU of exact and diag on the 350x350 phantom
 	 * and less in the pipeline, with the same depths (docs/parameters.md) */
@@ -101,6 +104,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE,
 						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE };
 	c0_run_conf_matirf(c, &s->matirf);
+	if (c->kappa == -1)   /* run's MA-TIRF step does not deconvolve (docs/parameters.md): the plain default */
+		s->matirf.kappa = ((struct c0_matirf_conf)C0_MATIRF_DEFAULTS).kappa;
 	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
 	s->pool_range_nm = c->depth_pool_range_nm < 0 ? C0_DEPTH_POOL_RANGE_NM : c->depth_pool_range_nm;
 	if ((unsigned)c->discrepancy > C0_DISCREPANCY_PLAIN || (unsigned)c->bleach > C0_BLEACHING_OFF ||
@@ -135,10 +140,10 @@ static int matirf_params(const struct c0_run_conf *c)
 		return c0_fail(C0_EINVAL, "psf_fwhm_nm %g: must be a positive, finite number of nm (0: no deconvolution)", c->psf_fwhm_nm);
 	if (!(c->background_smooth >= 0))
 		return c0_fail(C0_EINVAL, "background_smooth %g: must be >= 0", c->background_smooth);
-	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->axial_weight >= 0 && isfinite(c->axial_weight)) ||
-	    !(c->sparsity >= 0 && isfinite(c->sparsity)))
-		return c0_fail(C0_EINVAL, "kappa %g, axial_weight %g, sparsity %g: must be finite and >= 0", c->kappa,
-			       c->axial_weight, c->sparsity);
+	if (!((c->kappa >= 0 || c->kappa == -1) && isfinite(c->kappa)))
+		return c0_fail(C0_EINVAL, "kappa %g: must be finite and >= 0 (-1: the default)", c->kappa);
+	if (!(c->axial_weight >= 0 && isfinite(c->axial_weight)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
+		return c0_fail(C0_EINVAL, "axial_weight %g, sparsity %g: must be finite and >= 0", c->axial_weight, c->sparsity);
 	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
 		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
 	if (c->matirf_iterations < 1)

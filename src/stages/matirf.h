@@ -42,6 +42,11 @@ struct c0_matirf_conf {
 	/* levels of the warm start from 2x2-binned images and PSF (apg and exact with TV) */
 	int coarse;
 };
+/* kappa where the run conf deconvolves (psf_fwhm_nm > 0) and gives none:
+ * measured with the blur modelled, 1e-3 halves the depth error of 3e-2 and
+ * doubles the sum-over-depth image's fine detail, short of the truth's
+ * (3e-4 overshoots it: noise) (docs/parameters.md) */
+#define C0_MATIRF_KAPPA_DECONV 1e-3
 #define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0 }
 
 struct c0_matirf_result {
