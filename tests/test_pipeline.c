@@ -7,6 +7,7 @@
 #include "col0rme.h"
 #include "app/pipeline.h"
 #include "app/params.h"
+#include "cli/confopts.h"
 #include "stages/depthpool.h"
 #include "sim/sim.h"
 #include "io/tiff.h"
@@ -247,6 +248,7 @@ static void test_param_defaults(void)
 			checked++;
 		}
 	}
+	CHECK_MSG(n <= C0_CLI_MAXPARAMS, "%d parameters, the CLI has room for %d", n, C0_CLI_MAXPARAMS);
 	CHECK_MSG(checked >= 30, "%d of %d rows have a plain default", checked, n);
 	/* and each row is a parameter c0_run_conf_set knows, once */
 	for (int i = 0; i < n; i++)

@@ -31,7 +31,7 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 	cJSON_AddNumberToObject(l, "kappa", v->kappa);
 	cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
 	cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
-	/* tiles: sigma_C from a subset of the tiles' interiors (stages/support.c) */
+	/* tiles: sigma_C from a subset of the tiles' interiors (stages/support_tiles.c) */
 	cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 	cJSON_AddNumberToObject(l, "seconds", v->seconds);
 	cJSON *cu = cJSON_AddObjectToObject(l, "curve");
@@ -100,7 +100,7 @@ cJSON *c0_report_support_stack(const char *name, const struct c0_support_result 
 		cJSON_Delete(o);
 		return NULL;
 	}
-	if (c->frc)    /* tiles: the precision without the FRC (stages/support.c) */
+	if (c->frc)    /* tiles: the precision without the FRC (stages/support_tiles.c) */
 		cJSON_AddNumberToObject(o, "precision_nm", s->precision_nm);
 	return o;
 }
