@@ -110,7 +110,7 @@ void c0_opts_help(const struct c0_cmd_spec *spec)
 	printf("usage: col0rme %s %s\n\n%s\n\noptions:\n", spec->name, spec->args, spec->summary);
 	for (int i = 0; i < spec->nopts; i++) {
 		const struct c0_opt *o = &spec->opts[i];
-		char head[64], def[160];
+		char head[64], def[192];   /* " (default: " + up to 159 characters + ")" */
 		snprintf(head, sizeof head, "%c%c%s--%s %s", o->shortname ? '-' : ' ', o->shortname ? o->shortname : ' ',
 			 o->shortname ? ", " : "  ", o->name, o->type == C0_OPT_FLAG ? "" : o->metavar ? o->metavar : "X");
 		show_default(o, def, sizeof def);
