@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+static int quick;   /* C0_QUICK set (the sanitizer build): the solves capped, code paths without accuracy bars */
 static struct c0_rng rng;
 
 static void test_adjoints(void)
@@ -317,7 +318,7 @@ static void test_solvers(void)
 		c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 		c.solver = S[k % 3];
 		if (k >= 3)
-			c.pdhg.tol = 1e-6, c.pdhg.maxit = 8000;
+			c.pdhg.tol = 1e-6, c.pdhg.maxit = quick ? 200 : 8000;
 		CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &r[k]) == C0_OK);
 	}
 	double dd[7], med[7];   /* exact vs diag, exact vs apg: defaults, tight; then each default vs tight exact */
@@ -344,16 +345,16 @@ static void test_solvers(void)
 	/* the objective is flat along depth: nearly equal objectives still
 	 * differ by a few nm, so the objectives are the test */
 	const double best = fmin(fmin(r[3].objective, r[4].objective), r[5].objective);
-	for (int k = 0; k < 3; k++) {
+	for (int k = 0; k < 3 && !quick; k++) {
 		CHECK_MSG(r[3 + k].objective <= best * (1 + 2e-4), "tight objective %.8g (solver %d) vs %.8g", r[3 + k].objective, k, best);
 		CHECK_MSG(r[k].objective <= best * 1.005, "default objective %.8g (solver %d) vs %.8g", r[k].objective, k, best);
 	}
-	CHECK_MSG(med[1] < 6 && med[0] < 6, "the solvers' depths differ by %.2f nm (defaults), %.2f nm (tight)", med[0], med[1]);
+	CHECK_MSG(quick || (med[1] < 6 && med[0] < 6), "the solvers' depths differ by %.2f nm (defaults), %.2f nm (tight)", med[0], med[1]);
 	/* apg and exact share their steps, only the per-pixel prox differs: the
 	 * same fixed point (tight: 0.4 nm apart; with x / tau halved in the
 	 * prox the objective was 578 against 15.87); at the defaults they stop
 	 * about as far apart as exact and diag */
-	CHECK_MSG(med[2] < 6 && med[3] < 1, "apg vs exact: depths differ by %.2f nm (defaults), %.2f nm (tight)", med[2], med[3]);
+	CHECK_MSG(quick || (med[2] < 6 && med[3] < 1), "apg vs exact: depths differ by %.2f nm (defaults), %.2f nm (tight)", med[2], med[3]);
 	for (int k = 0; k < 6; k++)
 		c0_matirf_result_free(&r[k]);
 	for (int q = 0; q < nq; q++)
@@ -387,7 +388,7 @@ static void test_coarse(void)
 		c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 		c.solver = C0_MATIRF_APG, c.coarse = k % 2 ? 2 : 0;
 		if (k >= 2)
-			c.pdhg.tol = 1e-5, c.pdhg.maxit = 3000;
+			c.pdhg.tol = 1e-5, c.pdhg.maxit = quick ? 200 : 3000;
 		CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &r[k]) == C0_OK);
 	}
 	double med[2], *e = malloc(sizeof(double) * n * n);   /* coarse vs cold: defaults, tight */
@@ -404,9 +405,9 @@ static void test_coarse(void)
 		r[0].iters, r[1].iters, r[1].coarse_iters, r[0].objective, r[1].objective, med[0],
 		r[2].iters, r[3].iters, r[3].coarse_iters, r[2].objective, r[3].objective, med[1]);
 	CHECK(r[0].coarse_iters == 0 && r[1].coarse_iters > 0 && r[0].converged && r[1].converged);
-	CHECK_MSG(r[3].objective <= r[2].objective * (1 + 2e-4) && r[2].objective <= r[3].objective * (1 + 2e-4) && med[1] < 2,
+	CHECK_MSG(quick || (r[3].objective <= r[2].objective * (1 + 2e-4) && r[2].objective <= r[3].objective * (1 + 2e-4) && med[1] < 2),
 		  "tight: objective %.8g vs %.8g, depths %.3f nm apart", r[3].objective, r[2].objective, med[1]);
-	CHECK_MSG(r[1].objective <= r[2].objective * 1.005 && med[0] < 3 && r[1].iters < 0.8 * r[0].iters,
+	CHECK_MSG(quick || (r[1].objective <= r[2].objective * 1.005 && med[0] < 3 && r[1].iters < 0.8 * r[0].iters),
 		  "defaults: objective %.8g (tight %.8g), depths %.2f nm apart, %d vs %d iterations", r[1].objective,
 		  r[2].objective, med[0], r[1].iters, r[0].iters);
 	for (int k = 0; k < 4; k++)
@@ -529,6 +530,8 @@ static void test_deconvolution(void)
 	double depth[40 * 40], amp[40 * 40];
 	phantom(n, depth, amp);
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
+	if (quick)
+		c.pdhg.maxit = 200;   /* the code paths, without the accuracy bars */
 	float *img[5];
 	const double sigma = 1.2;
 	make_images(&c, depth, amp, n, sigma, img);
@@ -544,7 +547,7 @@ static void test_deconvolution(void)
 	fprintf(stderr, "blurred phantom (sigma %.1f px): depth error %.1f nm without deconvolution, %.1f nm with; "
 		"share of the volume on the structure %.2f -> %.2f (%d iterations, %s)\n", sigma, e0, e1, in0 / t0, in1 / t1,
 		r1.iters, r1.converged ? "converged" : "not converged");
-	CHECK(!r1.exact && in1 / t1 > in0 / t0 + 0.05 && e1 < e0);
+	CHECK(!r1.exact && (quick || (in1 / t1 > in0 / t0 + 0.05 && e1 < e0)));
 	/* apg (the default) with the blur in its step and the coarse start
 	 * (issue 33): the depths, and the fine detail of the sum over depth
 	 * against the plain apg solve's */
@@ -559,8 +562,8 @@ static void test_deconvolution(void)
 		r2.iters, r2.coarse_iters, r2.converged ? "converged" : "not converged", r3.iters, r3.coarse_iters);
 	/* the same minimiser as diag's (the objective includes the blur) */
 	fprintf(stderr, "  objectives with the blur: diag %.6f, apg %.6f\n", r1.objective, r2.objective);
-	CHECK(fabs(r2.objective - r1.objective) < 2e-3 * r1.objective);
-	CHECK(r2.apg && r2.converged && e2 <= 5 && d2 >= 2 * d3);
+	CHECK(quick || fabs(r2.objective - r1.objective) < 2e-3 * r1.objective);
+	CHECK(r2.apg && (quick || (r2.converged && e2 <= 5 && d2 >= 2 * d3)));
 	/* kappa where the run conf deconvolves (issue 33, item 3): measured to
 	 * bring the depths closer and the sum over depth sharper than 3e-2 */
 	struct c0_matirf_result r4;
@@ -570,7 +573,7 @@ static void test_deconvolution(void)
 	fprintf(stderr, "apg deconvolving with kappa %g: depth error %.1f nm (%.1f with 3e-2), fine detail %.2fx 3e-2's "
 		"(%d + %d coarse iterations, %s)\n", c.kappa, e4, e2, d4 / d2, r4.iters, r4.coarse_iters,
 		r4.converged ? "converged" : "not converged");
-	CHECK(r4.converged && e4 <= e2 + 0.5 && d4 >= 1.5 * d2);
+	CHECK(quick || (r4.converged && e4 <= e2 + 0.5 && d4 >= 1.5 * d2));
 	c0_matirf_result_free(&r0), c0_matirf_result_free(&r1), c0_matirf_result_free(&r2), c0_matirf_result_free(&r3);
 	c0_matirf_result_free(&r4);
 	for (int q = 0; q < nq; q++)
@@ -592,11 +595,11 @@ static void test_depth(void)
 	c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 	c.kappa = 1e-6;
 	c.sparsity = 0;
-	c.pdhg.maxit = 5000;
+	c.pdhg.maxit = quick ? 200 : 5000;
 	c.pdhg.tol = 1e-7;
 	e = depth_error(&c, 0, &res);
 	fprintf(stderr, "matirf noiseless: relative residual %.2e, median depth error %.1f nm\n", res, e);
-	CHECK(res < 1e-2);
+	CHECK(quick || res < 1e-2);
 }
 
 static void test_refusals(void)
@@ -614,6 +617,7 @@ static void test_refusals(void)
 
 int main(void)
 {
+	quick = getenv("C0_QUICK") != NULL;
 	c0_rng_init(&rng, 17, 0);
 	RUN(test_adjoints);
 	RUN(test_grad3m);
