@@ -13,6 +13,16 @@ def check(cond, what):
         print("FAIL:", what, file=sys.stderr)
 
 
+def refused(p, *needles):
+    """a CLI refusal: one error line naming the culprit (every needle), a non-zero exit,
+    nothing on stdout; the exit and stderr are printed when it is not"""
+    lines = p.stderr.strip().splitlines()
+    ok = p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
+    if not ok:
+        print("  rc %d, stderr %r" % (p.returncode, p.stderr.strip()), file=sys.stderr)
+    return ok
+
+
 def done():
     print("%d passed, %d failed" % (_count["passed"], _count["failed"]))
     sys.exit(1 if _count["failed"] else 0)

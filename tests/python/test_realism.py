@@ -16,18 +16,13 @@ import tempfile
 import numpy as np
 import tifffile
 
-from checks import check, done
+from checks import check, done, refused
 
 CLI, MODE = sys.argv[1], sys.argv[2]
 
 
 def cli(*args):
     return subprocess.run([CLI, *args], capture_output=True, text=True)
-
-
-def refused(p, *needles):
-    lines = p.stderr.strip().splitlines()
-    return p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
 
 
 def simulate(tmp, name, *args):

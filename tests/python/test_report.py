@@ -25,7 +25,7 @@ import zlib
 import numpy as np
 import tifffile
 
-from checks import check, done
+from checks import check, done, refused
 
 CLI = sys.argv[1]
 IDS = ["mean", "render", "depth", "lambda", "drift", "bleach", "frc", "error-map",
@@ -38,14 +38,6 @@ MARGIN_LOCAL = 3.0      # the deleted part's rise / the rise elsewhere
 
 def cli(*args):
     return subprocess.run([CLI, *args], capture_output=True, text=True)
-
-
-def refused(p, *needles):
-    lines = p.stderr.strip().splitlines()
-    ok = p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
-    if not ok:
-        print("  rc %d, stderr %r" % (p.returncode, p.stderr.strip()), file=sys.stderr)
-    return ok
 
 
 def png_decode(data):

@@ -19,22 +19,13 @@ import time
 import numpy as np
 import tifffile
 
-from checks import check, done
+from checks import check, done, refused
 
 CLI = sys.argv[1]
 
 
 def cli(*args, **kw):
     return subprocess.run([CLI, *args], capture_output=True, text=True, **kw)
-
-
-def refused(p, *needles):
-    """one error line naming the culprit, non-zero exit, nothing on stdout"""
-    lines = p.stderr.strip().splitlines()
-    ok = p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
-    if not ok:
-        print("  rc %d, stderr %r" % (p.returncode, p.stderr.strip()), file=sys.stderr)
-    return ok
 
 
 def digest(d):

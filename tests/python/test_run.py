@@ -15,19 +15,13 @@ import tempfile
 import numpy as np
 import tifffile
 
-from checks import check, done
+from checks import check, done, refused
 
 CLI, DATA, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
 
 
 def cli(*args):
     return subprocess.run([CLI, *args], capture_output=True, text=True)
-
-
-def refused(p, *needles):
-    """one error line naming the culprit, non-zero exit, nothing on stdout"""
-    lines = p.stderr.strip().splitlines()
-    return p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
 
 
 def png_size(path):

@@ -31,7 +31,7 @@ import tempfile
 import numpy as np
 import tifffile
 
-from checks import check, done
+from checks import check, done, refused
 
 CLI = sys.argv[1]
 MPIRUN = sys.argv[2] if len(sys.argv) > 2 and sys.argv[2] else None
@@ -41,11 +41,6 @@ ENV.pop("OMP_WAIT_POLICY", None)       # the program must set it itself
 
 def cli(*args, pre=(), env=ENV):
     return subprocess.run([*pre, CLI, *args], capture_output=True, text=True, env=env)
-
-
-def refused(p, *needles):
-    lines = p.stderr.strip().splitlines()
-    return p.returncode != 0 and len(lines) == 1 and all(n in lines[0] for n in needles) and not p.stdout
 
 
 def pages(path):
