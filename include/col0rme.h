@@ -118,6 +118,10 @@ struct c0_run_conf {
 	double gaps_frames[C0_MAX_STACKS];
 	int ngaps_frames;
 	int baseline;
+	/* the camera's calibration maps (sCMOS), TIFF files of the stacks' frame size */
+	const char *offset_map;
+	const char *variance_map;
+	const char *gain_map;
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \

@@ -83,6 +83,10 @@ static const struct c0_param table[] = {
 	LIST(acquisition_order, C0_P_INTS, "acquisition-order", "I,J,...", "the stack numbers (1-based, as given) in the order they were recorded", "as given"),
 	LIST(gaps_frames, C0_P_DOUBLES, "gaps", "FRAMES,...", "illuminated but unrecorded time between consecutive recorded stacks, in frames (one value: all)", "none"),
 	NUM(baseline, C0_P_FLAG, "baseline", NULL, "also reconstruct the standard MA-TIRF volume from the background-corrected means (baseline_*)", "off"),
+	/* the camera's calibration (sCMOS; docs/guide.md: making the maps from dark frames) */
+	NUM(offset_map, C0_P_STRING, "offset-map", "FILE.tif", "per-pixel dark level (ADU, one plane of the stacks' size): subtracted from every frame", "none"),
+	NUM(variance_map, C0_P_STRING, "variance-map", "FILE.tif", "per-pixel read-noise variance (ADU^2): taken out of each pixel's variance in the covariance", "none"),
+	NUM(gain_map, C0_P_STRING, "gain-map", "FILE.tif", "per-pixel gain (ADU per photon): frames are evened to the map's mean gain", "none"),
 };
 enum { NPARAMS = sizeof table / sizeof *table };
 

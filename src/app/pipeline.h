@@ -58,6 +58,7 @@ struct c0_result {
 	void *hooks[C0_MAX_STACKS];
 	float *render;               /* n planes Ly x Lx, after the render step */
 	double render_sd_nm;
+	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
 };
 
 /* An empty result for command (the report's "command"), n stacks named. */
@@ -74,6 +75,10 @@ void c0_stacks_close(struct c0_frames *f, int n);
 int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, int n, double *pixel_nm);
 /* Every stack against the support config (size against the PSF band, frames). */
 int c0_stacks_check(const struct c0_support_conf *sc, const struct c0_frames *f, int n);
+/* The camera calibration maps of c (offset_map, variance_map, gain_map):
+ * read and checked against f (size, values, the offset map's region),
+ * attached to the frames and sc's support, owned by r. */
+int c0_calib_attach(const struct c0_run_conf *c, struct c0_frames *f, int n, struct c0_stage_confs *sc, struct c0_result *r);
 /* The start of every run: the stacks opened into f (close them with
  * c0_stacks_close), the stages' configs, an empty result for command. */
 int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,

@@ -80,6 +80,8 @@ int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct
 		st = c0_stacks_check(&sc->support, f, n);
 	if (!st)
 		st = c0_result_new(command, n, names, is_file, out);
+	if (!st && (st = c0_calib_attach(c, f, n, sc, *out)))
+		c0_result_free(*out), *out = NULL;
 	if (st)
 		c0_stacks_close(f, n);
 	return st;

@@ -112,10 +112,20 @@ static int intensity_read(const struct c0_support_conf *sc0, void *hook, struct 
 	return c0_stack_noise(&scc, f, mask, own, frames, s2, seconds);
 }
 
+/* With the camera's read-noise map (less its median, noise): each pixel's
+ * weight in the intensity fit, s2 over its own noise variance s2 + noise */
 static int intensity_solve(const struct c0_intensity_conf *ic, const double *mean, int H, int W, int64_t frames,
-			   const uint8_t *mask, double s2, struct c0_intensity_result *res, float **corrected)
+			   const uint8_t *mask, double s2, const float *noise, struct c0_intensity_result *res, float **corrected)
 {
-	int st = c0_intensity_solve(ic, mean, H, W, frames, mask, s2, res);
+	struct c0_intensity_conf c = *ic;
+	float *w = noise && s2 > 0 ? malloc((size_t)H * W * sizeof *w) : NULL;
+	if (noise && s2 > 0 && !w)
+		return C0_ENOMEM;
+	for (size_t p = 0; w && p < (size_t)H * W; p++)
+		w[p] = (float)(s2 / fmax(0.5 * s2, s2 + noise[p]));
+	c.weight = w;
+	int st = c0_intensity_solve(&c, mean, H, W, frames, mask, s2, res);
+	free(w);
 	if (!st && corrected) {
 		size_t nc = (size_t)H * W;
 		if (!(*corrected = malloc(nc * sizeof **corrected)))
@@ -157,7 +167,7 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 	for (int i = 0; i < n; i++) {
 		if (bad)
 			continue;
-		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], &r->ires[i],
+		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &r->ires[i],
 					 corrected ? &r->corrected[i] : NULL);
 		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
 			r->mean[(size_t)i * H * W + p] = (float)(known[i] ? known[i]->mean : own[i])[p];

@@ -3,7 +3,8 @@
 #include "cli/cmdkit.h"
 
 static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "penalty", "lambda",
-				      "iterations", "support_solver", "tol", "reweightings", "lag", "tile", "drift", "no_drift", "pixel_guard", "frc", NULL };
+				      "iterations", "support_solver", "tol", "reweightings", "lag", "tile", "drift", "no_drift", "pixel_guard", "frc",
+				      "offset_map", "variance_map", "gain_map", NULL };
 
 int cmd_support(int argc, char **argv)
 {

@@ -42,11 +42,13 @@ double c0_support_guard_ratio(const struct c0_support_conf *c)
 	return g < 1 ? g : 1;
 }
 
-int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a)
+int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, int x0, int y0, struct c0_cov_acc **a)
 {
 	int st = c0_cov_acc_new(W, H, d, a);
 	if (!st && c->guard)
 		c0_cov_acc_set_guard(*a, c0_support_guard_ratio(c));
+	if (!st && c->noise_map)
+		c0_cov_acc_set_noise(*a, c->noise_map, c->noise_map_w, x0, y0);
 	return st;
 }
 

@@ -22,8 +22,9 @@ double c0_support_lambda_rel(const struct c0_support_conf *c);
 /* The errors that several paths share (their texts are read by users and tests) */
 int c0_support_fail_flat(void);
 int c0_support_fail_short(const struct c0_frames *in);
-/* A covariance accumulator for c's streamed stacks: with its pixel guard. */
-int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a);
+/* A covariance accumulator for c's streamed stacks: with its pixel guard and
+ * noise map; its pixel (0, 0) is the image's (y0, x0). */
+int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, int x0, int y0, struct c0_cov_acc **a);
 
 /* The covariance operator on cov's window for c's optics. */
 int c0_support_covop(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_covop *op);
