@@ -7,6 +7,23 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+/* the path's criterion (stages/lambda.h, c0_lambda_cv) */
+static void cross_validation(cJSON *l, const struct c0_lambda_result *v)
+{
+	cJSON *x = cJSON_AddObjectToObject(l, "cross_validation");
+	cJSON_AddStringToObject(x, "what", "each half of the frames (even, odd) solved along a warm-started path of "
+				"lambda, its support refitted without penalty; the error of those emitter variances "
+				"predicting the other half's off-diagonal covariance lags, both directions summed, "
+				"relative to the error of x = 0; chosen: the largest lambda whose error is within one "
+				"standard error (paired, over blocks of lag x lag pixels) of the least");
+	c0_report_add_array(x, "lambda_relative", v->cv_rel, v->cv_points);
+	c0_report_add_array(x, "error", v->cv_err, v->cv_points);
+	cJSON_AddNumberToObject(x, "least_relative", v->cv_rel[v->cv_min]);
+	c0_report_add_array(x, "standard_error", v->cv_se, v->cv_pick);
+	cJSON_AddNumberToObject(x, "iterations", v->cv_iters);
+	cJSON_AddNumberToObject(x, "seconds", v->cv_seconds);
+}
+
 static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 {
 	const struct c0_lambda_result *v = &s->cv;
@@ -20,6 +37,8 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 				  "the lower quartile of the interleaved frame halves' difference; q90: its 90th "
 				  "percentile over the pixels above kappa sigma_C");
 	cJSON_AddNumberToObject(l, "chosen_relative", v->chosen_rel);
+	if (v->cv)
+		cross_validation(l, v);
 	if (v->second) {
 		cJSON_AddNumberToObject(l, "first_relative", v->first_rel);
 		cJSON_AddNumberToObject(l, "peak_relative", v->peak_rel);
