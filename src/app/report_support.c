@@ -28,7 +28,10 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 {
 	const struct c0_lambda_result *v = &s->cv;
 	cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
-	cJSON_AddStringToObject(l, "rule", v->second
+	cJSON_AddStringToObject(l, "rule", v->cv
+				? "cross-validation of the interleaved frame halves along a path of lambda (cross_validation); "
+				  "rho, q90, kappa and sigma_C below are the peaks rule's first step, for reference"
+				: v->second
 				? "max(share median peak, kappa sigma_C) from a first solve at max(rho q90, kappa "
 				  "sigma_C); peak: x ||a||^2 at the first support's local maxima; sigma_C: noise "
 				  "sd of the correlation image, from the lower quartile of the interleaved frame "
@@ -49,7 +52,8 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 	cJSON_AddNumberToObject(l, "signal_relative", v->signal_rel);
 	cJSON_AddNumberToObject(l, "kappa", v->kappa);
 	cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
-	cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
+	if (!v->cv)
+		cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
 	/* tiles: sigma_C from a subset of the tiles' interiors (stages/support_tiles.c) */
 	cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 	cJSON_AddNumberToObject(l, "seconds", v->seconds);
