@@ -34,6 +34,7 @@ enum c0_status {
 
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_support_solver { C0_SUPPORT_FISTA, C0_SUPPORT_PRUNED };    /* "fista", "pruned" */
+enum c0_lambda_rule { C0_LAMBDA_PEAKS, C0_LAMBDA_CV };    /* "peaks", "cv" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
 enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO, C0_MATIRF_APG }; /* "exact", "diag", "auto", "apg" */
@@ -122,6 +123,8 @@ struct c0_run_conf {
 	const char *offset_map;
 	const char *variance_map;
 	const char *gain_map;
+	/* the automatic support lambda's rule (l1) */
+	enum c0_lambda_rule lambda_rule;
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
