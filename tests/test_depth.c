@@ -255,6 +255,7 @@ static void test_depth_noise_free(void)
 	c0_run_conf_matirf(&rc, &c);
 	struct c0_matirf_result r;
 	CHECK(c0_matirf_solve(&c, NQ, ANG, NULL, (const float *const *)img, N, N, &r) == C0_OK);
+	CHECK(c0_depth_fit(&t, NQ, ANG, NULL, r.nz, c.z0_nm, c.dz_nm, r.f, (size_t)N * N, r.depth) == C0_OK);
 	double *e = malloc(sizeof *e * N * N), *em = malloc(sizeof *em * N * N), *ea = malloc(sizeof *ea * N * N);
 	int n = 0;
 	for (int k = 0; k < N * N; k++) {

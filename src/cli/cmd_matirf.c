@@ -11,7 +11,7 @@ int cmd_matirf(int argc, char **argv)
 		"Multi-angle TIRF axial reconstruction from one 2D image per angle (e.g. the\n"
 		"intensity_qNN.tif of 'col0rme intensity', or background-corrected means). Writes\n"
 		"OUTDIR/volume.tif (float32, depth bins x H x W, z spacing = bin width),\n"
-		"OUTDIR/depth.tif (each pixel's single-depth fit to its column, nm), OUTDIR/depth.png (depth colour\n"
+		"OUTDIR/depth.tif (intensity-weighted mean depth, nm), OUTDIR/depth.png (depth colour\n"
 		"code with colour bar) and OUTDIR/report.json (\"z_nm\": bin centres).",
 		NULL, 0, 2, C0_MAX_STACKS, 1 };
 	struct c0_cli k;

@@ -3,7 +3,6 @@
  * objective; the steps themselves are in matirf_steps.c and matirf_exact.c
  * (matirf_ctx.h says which file holds what). */
 #include "stages/matirf_ctx.h"
-#include "stages/depthfit.h"
 #include "ops/tirfop.h"
 #include "optics/psf.h"
 #include "solve/prox_schatten.h"
@@ -136,12 +135,7 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (fw > (ny < nx ? ny : nx) / 4.0)
 		return c0_fail(C0_EINVAL, "psf_fwhm_nm: a FWHM of %.3g pixels is wider than a quarter of the %dx%d field", fw,
 			       nx, ny);
-	if ((st = matirf_level(c, nq, angles, gain, x, ny, nx, 0, c->coarse, NULL, res)))
-		return st;
-	/* the depth map: each column's single-depth fit, not its mean (stages/depthfit.h) */
-	if ((st = c0_depth_fit(&c->tirf, nq, angles, gain, res->nz, c->z0_nm, c->dz_nm, res->f, (size_t)ny * nx, res->depth)))
-		c0_matirf_result_free(res);
-	return st;
+	return matirf_level(c, nq, angles, gain, x, ny, nx, 0, c->coarse, NULL, res);
 }
 
 /* One level's problem and its buffers */

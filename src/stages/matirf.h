@@ -53,7 +53,7 @@ struct c0_matirf_result {
 	int nz, ny, nx;
 	float *f;                    /* nz x ny x nx, in the images' units per bin */
 	double *z_nm;                /* bin centres */
-	float *depth;                /* ny x nx depth (nm): each column's single-depth fit (stages/depthfit.h), 0 where empty */
+	float *depth;                /* ny x nx intensity-weighted mean depth (nm), 0 where empty */
 	float *total;                /* ny x nx sum over depth */
 	int iters, converged, exact, apg;   /* exact, apg: which solver ran */
 	int coarse_iters;            /* iterations of the coarse levels (their pixels are 1/4, 1/16.. of these) */
