@@ -1,7 +1,7 @@
 """Whole camera frames (issue 36): `col0rme run` on 5 angles of simulated
 stacks (simulate --seed 3, default angles) at 512x512, 1024x1024 and
 2048x2048, one table: frames, wall seconds, peak RSS, each step's seconds
-from report.json, throughput, and the ratio to a baseline measured in the
+and the peak RSS after it from report.json, throughput, and the ratio to a baseline measured in the
 same run: main's binary on the same stacks when --baseline BIN is given,
 else the first row, per pixel and frame.
 
@@ -85,7 +85,8 @@ def main():
                 ref, ratio = r["wall"] / work, "reference"
             else:
                 ratio = "%.2fx the reference's time per pixel-frame" % (r["wall"] / work / ref) if r["rc"] == 0 and ref else ""
-            steps = ", ".join("%s %.1f" % (k, r["t"][k]) for k in STEPS if k in r["t"]) if r["rc"] == 0 else \
+            steps = ", ".join("%s %.1f s %s MiB" % (k, r["t"][k], r["peak"].get(k, "?")) for k in STEPS if k in r["t"]) \
+                if r["rc"] == 0 else \
                 "FAILED (exit %d) after %.0f s: %s" % (r["rc"], r["wall"], r["last"])
             rows.append(("%dx%d" % (w, w), "%d x %d" % (len(files), T), "%.1f" % r["wall"], "%.0f" % r["mem"], steps,
                          "%.1f" % (work / r["wall"] / 1e6), ratio))
@@ -95,7 +96,7 @@ def main():
     finally:
         if not a.data:
             shutil.rmtree(data, ignore_errors=True)
-    hdr = ("frame", "stacks x frames", "wall s", "peak RSS MiB", "steps (s)", "Mpx-frames/s", "ratio")
+    hdr = ("frame", "stacks x frames", "wall s", "peak RSS MiB", "steps: seconds, peak RSS after it", "Mpx-frames/s", "ratio")
     wd = [max(len(str(x[i])) for x in rows + [hdr]) for i in range(len(hdr))]
     print("load %.1f, %d CPUs, %s" % (os.getloadavg()[0], os.cpu_count(), cli))
     print(" | ".join(h.ljust(n) for h, n in zip(hdr, wd)))
