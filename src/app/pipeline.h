@@ -61,6 +61,13 @@ struct c0_result {
 	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
 };
 
+/* A step's bookkeeping: its name for the out-of-memory message while it
+ * runs (c0_mem_stage), then in the report its wall seconds (timings_s), the
+ * peak resident memory so far (peak_rss_mb) and how much the step raised
+ * that peak (rss_rise_mb; 0: it stayed below an earlier step's). */
+struct c0_step_clock { const char *key; double t0, peak0; };
+struct c0_step_clock c0_step_begin(const char *key);
+void c0_step_end(struct c0_result *r, const struct c0_step_clock *k);
 /* An empty result for command (the report's "command"), n stacks named. */
 int c0_result_new(const char *command, int n, const char *const *names, const int *is_file, struct c0_result **out);
 /* Adds one line to the report's "warnings" (the CLI prints them). */

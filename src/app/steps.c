@@ -16,9 +16,31 @@
 #include <stdlib.h>
 #include <string.h>
 
+struct c0_step_clock c0_step_begin(const char *key)
+{
+	c0_mem_stage(key);
+	return (struct c0_step_clock){ key, c0_now(), c0_mem_peak_mb() };
+}
+
+static void add_number(cJSON *rep, const char *obj, const char *key, double v)
+{
+	cJSON *o = cJSON_GetObjectItem(rep, obj);
+	if (!o)
+		o = cJSON_AddObjectToObject(rep, obj);
+	cJSON_AddNumberToObject(o, key, v);
+}
+
+void c0_step_end(struct c0_result *r, const struct c0_step_clock *k)
+{
+	const double peak = c0_mem_peak_mb();
+	cJSON_AddNumberToObject(r->timings, k->key, c0_now() - k->t0);
+	add_number(r->rep, "peak_rss_mb", k->key, round(peak));
+	add_number(r->rep, "rss_rise_mb", k->key, round(peak - k->peak0));
+}
+
 int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n)
 {
-	double t = c0_now();
+	const struct c0_step_clock t = c0_step_begin("drift");
 	const struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
 	int st = c0_drift_estimate(&dc, f, n, &r->drift);
 	if (st)
@@ -28,12 +50,13 @@ int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n)
 	const double px = r->pixel_nm > 0 ? r->pixel_nm : f[0].pixel_nm;
 	if ((st = c0_report_drift(r->rep, r->drift, px)))
 		return st;
-	cJSON_AddNumberToObject(r->timings, "drift", c0_now() - t);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
 
 int c0_step_render(struct c0_result *r)
 {
+	const struct c0_step_clock t = c0_step_begin("render");
 	const double fine = r->pixel_nm / r->srf;
 	double prec = -1;
 	for (int k = 0; r->sres && k < r->nsup; k++)
@@ -49,6 +72,7 @@ int c0_step_render(struct c0_result *r)
 	}
 	r->render_sd_nm = sd;
 	c0_report_render(r->rep, sd, prec, fine);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
 
@@ -75,7 +99,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	cJSON *arr = cJSON_AddArrayToObject(r->rep, "support");
 	if (!(r->sres = c0_alloc((size_t)r->nsup, sizeof *r->sres)))
 		return C0_ENOMEM;
-	double t = c0_now();
+	const struct c0_step_clock t = c0_step_begin("support");
 	for (int k = 0; k < r->nsup; k++) {
 		int i = r->sup[k];
 		cc.frame_fn = r->drift ? c0_drift_frame_fn : NULL, cc.frame_ctx = r->hooks[i];
@@ -91,7 +115,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	r->pixel_nm = cc.grid.pixel_nm, r->srf = cc.grid.srf;
 	int st = support_union(r);
 	if (!st)
-		cJSON_AddNumberToObject(r->timings, "support", c0_now() - t);
+		c0_step_end(r, &t);
 	return st;
 }
 
@@ -129,7 +153,7 @@ static int intensity_solve(const struct c0_intensity_conf *ic, const double *mea
 	free(w);
 	if (!st && corrected) {
 		size_t nc = (size_t)H * W;
-		if (!(*corrected = malloc(nc * sizeof **corrected)))
+		if (!(*corrected = c0_alloc(nc, sizeof **corrected)))
 			st = C0_ENOMEM;
 		for (size_t p = 0; !st && p < nc; p++)
 			(*corrected)[p] = (float)(mean[p] - res->b[p]);
@@ -193,7 +217,8 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels at srf %d do not match the %dx%d support", f[0].name, f[0].width,
 			       f[0].height, sc->grid.srf, r->Lx, r->Ly);
 	int64_t frames[C0_MAX_STACKS];
-	double tc[C0_MAX_STACKS], t = c0_now();
+	double tc[C0_MAX_STACKS];
+	const struct c0_step_clock t = c0_step_begin("intensity");
 	int sts[C0_MAX_STACKS];
 	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
 	r->ires = c0_alloc((size_t)n, sizeof *r->ires);
@@ -214,7 +239,7 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	free(msg);
 	r->pixel_nm = ic->grid.pixel_nm, r->srf = ic->grid.srf;
 	c0_report_intensity(r->rep, r, ic, frames, tc);
-	cJSON_AddNumberToObject(r->timings, "intensity", c0_now() - t);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
 
@@ -224,7 +249,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	struct c0_matirf_result *res = baseline ? &r->base : &r->vol;
 	const char *key = baseline ? "baseline_matirf" : "matirf";
 	const int nq = c->nangles;
-	double t = c0_now();
+	const struct c0_step_clock t = c0_step_begin(key);
 	int st = c0_matirf_solve(m, nq, c->angles, c->ngains ? c->gains : NULL, img, ny, nx, res);
 	if (st)
 		return st;
@@ -252,7 +277,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	cJSON *mj = cJSON_GetObjectItem(r->rep, key);
 	cJSON_AddStringToObject(mj, "depth_readout", baseline ? "intensity-weighted mean of each column" : "single-depth fit of each column's projections");
 	cJSON_AddNumberToObject(mj, "depth_readout_s", baseline ? 0 : c0_now() - tfit);
-	cJSON_AddNumberToObject(r->timings, key, c0_now() - t);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
 
@@ -310,7 +335,8 @@ void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
 int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f)
 {
 	const int n = r->n;
-	double t = c0_now(), B[C0_MAX_STACKS] = { 0 };
+	const struct c0_step_clock t = c0_step_begin("bleaching");
+	double B[C0_MAX_STACKS] = { 0 };
 	struct c0_bleach_conf bc;
 	c0_run_conf_bleach(c, &bc);
 	for (int q = 0; q < n; q++)
@@ -336,6 +362,6 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 			 "a repeat of the first angle recorded at the end)", br.k, br.k_sd, (double)C0_BLEACH_SIGNIF);
 		cJSON_AddStringToObject(bj, "warning", msg);
 	}
-	cJSON_AddNumberToObject(r->timings, "bleaching", c0_now() - t);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
