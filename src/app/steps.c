@@ -296,7 +296,9 @@ int c0_step_matirf_raw(struct c0_result *r, const struct c0_run_conf *c, const s
 
 void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
 {
-	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF : C0_BLEACH_ESTIMATE,
+	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN
+					       : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF
+					       : c->bleach == C0_BLEACHING_REPEAT ? C0_BLEACH_REPEAT : C0_BLEACH_ESTIMATE,
 				       .interleaved = c->acquisition == C0_ACQ_INTERLEAVED, .norder = c->nacquisition_order,
 				       .ngaps = c->ngaps_frames, .nfactors = c->nbleach_factors };
 	for (int i = 0; i < c->nacquisition_order && i < C0_BLEACH_MAX; i++)
@@ -316,6 +318,13 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 	for (int q = 0; q < n; q++)
 		for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
 			B[q] += r->ires[q].b[i];
+	if (bc.mode == C0_BLEACH_REPEAT) {   /* intensity totals on the support: the repeat's over the first's */
+		const int first = bc.norder ? bc.order[0] : 0;
+		double s0 = 0, s1 = 0;
+		for (size_t i = 0; i < (size_t)r->Ly * r->Lx; i++)
+			s0 += r->ires[first].x[i], s1 += r->ires[n - 1].x[i];
+		bc.repeat_ratio = s1 / s0;
+	}
 	struct c0_bleach_result br;
 	int st = c0_bleach_run(&bc, n, f, B, &br);
 	if (st)
