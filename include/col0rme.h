@@ -39,7 +39,7 @@ enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "c
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
 enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO, C0_MATIRF_APG }; /* "exact", "diag", "auto", "apg" */
 enum c0_discrepancy { C0_DISCREPANCY_RELATIVE, C0_DISCREPANCY_PLAIN };  /* "relative", "plain" */
-enum c0_bleaching { C0_BLEACHING_ESTIMATE, C0_BLEACHING_OFF };       /* "estimate", "off" */
+enum c0_bleaching { C0_BLEACHING_ESTIMATE, C0_BLEACHING_OFF, C0_BLEACHING_REPEAT }; /* "estimate", "off", "repeat" */
 enum c0_acquisition { C0_ACQ_SEQUENTIAL, C0_ACQ_INTERLEAVED };       /* "sequential", "interleaved" */
 
 #define C0_MAX_STACKS 64

@@ -72,8 +72,38 @@ static void test_check(void)
 	CHECK(c0_bleach_check(&f, 2) == C0_EINVAL && strstr(c0_errmsg(), "factor 2"));
 }
 
+/* mode repeat: the rate from the ratio of the repeat's factor to the first
+ * stack's (equal lengths, gaps between), checked against the explicit means */
+static void test_repeat(void)
+{
+	const int n = 4;
+	const int64_t T[4] = { 300, 250, 400, 300 };
+	const double k = 3e-5, start[4] = { 0, 340, 590, 1030 };   /* gaps 40, 0, 40 */
+	double F[4];
+	for (int q = 0; q < n; q++) {
+		F[q] = 0;
+		for (int t = 0; t < T[q]; t++)
+			F[q] += exp(-k * (start[q] + t)) / (double)T[q];
+	}
+	struct c0_bleach_conf c = { .mode = C0_BLEACH_REPEAT, .ngaps = 3, .gap_frames = { 40, 0, 40 }, .repeat_ratio = F[3] / F[0] };
+	struct c0_bleach_result res;
+	memset(&res, 0, sizeof res);
+	CHECK(c0_bleach_check(&c, n) == C0_OK);
+	CHECK(c0_bleach_repeat(&c, n, T, &res) == C0_OK);
+	CHECK_REL(res.k, k, 1e-9);
+	for (int q = 0; q < n; q++)
+		CHECK_REL(res.factor[q], F[q], 1e-9);
+	c.repeat_ratio = 0;
+	CHECK(c0_bleach_repeat(&c, n, T, &res) == C0_EINVAL && strstr(c0_errmsg(), "repeat"));
+	struct c0_bleach_conf o = { .mode = C0_BLEACH_REPEAT, .norder = 3, .order = { 0, 2, 1 } };
+	CHECK(c0_bleach_check(&o, 3) == C0_EINVAL && strstr(c0_errmsg(), "recorded last"));
+	struct c0_bleach_conf i = { .mode = C0_BLEACH_REPEAT, .interleaved = 1 };
+	CHECK(c0_bleach_check(&i, 3) == C0_EINVAL && strstr(c0_errmsg(), "sequential"));
+}
+
 int main(void)
 {
+	RUN(test_repeat);
 	RUN(test_fit);
 	RUN(test_check);
 	return CHECK_DONE();

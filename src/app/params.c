@@ -78,8 +78,10 @@ static const struct c0_param table[] = {
 	NUM(depth_pool_nm, C0_P_DOUBLE, "depth-pool", "NM", "window over which intensities are summed for each pixel's depth (0: off; -1: the default)", "0.75 FWHM"),
 	NUM(depth_pool_range_nm, C0_P_DOUBLE, "depth-pool-range", "NM", "only window pixels whose first depth guess is within NM of the centre's are summed (0: all; -1: the default)", "50"),
 	/* photobleaching */
-	ENUM(bleach, "estimate|off", "bleach",
-	     "photobleaching across the stacks: estimate the fade and divide each stack's intensity by its factor before MA-TIRF, or off", "estimate"),
+	ENUM(bleach, "estimate|off|repeat", "bleach",
+	     "photobleaching across the stacks: estimate the fade from the stacks' frame sums and divide each stack's intensity by its factor before MA-TIRF; "
+	     "repeat: the last stack is a repeat of the first angle recorded at the end, the fade from its intensity relative to the first's "
+	     "(it only measures the fade, not used in the MA-TIRF); or off", "estimate"),
 	LIST(bleach_factors, C0_P_DOUBLES, "bleach-factors", "F,...", "known bleaching factors: each stack's mean population relative to the start of the acquisition", "estimated"),
 	ENUM(acquisition, "sequential|interleaved", "acquisition", "how the stacks were recorded: one after another, or frame by frame in turn", "sequential"),
 	LIST(acquisition_order, C0_P_INTS, "acquisition-order", "I,J,...", "the stack numbers (1-based, as given) in the order they were recorded", "as given"),

@@ -19,7 +19,8 @@ static int support_stacks(const struct c0_run_conf *c, const int *only, int n, s
 	if (!c->nsupport_stacks) {
 		/* the support-only stacks (at or below the critical angle) and the smallest TIRF angle */
 		int best = -1, k = 0;
-		for (int i = 0; i < c->nangles; i++)
+		const int na = c->nangles - (c->bleach == C0_BLEACHING_REPEAT);   /* the repeat only measures the fade */
+		for (int i = 0; i < na; i++)
 			if (only[i])
 				r->sup[k++] = i;
 			else if (best < 0 || c->angles[i] < c->angles[best])
@@ -117,6 +118,23 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 /* Angles below this share of the critical angle are refused as typos. */
 #define C0_ANGLE_FLOOR 0.8
 
+/* With bleach repeat the last stack repeats the first's angle. */
+#define C0_REPEAT_ANGLE_TOL 0.01
+
+static int repeat_check(const struct c0_run_conf *c, int n)
+{
+	if (!c->nangles)
+		return c0_fail(C0_EINVAL, "bleach repeat: needs the stacks' angles (3D mode)");
+	if (c->nbleach_factors)
+		return c0_fail(C0_EINVAL, "bleach_factors: given with bleach repeat (choose one)");
+	if (n < 3)
+		return c0_fail(C0_EINVAL, "bleach repeat: needs at least 2 angles and the repeat of the first as the last stack (got %d stacks)", n);
+	if (fabs(c->angles[n - 1] - c->angles[0]) > C0_REPEAT_ANGLE_TOL)
+		return c0_fail(C0_EINVAL, "angles: with bleach repeat the last stack repeats the first angle (%g deg), but its angle is %g deg",
+			       c->angles[0], c->angles[n - 1]);
+	return C0_OK;
+}
+
 static int run_check(const struct c0_run_conf *c, const struct c0_stage_confs *s, int n, int *only, int *tirf,
 		     struct c0_run_conf *ct)
 {
@@ -127,8 +145,11 @@ static int run_check(const struct c0_run_conf *c, const struct c0_stage_confs *s
 		st = c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, n);
 	if (!st && three_d && c->ngains && c->ngains != n)
 		st = c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, n);
+	const int repeat = c->bleach == C0_BLEACHING_REPEAT;
+	if (!st && repeat)
+		st = repeat_check(c, n);
 	const double crit = c0_tirf_critical_deg(&s->matirf.tirf);
-	for (int q = 0; !st && three_d && q < n; q++) {
+	for (int q = 0; !st && three_d && q < n - repeat; q++) {
 		only[q] = c->angles[q] <= crit;
 		if (c->angles[q] != 0 && c->angles[q] < C0_ANGLE_FLOOR * crit)   /* 0: epi, at normal incidence */
 			st = c0_fail(C0_EINVAL, "angles: %g deg (stack %d) is far below the critical angle %.2f deg of n_glass %g "

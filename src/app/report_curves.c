@@ -225,8 +225,12 @@ void c0_fig_bleach(struct c0_html *h, const struct c0_rundir *d)
 	c0_plot_end(h);
 	c0_html_add(h, "<figcaption>rate ");
 	c0_html_num(h, "bleaching.rate_per_frame", k);
-	c0_html_add(h, " \u00b1 ");
-	c0_html_num(h, "bleaching.rate_sd_per_frame", c0_json_num(d->rep, "bleaching.rate_sd_per_frame", NAN));
+	const double ksd = c0_json_num(d->rep, "bleaching.rate_sd_per_frame", NAN);
+	if (isfinite(ksd)) {
+		c0_html_add(h, " \u00b1 ");
+		c0_html_num(h, "bleaching.rate_sd_per_frame", ksd);
+	} else if (isfinite(c0_json_num(d->rep, "bleaching.repeat_ratio", NAN)))   /* bleach repeat: one ratio, no sd */
+		c0_html_add(h, " (from the repeat of the first angle, the last stack)");
 	c0_html_add(h, " per frame; factors");
 	for (int q = 0; q < n; q++) {
 		char p[64];

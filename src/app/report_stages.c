@@ -142,7 +142,7 @@ void c0_report_matirf_raw(cJSON *j, const struct c0_run_conf *c, const struct c0
 
 void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct c0_bleach_result *br, int n)
 {
-	static const char *modes[] = { "estimated", "given", "off" };
+	static const char *modes[] = { "estimated", "given", "off", "estimated" };
 	cJSON *o = cJSON_AddObjectToObject(rep, "bleaching");
 	cJSON_AddStringToObject(o, "correction", modes[bc->mode]);
 	cJSON_AddStringToObject(o, "acquisition", bc->interleaved ? "interleaved" : "sequential");
@@ -161,6 +161,15 @@ void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct 
 		c0_report_add_array(o, "start_frame", br->start, n);
 		c0_report_add_array(o, "signal_per_frame", br->signal, n);
 	}
+	if (bc->mode == C0_BLEACH_REPEAT) {
+		cJSON_AddStringToObject(o, "source", "repeat");
+		cJSON_AddStringToObject(o, "source_meaning", "the rate from the last stack, a repeat of the first angle recorded at the end: "
+					"its intensity total on the support over the first stack's, e^{-k dt}, dt between their midpoints");
+		cJSON_AddNumberToObject(o, "repeat_ratio", bc->repeat_ratio);
+		cJSON_AddNumberToObject(o, "rate_per_frame", br->k);
+		c0_report_add_array(o, "start_frame", br->start, n);
+	} else if (bc->mode == C0_BLEACH_ESTIMATE)
+		cJSON_AddStringToObject(o, "source", "slope");
 	c0_report_add_array(o, "factors", br->factor, n);
 	const int first = bc->norder ? bc->order[0] : 0, last = bc->norder ? bc->order[n - 1] : n - 1;
 	cJSON_AddNumberToObject(o, "fade_last_vs_first", 1 - br->factor[last] / br->factor[first]);

@@ -59,6 +59,7 @@ static void report_parameters(const struct c0_sim_conf *c, cJSON *rep)
 	cJSON_AddNumberToObject(p, "tau_bleach_s", c->tau_bleach_s);
 	cJSON_AddStringToObject(p, "tau_bleach_definition", "mean cumulative ON time before bleaching");
 	cJSON_AddStringToObject(p, "bleach_order", c0_sim_order_name(c->order));
+	cJSON_AddBoolToObject(p, "repeat_first", c->repeat_first);
 	if (c->ngaps)
 		c0_report_add_array(p, "gaps_s", c->gap_s, c->ngaps);
 	cJSON_AddNumberToObject(p, "fps", c->fps);

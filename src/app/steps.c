@@ -321,7 +321,9 @@ int c0_step_matirf_raw(struct c0_result *r, const struct c0_run_conf *c, const s
 
 void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
 {
-	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF : C0_BLEACH_ESTIMATE,
+	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN
+					       : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF
+					       : c->bleach == C0_BLEACHING_REPEAT ? C0_BLEACH_REPEAT : C0_BLEACH_ESTIMATE,
 				       .interleaved = c->acquisition == C0_ACQ_INTERLEAVED, .norder = c->nacquisition_order,
 				       .ngaps = c->ngaps_frames, .nfactors = c->nbleach_factors };
 	for (int i = 0; i < c->nacquisition_order && i < C0_BLEACH_MAX; i++)
@@ -342,6 +344,13 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 	for (int q = 0; q < n; q++)
 		for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
 			B[q] += r->ires[q].b[i];
+	if (bc.mode == C0_BLEACH_REPEAT) {   /* intensity totals on the support: the repeat's over the first's */
+		const int first = bc.norder ? bc.order[0] : 0;
+		double s0 = 0, s1 = 0;
+		for (size_t i = 0; i < (size_t)r->Ly * r->Lx; i++)
+			s0 += r->ires[first].x[i], s1 += r->ires[n - 1].x[i];
+		bc.repeat_ratio = s1 / s0;
+	}
 	struct c0_bleach_result br;
 	int st = c0_bleach_run(&bc, n, f, B, &br);
 	if (st)
@@ -355,12 +364,13 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 	const int significant = !(bc.mode == C0_BLEACH_ESTIMATE) || fabs(br.k) >= C0_BLEACH_SIGNIF * br.k_sd;
 	cJSON *bj = cJSON_GetObjectItem(r->rep, "bleaching");
 	cJSON_AddBoolToObject(bj, "rate_significant", significant);
-	if (!significant) {   /* in the report, not on stderr: short test stacks never show a fade */
+	if (!significant) {   /* in the report's bleaching object and its warnings (the CLI prints those) */
 		char msg[320];
 		snprintf(msg, sizeof msg, "the fade rate %.3g +- %.2g per frame is within %g sds of zero: the stacks do not show the "
-			 "fade, and their factors may be off; give bleach_factors measured otherwise (e.g. the intensity ratio of "
-			 "a repeat of the first angle recorded at the end)", br.k, br.k_sd, (double)C0_BLEACH_SIGNIF);
+			 "fade, and their factors may be off; record a repeat of the first angle at the end and run with bleach "
+			 "repeat, or give bleach_factors measured otherwise", br.k, br.k_sd, (double)C0_BLEACH_SIGNIF);
 		cJSON_AddStringToObject(bj, "warning", msg);
+		c0_result_warn(r, "bleaching: %s", msg);
 	}
 	c0_step_end(r, &t);
 	return C0_OK;

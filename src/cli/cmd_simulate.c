@@ -68,6 +68,8 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 		  "angles acquired one after another on the same fluorophores, frame by frame in turn, or each on a fresh population", NULL, 0, NULL },
 		{ "gaps", 0, C0_OPT_DOUBLES, c.gap_s, "S,...", "illuminated, unrecorded seconds between consecutive stacks (one value: all; sequential order)",
 		  "none", C0_MAX_ANGLES, &c.ngaps },
+		{ "repeat-first", 0, C0_OPT_FLAG, &c.repeat_first, NULL,
+		  "record one more stack at the end at the first angle (same population, the fade continues): for run --bleach repeat", NULL, 0, NULL },
 		{ "fps", 0, C0_OPT_DOUBLE, &c.fps, "HZ", "frame rate (each frame integrates its whole period)", NULL, 0, NULL },
 		{ "brightness", 0, C0_OPT_DOUBLE, &c.brightness, "PH", "photons per frame of an emitter fully on at z=0, angle 1", NULL, 0, NULL },
 		{ "brightness-cv", 0, C0_OPT_DOUBLE, &c.brightness_cv, "F", "log-normal spread of brightness (coefficient of variation)", NULL, 0, NULL },
@@ -108,6 +110,8 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 	c.z_min_nm = zr[0];
 	c.z_max_nm = nz > 1 ? zr[1] : zr[0];
 	c.nangles = nangles;
+	if (c0_sim_add_repeat(&c))
+		return fail();
 	c.hot_fraction = hot[0], c.hot_sd = hot[1];
 	if (c0_sim_camera_parse(camera, &c.camera))
 		return fail();

@@ -81,6 +81,9 @@ struct c0_sim_conf {
 	double read_e;             /* 1.5 (scmos): median read-noise sd, electrons (photons) */
 	double read_spread;        /* 0.45 (scmos): log-normal sigma of the per-pixel read-noise sd */
 	int dark_frames;           /* 200 (scmos): frames of dark.tif */
+	/* 0; 1: one more stack at the end at the first angle (its fade measures
+	 * the bleaching over the acquisition: run's bleach repeat) */
+	int repeat_first;
 };
 
 /* Cameras (camera.c). ccd: ADU = gain Poisson + offset + read noise (above).
@@ -115,6 +118,9 @@ struct c0_outdir;
 int c0_sim_write_camera(const struct c0_sim_conf *c, const struct c0_sim_cam *m, struct c0_outdir *out);
 
 void c0_sim_defaults(struct c0_sim_conf *c);
+/* With repeat_first: appends the first angle to the angles (once; refused
+ * when there is no room). */
+int c0_sim_add_repeat(struct c0_sim_conf *c);
 /* enum c0_sim_order by its name in sim.json (sequential, interleaved, restart)
  * and back; an unknown name is refused naming bleach_order. */
 int c0_sim_order_parse(const char *name, int *order);

@@ -53,6 +53,17 @@ int c0_sim_order_parse(const char *name, int *order)
 	return c0_fail(C0_EINVAL, "bleach_order %s: expected sequential, interleaved or restart", name);
 }
 
+int c0_sim_add_repeat(struct c0_sim_conf *c)
+{
+	if (!c->repeat_first)
+		return C0_OK;
+	if (c->nangles < 1 || c->nangles >= C0_MAX_ANGLES)
+		return c0_fail(C0_EINVAL, "angles: %d angles leave no room for the repeat of the first (at most %d stacks)", c->nangles,
+			       C0_MAX_ANGLES);
+	c->angles[c->nangles++] = c->angles[0];
+	return C0_OK;
+}
+
 int c0_sim_check(const struct c0_sim_conf *c)
 {
 	if (c->width < 8 || c->height < 8)

@@ -31,6 +31,14 @@ int c0_bleach_check(const struct c0_bleach_conf *c, int n)
 	for (int i = 0; i < c->ngaps; i++)
 		if (!(c->gap_frames[i] >= 0))
 			return c0_fail(C0_EINVAL, "gaps_frames: gap %d is negative or not a number", i + 1);
+	if (c->mode == C0_BLEACH_REPEAT) {
+		if (c->interleaved)
+			return c0_fail(C0_EINVAL, "bleach repeat: needs stacks recorded one after another (acquisition sequential)");
+		if (n < 2)
+			return c0_fail(C0_EINVAL, "bleach repeat: needs the stacks and a repeat of the first angle as the last stack");
+		if (c->norder && c->order[n - 1] != n - 1)
+			return c0_fail(C0_EINVAL, "acquisition_order: with bleach repeat the repeat (stack %d) is recorded last", n);
+	}
 	if (c->mode == C0_BLEACH_KNOWN) {
 		if (c->nfactors != n)
 			return c0_fail(C0_EINVAL, "bleach_factors: %d factors for %d stacks", c->nfactors, n);
@@ -95,6 +103,25 @@ void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, 
 	}
 }
 
+int c0_bleach_repeat(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res)
+{
+	const int first = c->norder ? c->order[0] : 0;
+	if (!(c->repeat_ratio > 0) || !isfinite(c->repeat_ratio))
+		return c0_fail(C0_EINVAL, "bleach repeat: the repeat's intensity over the first stack's is %g, not a positive number",
+			       c->repeat_ratio);
+	res->k = 0;
+	c0_bleach_factors(c, n, T, res);   /* the starts */
+	const double dt = res->start[n - 1] + 0.5 * (double)(T[n - 1] - 1) - res->start[first] - 0.5 * (double)(T[first] - 1);
+	if (!(dt > 0))
+		return c0_fail(C0_EINVAL, "bleach repeat: the repeat is not recorded after the first stack");
+	res->k = -log(c->repeat_ratio) / dt;
+	res->k_sd = NAN;
+	for (int q = 0; q < n; q++)
+		res->k_stack[q] = NAN;
+	c0_bleach_factors(c, n, T, res);
+	return C0_OK;
+}
+
 /* the sums come from the passes that read the frames before (drift,
  * covariance): only frames none of them read whole are read here */
 static int frame_sums(struct c0_frames *f, double **S, int64_t *T)
@@ -115,6 +142,12 @@ int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, co
 	int st = c0_bleach_check(c, n);
 	if (st)
 		return st;
+	if (c->mode == C0_BLEACH_REPEAT) {
+		int64_t T[C0_BLEACH_MAX];
+		for (int q = 0; q < n; q++)
+			T[q] = f[q].count;
+		return c0_bleach_repeat(c, n, T, res);
+	}
 	if (c->mode != C0_BLEACH_ESTIMATE) {
 		for (int q = 0; q < n; q++)
 			res->factor[q] = c->mode == C0_BLEACH_KNOWN ? c->factor[q] : 1, res->k_stack[q] = NAN;

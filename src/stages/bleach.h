@@ -21,7 +21,11 @@
  * below, the run warns that the stacks do not show the fade. */
 #define C0_BLEACH_SIGNIF 2
 
-enum c0_bleach_mode { C0_BLEACH_ESTIMATE, C0_BLEACH_KNOWN, C0_BLEACH_OFF };
+/* repeat: the last stack recorded is a repeat of the first's angle; the ratio
+ * of their intensity totals on the support is the fade between them,
+ * F_last / F_first = e^{-k (u_last - u_first)} (midpoints, equal lengths),
+ * which gives k when the frame sums cannot (sparse or fast blinking). */
+enum c0_bleach_mode { C0_BLEACH_ESTIMATE, C0_BLEACH_KNOWN, C0_BLEACH_OFF, C0_BLEACH_REPEAT };
 
 struct c0_bleach_conf {
 	enum c0_bleach_mode mode;     /* estimate */
@@ -32,6 +36,7 @@ struct c0_bleach_conf {
 	int ngaps;                    /* 0: none; 1: the same everywhere; n - 1 */
 	double factor[C0_BLEACH_MAX]; /* known F_q (mode known) */
 	int nfactors;
+	double repeat_ratio;          /* mode repeat: last stack's intensity total over the first's */
 };
 
 struct c0_bleach_result {
@@ -51,8 +56,12 @@ int c0_bleach_check(const struct c0_bleach_conf *c, int n);
 int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res);
 /* res->start and res->factor for rate k (res->k) and the frame counts. */
 void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
+/* Mode repeat: k from c->repeat_ratio and the time between the midpoints of
+ * the first and the last recorded stack (T their frame counts), then the
+ * factors; k_sd is NAN (one ratio). */
+int c0_bleach_repeat(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
 /* The whole step for the stacks f: one pass each for its frame sums, then
  * the fit (mode estimate) and the factors; mode known copies the factors,
- * mode off sets them to 1. */
+ * mode off sets them to 1, mode repeat fits k from the ratio. */
 struct c0_frames;
 int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res);
