@@ -58,6 +58,9 @@ struct c0_result {
 	void *hooks[C0_MAX_STACKS];
 	float *render;               /* n planes Ly x Lx, after the render step */
 	double render_sd_nm;
+	/* vol and base on the whole grid, made when the library's caller first
+	 * asks for them (c0_result_volume): the run holds only their columns */
+	float *vol_dense, *base_dense;
 };
 
 /* An empty result for command (the report's "command"), n stacks named. */

@@ -9,6 +9,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -77,6 +78,35 @@ static int write_means(const struct c0_result *r, struct c0_outdir *out)
 	return st;
 }
 
+/* The volume, plane by plane from its columns (stages/matirf.h): one
+ * plane in memory, never the whole grid times the depth bins. The display
+ * range is the values' (0 among them when some pixel is off the columns),
+ * as c0_tiff_save_f32 would set it. */
+static int save_volume(const char *path, struct c0_tiff_wopts o, const struct c0_matirf_result *v)
+{
+	const size_t np = (size_t)v->ny * v->nx, n = (size_t)v->M * v->nz;
+	float lo = (size_t)v->M < np ? 0 : INFINITY, hi = (size_t)v->M < np ? 0 : -INFINITY;
+	for (size_t i = 0; i < n; i++) {
+		if (v->f[i] < lo) lo = v->f[i];
+		if (v->f[i] > hi) hi = v->f[i];
+	}
+	if (lo <= hi)
+		o.display_min = lo, o.display_max = hi > lo ? hi : lo + 1;
+	float *plane = c0_alloc(np, sizeof *plane);
+	struct c0_tiff_writer *w = NULL;
+	int st = plane ? c0_tiff_create(path, &o, &w) : C0_ENOMEM;
+	for (int j = 0; !st && j < v->nz; j++) {
+		c0_matirf_plane(v, j, plane);
+		st = c0_tiff_write_plane(w, plane);
+	}
+	free(plane);
+	if (st) {
+		c0_tiff_abort(w);
+		return st;
+	}
+	return c0_tiff_commit(w);
+}
+
 /* PREFIXvolume.tif, PREFIXdepth.tif (mean depth) and PREFIXdepth.png */
 static int write_volume(const struct c0_result *r, const struct c0_matirf_result *v, double pixel_nm,
 			const char *prefix, struct c0_outdir *out)
@@ -86,7 +116,7 @@ static int write_volume(const struct c0_result *r, const struct c0_matirf_result
 				   .pixel_size_nm = pixel_nm, .z_spacing_nm = r->dz_nm, .z_origin_nm = r->z0_nm + r->dz_nm / 2,
 				   .software = "col0rme" };
 	snprintf(name, sizeof name, "%svolume.tif", prefix);
-	int st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, v->f);
+	int st = save_volume(c0_outdir_file(out, name), o, v);
 	if (st)
 		return st;
 	o.slices = 1;
@@ -95,7 +125,7 @@ static int write_volume(const struct c0_result *r, const struct c0_matirf_result
 		return st;
 	uint8_t *rgb;
 	int w, h;
-	if ((st = c0_depthcode(v->f, v->nz, v->ny, v->nx, r->z0_nm, r->z0_nm + v->nz * r->dz_nm, &rgb, &w, &h)))
+	if ((st = c0_depthcode(v->f, v->pixel, (size_t)v->M, v->nz, v->ny, v->nx, r->z0_nm, r->z0_nm + v->nz * r->dz_nm, &rgb, &w, &h)))
 		return st;
 	snprintf(name, sizeof name, "%sdepth.png", prefix);
 	st = c0_png_write_rgb(c0_outdir_file(out, name), w, h, rgb);

@@ -218,12 +218,13 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	if (st)
 		return st;
 	if (own) {
-		c0_pool_rescale(res->f, res->nz, ny, nx, nq, own, img);
-		for (size_t p = 0; p < (size_t)ny * nx; p++) {
+		const size_t M = res->M;
+		c0_pool_rescale(res->f, res->nz, res->pixel, M, nq, own, img);
+		for (size_t k = 0; k < M; k++) {     /* off the columns the total stays 0 */
 			double s = 0;
 			for (int j = 0; j < res->nz; j++)
-				s += res->f[j * (size_t)ny * nx + p];
-			res->total[p] = (float)s;
+				s += res->f[j * M + k];
+			res->total[res->pixel[k]] = (float)s;
 		}
 	}
 	if (!baseline)
