@@ -78,6 +78,25 @@ static int write_means(const struct c0_result *r, struct c0_outdir *out)
 	return st;
 }
 
+/* A volume past this many bytes whose columns cover less than half the grid
+ * is written deflated: mostly-zero planes shrink a hundredfold and more. */
+#define C0_VOLUME_DEFLATE_BYTES (256LL << 20)
+
+/* Deflate for a large, mostly-zero volume, and a bound on its file: the
+ * rows that hold columns at full size, the others (zeros) at 1 %. */
+static void volume_deflate(const struct c0_matirf_result *v, struct c0_tiff_wopts *o)
+{
+	const size_t np = (size_t)v->ny * v->nx, row = (size_t)v->nx * sizeof(float);
+	if (!((int64_t)(np * v->nz * sizeof(float)) > C0_VOLUME_DEFLATE_BYTES && (size_t)v->M < np / 2))
+		return;
+	size_t rows = 0;
+	for (size_t k = 0, last = (size_t)-1; k < (size_t)v->M; k++)
+		if ((size_t)v->pixel[k] / v->nx != last)
+			last = (size_t)v->pixel[k] / v->nx, rows++;
+	o->deflate = 1;
+	o->max_bytes = (int64_t)v->nz * (int64_t)(rows * row * 1.01 + (v->ny - rows) * row / 100.0 + (1 << 20));
+}
+
 /* The volume, plane by plane from its columns (stages/matirf.h): one
  * plane in memory, never the whole grid times the depth bins. The display
  * range is the values' (0 among them when some pixel is off the columns),
@@ -85,6 +104,7 @@ static int write_means(const struct c0_result *r, struct c0_outdir *out)
 static int save_volume(const char *path, struct c0_tiff_wopts o, const struct c0_matirf_result *v)
 {
 	const size_t np = (size_t)v->ny * v->nx, n = (size_t)v->M * v->nz;
+	volume_deflate(v, &o);
 	float lo = (size_t)v->M < np ? 0 : INFINITY, hi = (size_t)v->M < np ? 0 : -INFINITY;
 	for (size_t i = 0; i < n; i++) {
 		if (v->f[i] < lo) lo = v->f[i];
