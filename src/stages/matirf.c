@@ -41,6 +41,8 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
 		return c0_fail(C0_EINVAL, "matirf: kappa %g, wz %g, sparsity %g: must be finite and >= 0", c->kappa, c->wz,
 			       c->sparsity);
+	if (c->halo < 0 || c->halo > 64)
+		return c0_fail(C0_EINVAL, "matirf: halo %d: must be 0..64", c->halo);
 	if (c->coarse < 0 || c->coarse > 8)
 		return c0_fail(C0_EINVAL, "matirf: coarse %d: must be 0..8", c->coarse);
 	if (c->pdhg.maxit < 1)
@@ -195,6 +197,23 @@ static int level_weights(struct level *L, const struct c0_matirf_conf *c, int nq
 	return C0_OK;
 }
 
+/* the mask (0/1) grown by steps 4-neighbour steps; a pixel added in a step
+ * is 2 until the step ends */
+static void mask_dilate(uint8_t *mask, int ny, int nx, int steps)
+{
+	for (int s = 0; s < steps; s++) {
+		for (int y = 0; y < ny; y++)
+			for (int x = 0; x < nx; x++) {
+				const size_t p = (size_t)y * nx + x;
+				if (!mask[p])
+					mask[p] = 2 * ((x > 0 && mask[p - 1] == 1) || (x + 1 < nx && mask[p + 1] == 1) ||
+						       (y > 0 && mask[p - nx] == 1) || (y + 1 < ny && mask[p + nx] == 1));
+			}
+		for (size_t p = 0; p < (size_t)ny * nx; p++)
+			mask[p] = mask[p] != 0;
+	}
+}
+
 /* The columns solved for and the solver: TV solves only for the pixels with
  * signal in some image (a pixel that is zero at every angle has f = 0); the
  * Hessian, the background and the blur work on the full grid. */
@@ -209,6 +228,7 @@ static int level_grid(struct level *L, const struct c0_matirf_conf *c, int nq, c
 	for (size_t p = 0; p < np; p++)
 		for (int q = 0; q < nq; q++)
 			mask[p] |= c->reg == C0_REG_HESSIAN || c->bg_smooth > 0 || c->psf_sigma_px > 0 || c->full_grid || x[q][p] > 0;
+	mask_dilate(mask, ny, nx, c->halo);
 	int st = c0_grad3m_init(&ctx->g, mask, ny, nx, nz, 1, c->wz);
 	free(mask);
 	if (st)
