@@ -7,7 +7,10 @@ plain against --psf-fwhm rows;
 --large adds whole camera frames: support on 1024x1024x500 and 2048x2048x200,
 run on 5 angles of 512x512x500, each against the single-tile path measured in
 the same run where it fits, thread scaling and a run next to a busy process;
---large-only runs just those. They take tens of minutes on 2 cores.)
+--large-only runs just those. They take tens of minutes on 2 cores;
+--lambda runs only the cross-validated lambda's rows (--lambda-rule cv): at
+64x64x500 and 256x256x1000, its path against a solve at the lambda it
+chose, given.)
 
 Each timed command runs in its own process; peak memory is that process's
 maximum resident set size."""
@@ -233,6 +236,42 @@ def table():
 if "--matirf350" in sys.argv or "--matirf-psf" in sys.argv:   # only the MA-TIRF rows at the public example's size
     with tempfile.TemporaryDirectory() as tmp:
         matirf350(tmp, "--matirf350" not in sys.argv)
+    table()
+    sys.exit(0)
+
+def lambda_rows(tmp):
+    # the automatic lambda's cost (stages/lambda_cv.c): the whole command and
+    # its path against the same command with the chosen lambda given (drift
+    # and FRC off in both), the faster of two interleaved runs each
+    for w, T in ((64, 500), (256, 1000)):
+        d = os.path.join(tmp, "l%d" % w)
+        sim(d, w, T)
+        size, base = "%dx%dx%d r4" % (w, w, T), ["--fwhm", "229", "--pixel-size", "100", "--no-drift", "--frc", "0",
+                                                  "--lambda-rule", "cv",
+                                                  "--force", os.path.join(d, "stack_q01.tif")]
+        best = {}
+        for rnd in range(2):
+            dt, mem, _ = timed([CLI, "support", *base, "-o", d + "a"])
+            la = json.load(open(os.path.join(d + "a", "report.json")))["support"][0]
+            if "a" not in best or dt < best["a"][0]:
+                best["a"] = (dt, mem, la)
+            dt, mem, _ = timed([CLI, "support", *base, "--lambda", "%.17g" % la["lambda_relative"], "-o", d + "f"])
+            lf = json.load(open(os.path.join(d + "f", "report.json")))["support"][0]
+            if "f" not in best or dt < best["f"][0]:
+                best["f"] = (dt, mem, lf)
+        (ta, ma, la), (tf, mf, lf) = best["a"], best["f"]
+        cv = la["lambda_auto"]["cross_validation"]
+        row("support, lambda given (the automatic choice)", size, tf, "solve %.2f s, %d its" % (lf["solve_s"], lf["iterations"]),
+            mf)
+        row("support, lambda automatic (cross-validated)", size, ta,
+            "path %.2f s: %d points x 2 halves x %d its; chose %.3g" % (cv["seconds"], len(cv["error"]), cv["iterations"],
+                                                                      la["lambda_relative"]), ma,
+            "%.2fx given; path %.2fx the given solve" % (ta / tf, cv["seconds"] / lf["solve_s"]))
+
+
+if "--lambda" in sys.argv:
+    with tempfile.TemporaryDirectory() as tmp:
+        lambda_rows(tmp)
     table()
     sys.exit(0)
 

@@ -34,6 +34,7 @@ enum c0_status {
 
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_support_solver { C0_SUPPORT_FISTA, C0_SUPPORT_PRUNED };    /* "fista", "pruned" */
+enum c0_lambda_rule { C0_LAMBDA_PEAKS, C0_LAMBDA_CV };    /* "peaks", "cv" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
 enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO, C0_MATIRF_APG }; /* "exact", "diag", "auto", "apg" */
@@ -118,6 +119,12 @@ struct c0_run_conf {
 	double gaps_frames[C0_MAX_STACKS];
 	int ngaps_frames;
 	int baseline;
+	/* the camera's calibration maps (sCMOS), TIFF files of the stacks' frame size */
+	const char *offset_map;
+	const char *variance_map;
+	const char *gain_map;
+	/* the automatic support lambda's rule (l1) */
+	enum c0_lambda_rule lambda_rule;
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
@@ -175,7 +182,7 @@ const uint8_t *c0_result_support(const struct c0_result *r, int *h, int *w);    
 const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *w);   /* stack q (0-based), fine grid */
 const float *c0_result_background(const struct c0_result *r, int q, int *h, int *w);  /* stack q, camera grid */
 const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w);    /* NULL in 2D mode; made on the first call (NULL when out of memory) */
-const float *c0_result_depth(const struct c0_result *r, int *h, int *w);              /* mean depth (nm), 0 where empty */
+const float *c0_result_depth(const struct c0_result *r, int *h, int *w);              /* depth (nm), 0 where empty */
 const float *c0_result_baseline_volume(const struct c0_result *r, int *nz, int *h, int *w); /* camera grid; with baseline */
 const double *c0_result_z_nm(const struct c0_result *r, int *nz);                     /* depth bin centres */
 /* stack q's intensity splatted with a Gaussian of the localisation precision, fine grid (render.tif) */

@@ -34,7 +34,7 @@ outputs "$NEW" "$W/new"
 /usr/bin/python3 - "$W/old" "$W/new" <<'PY'
 import json, os, sys
 old, new = sys.argv[1:]
-VOLATILE = {"timings_s", "created", "argv", "versions", "omp_wait_policy", "threads", "wall_s", "cpu_s", "seconds"}
+VOLATILE = {"timings_s", "peak_rss_mb", "rss_rise_mb", "created", "argv", "versions", "omp_wait_policy", "threads", "wall_s", "cpu_s", "seconds"}
 def strip(x, root):   # the two builds wrote under different folders
     if isinstance(x, dict):
         return {k: strip(v, root) for k, v in x.items() if k not in VOLATILE and not k.endswith("_s")}

@@ -330,6 +330,45 @@ static void test_covariance(void)
 	free(D);
 }
 
+/* c0_cov_acc_set_noise: a window's lag 0 is the plain window's less the map
+ * at the window's place in the image (an accumulator with an origin, a
+ * window inside it, and the even half), the other lags untouched */
+static void test_noise_map(void)
+{
+	enum { W = 12, H = 10, T = 40, OX = 3, OY = 2, AW = 8, AH = 7 };
+	float map[W * H], fr[AW * AH];
+	for (int i = 0; i < W * H; i++)
+		map[i] = (float)(0.1 * i);
+	struct c0_cov_acc *a, *b, *ao, *bo;
+	CHECK(c0_cov_acc_new(AW, AH, 2, &a) == C0_OK && c0_cov_acc_new(AW, AH, 2, &b) == C0_OK);
+	CHECK(c0_cov_acc_new(AW, AH, 2, &ao) == C0_OK && c0_cov_acc_new(AW, AH, 2, &bo) == C0_OK);
+	c0_cov_acc_set_noise(b, map, W, OX, OY), c0_cov_acc_set_noise(bo, map, W, OX, OY);
+	for (int t = 0; t < T; t++) {
+		for (int i = 0; i < AW * AH; i++)
+			fr[i] = (float)(10 + c0_rng_normal(&rng));
+		c0_cov_acc_add(a, fr), c0_cov_acc_add(b, fr);
+		if (t % 2)
+			c0_cov_acc_add(ao, fr), c0_cov_acc_add(bo, fr);
+	}
+	struct c0_cov p, q, pe, qe;
+	CHECK(c0_cov_acc_window(a, 1, 2, 5, 4, &p) == C0_OK && c0_cov_acc_window(b, 1, 2, 5, 4, &q) == C0_OK);
+	CHECK(c0_cov_acc_window_even(a, ao, 0, 0, &pe) == C0_OK && c0_cov_acc_window_even(b, bo, 0, 0, &qe) == C0_OK);
+	double err = 0, erre = 0;
+	for (int l = 0; l < p.nlag; l++)
+		for (int i = 0; i < 5 * 4; i++) {
+			double m = l ? 0 : map[(OY + 1 + i / 4) * W + OX + 2 + i % 4];   /* 4 wide, 5 high */
+			err = fmax(err, fabs(p.r[(size_t)l * 20 + i] - m - q.r[(size_t)l * 20 + i]));
+		}
+	for (int l = 0; l < pe.nlag; l++)
+		for (int i = 0; i < AW * AH; i++) {
+			double m = l ? 0 : map[(OY + i / AW) * W + OX + i % AW];
+			erre = fmax(erre, fabs(pe.r[(size_t)l * AW * AH + i] - m - qe.r[(size_t)l * AW * AH + i]));
+		}
+	CHECK_MSG(err < 1e-9 && erre < 1e-9, "noise map: window %g, even half %g", err, erre);
+	c0_cov_free(&p), c0_cov_free(&q), c0_cov_free(&pe), c0_cov_free(&qe);
+	c0_cov_acc_free(a), c0_cov_acc_free(b), c0_cov_acc_free(ao), c0_cov_acc_free(bo);
+}
+
 static void test_covariance_operator(void)
 {
 	struct c0_covop op;
@@ -837,6 +876,7 @@ int main(void)
 	RUN(test_psf_factor);
 	RUN(test_dense_identities);
 	RUN(test_covariance);
+	RUN(test_noise_map);
 	RUN(test_covariance_operator);
 	RUN(test_covnormal);
 	RUN(test_covfit);

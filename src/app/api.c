@@ -98,6 +98,9 @@ static const struct param params[] = {
 	F("tau_bleach_s", P_DOUBLE, tau_bleach_s), F("fps", P_DOUBLE, fps), F("brightness", P_DOUBLE, brightness),
 	F("brightness_cv", P_DOUBLE, brightness_cv), F("background", P_DOUBLE, background), F("offset", P_DOUBLE, offset),
 	F("gain", P_DOUBLE, gain), F("read_noise", P_DOUBLE, read_noise), F("snr_db", P_DOUBLE, snr_db),
+	F("camera", P_INT, camera), F("em_gain", P_DOUBLE, em_gain), F("offset_sd", P_DOUBLE, offset_sd),
+	F("gain_cv", P_DOUBLE, gain_cv), F("read_e", P_DOUBLE, read_e), F("read_spread", P_DOUBLE, read_spread),
+	F("hot_fraction", P_DOUBLE, hot_fraction), F("hot_sd", P_DOUBLE, hot_sd),
 };
 #undef F
 
@@ -170,6 +173,8 @@ int c0_simulation_set(struct c0_simulation *s, const char *name, const char *val
 			}
 		return c0_fail(C0_EINVAL, "bleach_order \"%s\": expected sequential, interleaved or restart", value);
 	}
+	if (!strcmp(name, "camera") && !(value[0] >= '0' && value[0] <= '9'))   /* by name, as in sim.json */
+		return c0_sim_camera_parse(value, &s->c.camera);
 	if (!strcmp(name, "gaps_s")) {
 		int n;
 		if (numbers(name, value, s->c.gap_s, &n))

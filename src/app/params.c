@@ -26,6 +26,8 @@ static const struct c0_param table[] = {
 	ENUM(penalty, "l1|cel0", "penalty", "support sparsity penalty", "l1"),
 	NUM(lambda, C0_P_DOUBLE, "lambda", "F", "support regularisation relative to lambda_max (the smallest that gives an empty support)",
 	    "automatic: for l1 a first solve at max(2e-2 of the correlation's 90th percentile, 4 noise sds), then max(0.28 of the median emitter peak, 4 noise sds) (see the guide)"),
+	ENUM(lambda_rule, "peaks|cv", "lambda-rule",
+	     "automatic l1 lambda: the rule from a first solve's peaks, or cross-validation of the interleaved frame halves (a warm-started path; chooses the largest lambda within one standard error of the least prediction error; measured worse on the simulated grid, see docs/parameters.md)", "peaks"),
 	ENUM(support_solver, "fista|pruned", "support-solver",
 	     "l1 support solver, both FISTA on a working set re-made every 100 iterations (momentum kept): with the whole grid's step, or with the set's own step (converges, see the guide)", "fista"),
 	NUM(iterations, C0_P_INT, "iterations", "N", "maximum FISTA iterations (per reweighting for cel0; -1: the default)", "2000, or 10000 with pruned"),
@@ -83,6 +85,10 @@ static const struct c0_param table[] = {
 	LIST(acquisition_order, C0_P_INTS, "acquisition-order", "I,J,...", "the stack numbers (1-based, as given) in the order they were recorded", "as given"),
 	LIST(gaps_frames, C0_P_DOUBLES, "gaps", "FRAMES,...", "illuminated but unrecorded time between consecutive recorded stacks, in frames (one value: all)", "none"),
 	NUM(baseline, C0_P_FLAG, "baseline", NULL, "also reconstruct the standard MA-TIRF volume from the background-corrected means (baseline_*)", "off"),
+	/* the camera's calibration (sCMOS; docs/guide.md: making the maps from dark frames) */
+	NUM(offset_map, C0_P_STRING, "offset-map", "FILE.tif", "per-pixel dark level (ADU, one plane of the stacks' size): subtracted from every frame", "none"),
+	NUM(variance_map, C0_P_STRING, "variance-map", "FILE.tif", "per-pixel read-noise variance (ADU^2): taken out of each pixel's variance in the covariance", "none"),
+	NUM(gain_map, C0_P_STRING, "gain-map", "FILE.tif", "per-pixel gain (ADU per photon): frames are evened to the map's mean gain", "none"),
 };
 enum { NPARAMS = sizeof table / sizeof *table };
 

@@ -70,25 +70,26 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 }, *guide = NULL;
 	const double fine = c0_grid_fine_nm(&s->support.grid);
 	const int h = (int)lround((s->pool_nm / fine - 1) / 2), guided = h > 0 && s->pool_range_nm > 0;
+	c0_mem_stage("matirf");   /* the pooled intensities are its input */
 	const int hg = guided ? (int)lround((C0_DEPTH_GUIDE_FWHM * s->support.grid.fwhm_nm / fine - 1) / 2) : 0;
 	int st = C0_OK;
 	for (int i = 0; !st && i < nq; i++) {
 		const int q = tirf[i];
 		const float g = (float)(1 / r->bleach_factor[q]);
-		if (!(own[i] = malloc(L * sizeof(float))) || (h > 0 && !(pooled[i] = malloc(L * sizeof(float))))) {
+		if (!(own[i] = c0_alloc(L, sizeof(float))) || (h > 0 && !(pooled[i] = c0_alloc(L, sizeof(float))))) {
 			st = C0_ENOMEM;
 			break;
 		}
 		for (size_t p = 0; p < L; p++)
 			own[i][p] = r->ires[q].x[p] * g;
-		if (ct->baseline && !(st = (base[i] = malloc(Nc * sizeof(float))) ? C0_OK : C0_ENOMEM))
+		if (ct->baseline && !(st = (base[i] = c0_alloc(Nc, sizeof(float))) ? C0_OK : C0_ENOMEM))
 			for (size_t p = 0; p < Nc; p++)
 				base[i][p] = r->corrected[q][p] * g;
 		if (!st && h > 0 && !guided)
 			st = c0_pool_window(own[i], r->mask, Ly, Lx, h, pooled[i]);
 	}
 	if (!st && guided) {
-		st = (guide = malloc(L * sizeof(float))) ? depth_guide(ct, &s->matirf, r->mask, (const float *const *)own, Ly, Lx,
+		st = (guide = c0_alloc(L, sizeof(float))) ? depth_guide(ct, &s->matirf, r->mask, (const float *const *)own, Ly, Lx,
 								      hg, guide)
 							 : C0_ENOMEM;
 		if (!st)

@@ -58,11 +58,19 @@ struct c0_result {
 	void *hooks[C0_MAX_STACKS];
 	float *render;               /* n planes Ly x Lx, after the render step */
 	double render_sd_nm;
+	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
 	/* vol and base on the whole grid, made when the library's caller first
 	 * asks for them (c0_result_volume): the run holds only their columns */
 	float *vol_dense, *base_dense;
 };
 
+/* A step's bookkeeping: its name for the out-of-memory message while it
+ * runs (c0_mem_stage), then in the report its wall seconds (timings_s), the
+ * peak resident memory so far (peak_rss_mb) and how much the step raised
+ * that peak (rss_rise_mb; 0: it stayed below an earlier step's). */
+struct c0_step_clock { const char *key; double t0, peak0; };
+struct c0_step_clock c0_step_begin(const char *key);
+void c0_step_end(struct c0_result *r, const struct c0_step_clock *k);
 /* An empty result for command (the report's "command"), n stacks named. */
 int c0_result_new(const char *command, int n, const char *const *names, const int *is_file, struct c0_result **out);
 /* Adds one line to the report's "warnings" (the CLI prints them). */
@@ -77,6 +85,10 @@ void c0_stacks_close(struct c0_frames *f, int n);
 int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, int n, double *pixel_nm);
 /* Every stack against the support config (size against the PSF band, frames). */
 int c0_stacks_check(const struct c0_support_conf *sc, const struct c0_frames *f, int n);
+/* The camera calibration maps of c (offset_map, variance_map, gain_map):
+ * read and checked against f (size, values, the offset map's region),
+ * attached to the frames and sc's support, owned by r. */
+int c0_calib_attach(const struct c0_run_conf *c, struct c0_frames *f, int n, struct c0_stage_confs *sc, struct c0_result *r);
 /* The start of every run: the stacks opened into f (close them with
  * c0_stacks_close), the stages' configs, an empty result for command. */
 int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,

@@ -97,7 +97,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 							  c->tol },
 					       .cel0_outer = c->reweightings,
 					       .solver = c->support_solver,
-					       .frc = c->frc, .tile = c->tile, .guard = c->pixel_guard };
+					       .frc = c->frc, .tile = c->tile, .guard = c->pixel_guard,
+					       .lambda_cv = c->lambda_rule == C0_LAMBDA_CV };
 	s->intensity = (struct c0_intensity_conf){ .grid = grid,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
@@ -112,6 +113,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	    (unsigned)c->acquisition > C0_ACQ_INTERLEAVED)
 		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,
 			       (int)c->bleach, (int)c->acquisition);
+	if ((unsigned)c->lambda_rule > C0_LAMBDA_CV)
+		return c0_fail(C0_EINVAL, "lambda_rule %d: out of range", (int)c->lambda_rule);
 	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->support_solver > C0_SUPPORT_PRUNED ||
 	    (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN || (unsigned)c->matirf_solver > C0_MATIRF_APG)
 		return c0_fail(C0_EINVAL, "penalty %d / support_solver %d / background %d / reg %d / matirf_solver %d: out of range",

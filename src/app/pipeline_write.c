@@ -178,6 +178,7 @@ static int write_drift(const struct c0_result *r, struct c0_outdir *out)
 int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out)
 {
 	int st = C0_OK;
+	c0_mem_stage("writing");
 	if (r->drift)
 		st = write_drift(r, out);
 	if (!st && r->render) {
@@ -199,6 +200,9 @@ int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out)
 		st = c0_report_write(r->rep, c0_outdir_file(out, "report.json"));
 	if (!st)   /* the page, from the files just written (app/report_html.h) */
 		st = c0_report_html(out->stage);
+	if (st == C0_ENOMEM && !strstr(c0_errmsg(), "out of memory"))
+		c0_mem_fail(0);
+	c0_mem_stage(NULL);
 	return st;
 }
 

@@ -46,6 +46,35 @@ static double at(const double *x, const double *y, int n, double v)
 	return NAN;
 }
 
+/* The cross-validation path (stages/lambda.h, c0_lambda_cv): its error over
+ * the least, so that the flat bottom shows (log scale, floor 1e-5) */
+static void cv_one(struct c0_html *h, const cJSON *rep, int k, double chosen)
+{
+	char p[128];
+	int n, ne;
+	snprintf(p, sizeof p, "support.%d.lambda_auto.cross_validation.lambda_relative", k);
+	double *x = array(rep, p, &n);
+	snprintf(p, sizeof p, "support.%d.lambda_auto.cross_validation.error", k);
+	double *e = array(rep, p, &ne);
+	if (n > 1 && ne == n) {
+		double least = INFINITY, lo = INFINITY, hi = 0, xl = NAN, top = 1e-4;
+		for (int i = 0; i < n; i++)
+			if (e[i] < least)
+				least = e[i], xl = x[i];
+		for (int i = 0; i < n; i++) {
+			e[i] = fmax(e[i] / least - 1, 1e-5);
+			lo = fmin(lo, x[i]), hi = fmax(hi, x[i]), top = fmax(top, e[i]);
+		}
+		struct c0_plot pl = { lo / 1.5, hi * 1.5, 1e-5, top * 2, 1, 1, 0, 0, 1 };
+		c0_plot_begin(h, &pl, "\u03bb / \u03bb_max", "cross-validation error / least \u2212 1");
+		c0_plot_line(h, &pl, x, e, n, "#1f4e8c", 0);
+		c0_plot_mark(h, &pl, xl, 1e-5, "#888", "least");
+		c0_plot_mark(h, &pl, chosen, 1e-5, "#c0392b", "chosen");
+		c0_plot_end(h);
+	}
+	free(x), free(e);
+}
+
 static void lambda_one(struct c0_html *h, const cJSON *rep, int k)
 {
 	char p[128], q[128], cap[160];
@@ -68,6 +97,7 @@ static void lambda_one(struct c0_html *h, const cJSON *rep, int k)
 		c0_plot_legend(h, &pl, 0, "#1f4e8c", 0, "correlation image");
 		c0_plot_legend(h, &pl, 1, "#888", 1, "noise of the halves");
 		c0_plot_end(h);
+		cv_one(h, rep, k, chosen);
 	} else
 		c0_html_add(h, "<p class=\"absent\">No criterion curve: \u03bb was given.</p>");
 	snprintf(q, sizeof q, "support.%d.stack", k);
@@ -98,7 +128,9 @@ void c0_fig_lambda(struct c0_html *h, const struct c0_rundir *d)
 	const cJSON *rule = c0_json_at(d->rep, "support.0.lambda_auto.rule");
 	open_section(h, "lambda", "\u03bb criterion", "The support's regularisation: the share of fine pixels whose "
 		     "correlation exceeds \u03bb (solid) and the same for the noise image of the frame halves (dashed), "
-		     "against \u03bb relative to \u03bb_max; the red point is the \u03bb the run used.");
+		     "against \u03bb relative to \u03bb_max; below it, where \u03bb was cross-validated, how much worse "
+		     "each \u03bb's solutions on one half of the frames predict the other half's covariance than the "
+		     "best of the path. The red point is the \u03bb the run used.");
 	for (int k = 0; k < cJSON_GetArraySize(su); k++)
 		lambda_one(h, d->rep, k);
 	c0_html_add(h, "</div>");

@@ -62,7 +62,7 @@ struct c0_rundir {
 	int inten, render;               /* intensity_qNN.tif and render.tif (fine grid) are there, checked;
 					  * read plane by plane (c0_rundir_plane) where drawn */
 	struct c0_depthmap {
-		float *depth, *total;    /* mean depth (nm), and the volume summed over depth */
+		float *depth, *total;    /* depth (nm), and the volume summed over depth */
 		int ny, nx;
 		double pixel_nm;
 	} vol, base;                     /* depth.tif + volume.tif, baseline_* (NULL when absent) */

@@ -7,11 +7,31 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+/* the path's criterion (stages/lambda.h, c0_lambda_cv) */
+static void cross_validation(cJSON *l, const struct c0_lambda_result *v)
+{
+	cJSON *x = cJSON_AddObjectToObject(l, "cross_validation");
+	cJSON_AddStringToObject(x, "what", "each half of the frames (even, odd) solved along a warm-started path of "
+				"lambda, its support refitted without penalty; the error of those emitter variances "
+				"predicting the other half's off-diagonal covariance lags, both directions summed, "
+				"relative to the error of x = 0; chosen: the largest lambda whose error is within one "
+				"standard error (paired, over blocks of lag x lag pixels) of the least");
+	c0_report_add_array(x, "lambda_relative", v->cv_rel, v->cv_points);
+	c0_report_add_array(x, "error", v->cv_err, v->cv_points);
+	cJSON_AddNumberToObject(x, "least_relative", v->cv_rel[v->cv_min]);
+	c0_report_add_array(x, "standard_error", v->cv_se, v->cv_pick);
+	cJSON_AddNumberToObject(x, "iterations", v->cv_iters);
+	cJSON_AddNumberToObject(x, "seconds", v->cv_seconds);
+}
+
 static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 {
 	const struct c0_lambda_result *v = &s->cv;
 	cJSON *l = cJSON_AddObjectToObject(o, "lambda_auto");
-	cJSON_AddStringToObject(l, "rule", v->second
+	cJSON_AddStringToObject(l, "rule", v->cv
+				? "cross-validation of the interleaved frame halves along a path of lambda (cross_validation); "
+				  "rho, q90, kappa and sigma_C below are the peaks rule's first step, for reference"
+				: v->second
 				? "max(share median peak, kappa sigma_C) from a first solve at max(rho q90, kappa "
 				  "sigma_C); peak: x ||a||^2 at the first support's local maxima; sigma_C: noise "
 				  "sd of the correlation image, from the lower quartile of the interleaved frame "
@@ -20,6 +40,8 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 				  "the lower quartile of the interleaved frame halves' difference; q90: its 90th "
 				  "percentile over the pixels above kappa sigma_C");
 	cJSON_AddNumberToObject(l, "chosen_relative", v->chosen_rel);
+	if (v->cv)
+		cross_validation(l, v);
 	if (v->second) {
 		cJSON_AddNumberToObject(l, "first_relative", v->first_rel);
 		cJSON_AddNumberToObject(l, "peak_relative", v->peak_rel);
@@ -30,7 +52,8 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 	cJSON_AddNumberToObject(l, "signal_relative", v->signal_rel);
 	cJSON_AddNumberToObject(l, "kappa", v->kappa);
 	cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
-	cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
+	if (!v->cv)
+		cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
 	/* tiles: sigma_C from a subset of the tiles' interiors (stages/support_tiles.c) */
 	cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 	cJSON_AddNumberToObject(l, "seconds", v->seconds);

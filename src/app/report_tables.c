@@ -298,12 +298,13 @@ void c0_tab_parameters(struct c0_html *h, const struct c0_rundir *d)
 void c0_tab_timings(struct c0_html *h, const struct c0_rundir *d)
 {
 	const cJSON *t = c0_json_at(d->rep, "timings_s"), *e;
+	const int mem = c0_json_at(d->rep, "peak_rss_mb") != NULL;   /* runs before it had none */
 	double total = 0, mx = 0;
 	cJSON_ArrayForEach(e, t)
 		if (cJSON_IsNumber(e))
 			total += e->valuedouble, mx = fmax(mx, e->valuedouble);
 	c0_html_printf(h, "<section id=\"timings\"><h2>Timings</h2><table class=\"timings\"><tr><th>stage</th><th>seconds</th>"
-		       "<th></th></tr>");
+		       "%s<th></th></tr>", mem ? "<th>peak memory (MB)</th><th>its rise (MB)</th>" : "");
 	cJSON_ArrayForEach(e, t) {
 		if (!cJSON_IsNumber(e))
 			continue;
@@ -313,13 +314,21 @@ void c0_tab_timings(struct c0_html *h, const struct c0_rundir *d)
 		c0_html_escape(h, e->string);
 		c0_html_add(h, "</td><td>");
 		c0_html_num(h, p, e->valuedouble);
+		for (int k = 0; mem && k < 2; k++) {
+			snprintf(p, sizeof p, "%s.%s", k ? "rss_rise_mb" : "peak_rss_mb", e->string);
+			c0_html_add(h, "</td><td>");
+			if (c0_json_at(d->rep, p))
+				c0_html_num(h, p, c0_json_num(d->rep, p, NAN));
+		}
 		c0_html_printf(h, "</td><td><div class=\"tbar\" style=\"width:%.0fpx\"></div></td></tr>",
 			       mx > 0 ? 300 * e->valuedouble / mx : 0);
 	}
-	c0_html_printf(h, "<tr><td><b>total</b></td><td>%.4g</td><td></td></tr></table><p class=\"what\">Wall-clock "
-		       "seconds per stage, on ", total);
+	c0_html_printf(h, "<tr><td><b>total</b></td><td>%.4g</td>%s<td></td></tr></table><p class=\"what\">Wall-clock "
+		       "seconds per stage, on ", total, mem ? "<td></td><td></td>" : "");
 	c0_html_num(h, "threads", c0_json_num(d->rep, "threads", NAN));
-	c0_html_add(h, " threads.</p></section>\n");
+	c0_html_add(h, mem ? " threads; the process's peak resident memory after each stage, and how much the stage raised "
+			     "it (0: it stayed below an earlier stage's peak).</p></section>\n"
+			   : " threads.</p></section>\n");
 }
 
 /* a shell word, quoted when it needs to be */

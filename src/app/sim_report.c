@@ -3,6 +3,27 @@
 #include "app/sim_report.h"
 #include "io/outdir.h"
 
+/* the camera when it is not the plain ccd */
+static void report_camera(const struct c0_sim_conf *c, cJSON *p)
+{
+	cJSON_AddStringToObject(p, "camera", c0_sim_camera_name(c->camera));
+	if (c->camera == C0_CAM_EMCCD) {
+		cJSON_AddNumberToObject(p, "em_gain", c->em_gain);
+		cJSON_AddStringToObject(p, "camera_model", "ADU = gain Gamma(Poisson(photons), 1) + offset + Normal(0, (read_noise / em_gain)^2): "
+					"excess noise factor sqrt 2, gain ADU per photon");
+		return;
+	}
+	cJSON_AddNumberToObject(p, "offset_sd_adu", c->offset_sd);
+	cJSON_AddNumberToObject(p, "gain_cv", c->gain_cv);
+	cJSON_AddNumberToObject(p, "read_noise_median_e", c->read_e);
+	cJSON_AddNumberToObject(p, "read_noise_lognormal_sigma", c->read_spread);
+	cJSON_AddNumberToObject(p, "dark_frames", c->dark_frames);
+	cJSON_AddStringToObject(p, "camera_model", "per pixel i: ADU = gain_i Poisson(photons) + offset_i + Normal(0, sd_i^2) (+ Normal(0, hot_sd^2) "
+				"on the noisy pixels); gain_i = gain (1 + gain_cv N), offset_i = offset + offset_sd N, sd_i = gain_i read_e "
+				"exp(read_noise_lognormal_sigma N); truth in calib_offset.tif (ADU), calib_variance.tif (sd_i^2 + hot + 1/12, "
+				"ADU^2), calib_gain.tif (ADU/photon); dark.tif: dark frames of the same camera; snr_db_target not used");
+}
+
 /* "parameters": the configuration as simulated */
 static void report_parameters(const struct c0_sim_conf *c, cJSON *rep)
 {
@@ -51,6 +72,8 @@ static void report_parameters(const struct c0_sim_conf *c, cJSON *rep)
 	cJSON_AddNumberToObject(p, "snr_db_target", c->snr_db);
 	cJSON_AddNumberToObject(p, "hot_pixel_fraction", c->hot_fraction);
 	cJSON_AddNumberToObject(p, "hot_pixel_sd_adu", c->hot_sd);
+	if (c->camera != C0_CAM_CCD)   /* the ccd's sim.json as it always was */
+		report_camera(c, p);
 	cJSON_AddStringToObject(p, "snr_definition", "10 log10(var(noise-free ADU over pixels and frames) / read_noise^2), per angle");
 }
 

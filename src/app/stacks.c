@@ -6,6 +6,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 int c0_stacks_open(const struct c0_stack *s, int n, struct c0_frames *f)
 {
@@ -80,6 +81,8 @@ int c0_pipe_begin(const char *command, const struct c0_run_conf *c, const struct
 		st = c0_stacks_check(&sc->support, f, n);
 	if (!st)
 		st = c0_result_new(command, n, names, is_file, out);
+	if (!st && (st = c0_calib_attach(c, f, n, sc, *out)))
+		c0_result_free(*out), *out = NULL;
 	if (st)
 		c0_stacks_close(f, n);
 	return st;
@@ -92,14 +95,18 @@ int c0_pipe_run(const char *command, const struct c0_run_conf *c, const struct c
 	struct c0_stage_confs sc;
 	struct c0_result *r;
 	*out = NULL;
+	c0_mem_stage("opening");   /* each step names itself from here on */
 	int st = c0_pipe_begin(command, c, stacks, n, f, &sc, &r);
-	if (st)
-		return st;
-	st = body(c, &sc, f, n, r, arg);
-	c0_stacks_close(f, n);
-	if (st)
-		c0_result_free(r);
-	else
-		*out = r;
+	if (!st) {
+		st = body(c, &sc, f, n, r, arg);
+		if (st == C0_ENOMEM && !strstr(c0_errmsg(), "out of memory"))
+			c0_mem_fail(0);   /* a plain malloc's failure: the step, without the size */
+		c0_stacks_close(f, n);
+		if (st)
+			c0_result_free(r);
+		else
+			*out = r;
+	}
+	c0_mem_stage(NULL);
 	return st;
 }

@@ -3,6 +3,7 @@
 #include "app/pipeline.h"
 #include "app/report_steps.h"
 #include "stages/depthpool.h"
+#include "stages/depthfit.h"
 #include "stages/splat.h"
 #include "optics/psf.h"
 #include "core/clock.h"
@@ -15,9 +16,31 @@
 #include <stdlib.h>
 #include <string.h>
 
+struct c0_step_clock c0_step_begin(const char *key)
+{
+	c0_mem_stage(key);
+	return (struct c0_step_clock){ key, c0_now(), c0_mem_peak_mb() };
+}
+
+static void add_number(cJSON *rep, const char *obj, const char *key, double v)
+{
+	cJSON *o = cJSON_GetObjectItem(rep, obj);
+	if (!o)
+		o = cJSON_AddObjectToObject(rep, obj);
+	cJSON_AddNumberToObject(o, key, v);
+}
+
+void c0_step_end(struct c0_result *r, const struct c0_step_clock *k)
+{
+	const double peak = c0_mem_peak_mb();
+	cJSON_AddNumberToObject(r->timings, k->key, c0_now() - k->t0);
+	add_number(r->rep, "peak_rss_mb", k->key, round(peak));
+	add_number(r->rep, "rss_rise_mb", k->key, round(peak - k->peak0));
+}
+
 int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n)
 {
-	double t = c0_now();
+	const struct c0_step_clock t = c0_step_begin("drift");
 	const struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
 	int st = c0_drift_estimate(&dc, f, n, &r->drift);
 	if (st)
@@ -27,12 +50,13 @@ int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n)
 	const double px = r->pixel_nm > 0 ? r->pixel_nm : f[0].pixel_nm;
 	if ((st = c0_report_drift(r->rep, r->drift, px)))
 		return st;
-	cJSON_AddNumberToObject(r->timings, "drift", c0_now() - t);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
 
 int c0_step_render(struct c0_result *r)
 {
+	const struct c0_step_clock t = c0_step_begin("render");
 	const double fine = r->pixel_nm / r->srf;
 	double prec = -1;
 	for (int k = 0; r->sres && k < r->nsup; k++)
@@ -48,6 +72,7 @@ int c0_step_render(struct c0_result *r)
 	}
 	r->render_sd_nm = sd;
 	c0_report_render(r->rep, sd, prec, fine);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
 
@@ -74,7 +99,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	cJSON *arr = cJSON_AddArrayToObject(r->rep, "support");
 	if (!(r->sres = c0_alloc((size_t)r->nsup, sizeof *r->sres)))
 		return C0_ENOMEM;
-	double t = c0_now();
+	const struct c0_step_clock t = c0_step_begin("support");
 	for (int k = 0; k < r->nsup; k++) {
 		int i = r->sup[k];
 		cc.frame_fn = r->drift ? c0_drift_frame_fn : NULL, cc.frame_ctx = r->hooks[i];
@@ -90,7 +115,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	r->pixel_nm = cc.grid.pixel_nm, r->srf = cc.grid.srf;
 	int st = support_union(r);
 	if (!st)
-		cJSON_AddNumberToObject(r->timings, "support", c0_now() - t);
+		c0_step_end(r, &t);
 	return st;
 }
 
@@ -112,13 +137,23 @@ static int intensity_read(const struct c0_support_conf *sc0, void *hook, struct 
 	return c0_stack_noise(&scc, f, mask, own, frames, s2, seconds);
 }
 
+/* With the camera's read-noise map (less its median, noise): each pixel's
+ * weight in the intensity fit, s2 over its own noise variance s2 + noise */
 static int intensity_solve(const struct c0_intensity_conf *ic, const double *mean, int H, int W, int64_t frames,
-			   const uint8_t *mask, double s2, struct c0_intensity_result *res, float **corrected)
+			   const uint8_t *mask, double s2, const float *noise, struct c0_intensity_result *res, float **corrected)
 {
-	int st = c0_intensity_solve(ic, mean, H, W, frames, mask, s2, res);
+	struct c0_intensity_conf c = *ic;
+	float *w = noise && s2 > 0 ? malloc((size_t)H * W * sizeof *w) : NULL;
+	if (noise && s2 > 0 && !w)
+		return C0_ENOMEM;
+	for (size_t p = 0; w && p < (size_t)H * W; p++)
+		w[p] = (float)(s2 / fmax(0.5 * s2, s2 + noise[p]));
+	c.weight = w;
+	int st = c0_intensity_solve(&c, mean, H, W, frames, mask, s2, res);
+	free(w);
 	if (!st && corrected) {
 		size_t nc = (size_t)H * W;
-		if (!(*corrected = malloc(nc * sizeof **corrected)))
+		if (!(*corrected = c0_alloc(nc, sizeof **corrected)))
 			st = C0_ENOMEM;
 		for (size_t p = 0; !st && p < nc; p++)
 			(*corrected)[p] = (float)(mean[p] - res->b[p]);
@@ -157,7 +192,7 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 	for (int i = 0; i < n; i++) {
 		if (bad)
 			continue;
-		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], &r->ires[i],
+		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &r->ires[i],
 					 corrected ? &r->corrected[i] : NULL);
 		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
 			r->mean[(size_t)i * H * W + p] = (float)(known[i] ? known[i]->mean : own[i])[p];
@@ -182,7 +217,8 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels at srf %d do not match the %dx%d support", f[0].name, f[0].width,
 			       f[0].height, sc->grid.srf, r->Lx, r->Ly);
 	int64_t frames[C0_MAX_STACKS];
-	double tc[C0_MAX_STACKS], t = c0_now();
+	double tc[C0_MAX_STACKS];
+	const struct c0_step_clock t = c0_step_begin("intensity");
 	int sts[C0_MAX_STACKS];
 	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
 	r->ires = c0_alloc((size_t)n, sizeof *r->ires);
@@ -203,8 +239,22 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	free(msg);
 	r->pixel_nm = ic->grid.pixel_nm, r->srf = ic->grid.srf;
 	c0_report_intensity(r->rep, r, ic, frames, tc);
-	cJSON_AddNumberToObject(r->timings, "intensity", c0_now() - t);
+	c0_step_end(r, &t);
 	return C0_OK;
+}
+
+/* the single-depth fit of each column (stages/depthfit.h) into res->depth
+ * at its pixel; 0 off the columns, as their volume */
+static int depth_fit_cols(const struct c0_matirf_conf *m, const struct c0_run_conf *c, int nq, struct c0_matirf_result *res)
+{
+	float *d = c0_alloc(res->M ? (size_t)res->M : 1, sizeof *d);
+	int st = d ? c0_depth_fit(&m->tirf, nq, c->angles, c->ngains ? c->gains : NULL, res->nz, m->z0_nm, m->dz_nm, res->f,
+				  (size_t)res->M, d)
+		   : C0_ENOMEM;
+	for (size_t k = 0; !st && k < (size_t)res->M; k++)
+		res->depth[res->pixel[k]] = d[k];
+	free(d);
+	return st;
 }
 
 int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
@@ -213,7 +263,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	struct c0_matirf_result *res = baseline ? &r->base : &r->vol;
 	const char *key = baseline ? "baseline_matirf" : "matirf";
 	const int nq = c->nangles;
-	double t = c0_now();
+	const struct c0_step_clock t = c0_step_begin(key);
 	int st = c0_matirf_solve(m, nq, c->angles, c->ngains ? c->gains : NULL, img, ny, nx, res);
 	if (st)
 		return st;
@@ -227,11 +277,21 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 			res->total[res->pixel[k]] = (float)s;
 		}
 	}
+	/* the fine grid's depth map: each column's single-depth fit, not its mean,
+	 * which reads deep (stages/depthfit.h). The camera-grid baseline keeps the
+	 * mean: its 100 nm pixels hold several depths, whose brightness-weighted
+	 * mean the single fit misses (demo: -29 nm signed, the mean -8 nm) */
+	const double tfit = c0_now();
+	if (!baseline && (st = depth_fit_cols(m, c, nq, res)))
+		return st;
 	if (!baseline)
 		r->vol_pixel_nm = pixel_nm;
 	r->z0_nm = m->z0_nm, r->dz_nm = m->dz_nm;
 	c0_report_matirf(r->rep, key, c, m, res);
-	cJSON_AddNumberToObject(r->timings, key, c0_now() - t);
+	cJSON *mj = cJSON_GetObjectItem(r->rep, key);
+	cJSON_AddStringToObject(mj, "depth_readout", baseline ? "intensity-weighted mean of each column" : "single-depth fit of each column's projections");
+	cJSON_AddNumberToObject(mj, "depth_readout_s", baseline ? 0 : c0_now() - tfit);
+	c0_step_end(r, &t);
 	return C0_OK;
 }
 
@@ -289,7 +349,8 @@ void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
 int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f)
 {
 	const int n = r->n;
-	double t = c0_now(), B[C0_MAX_STACKS] = { 0 };
+	const struct c0_step_clock t = c0_step_begin("bleaching");
+	double B[C0_MAX_STACKS] = { 0 };
 	struct c0_bleach_conf bc;
 	c0_run_conf_bleach(c, &bc);
 	for (int q = 0; q < n; q++)
@@ -302,6 +363,19 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 	for (int q = 0; q < n; q++)
 		r->bleach_factor[q] = br.factor[q];
 	c0_report_bleach(r->rep, &bc, &br, n);
-	cJSON_AddNumberToObject(r->timings, "bleaching", c0_now() - t);
+	/* a fade the stacks cannot show (sparse or fast blinking: the frame sums
+	 * carry more blinking noise than fade) leaves the factors near 1 and the
+	 * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth bias") */
+	const int significant = !(bc.mode == C0_BLEACH_ESTIMATE) || fabs(br.k) >= C0_BLEACH_SIGNIF * br.k_sd;
+	cJSON *bj = cJSON_GetObjectItem(r->rep, "bleaching");
+	cJSON_AddBoolToObject(bj, "rate_significant", significant);
+	if (!significant) {   /* in the report, not on stderr: short test stacks never show a fade */
+		char msg[320];
+		snprintf(msg, sizeof msg, "the fade rate %.3g +- %.2g per frame is within %g sds of zero: the stacks do not show the "
+			 "fade, and their factors may be off; give bleach_factors measured otherwise (e.g. the intensity ratio of "
+			 "a repeat of the first angle recorded at the end)", br.k, br.k_sd, (double)C0_BLEACH_SIGNIF);
+		cJSON_AddStringToObject(bj, "warning", msg);
+	}
+	c0_step_end(r, &t);
 	return C0_OK;
 }

@@ -19,7 +19,9 @@ static const struct c0_cli_name NAMES[] = {
 	{ "background", "--background" }, { "gain", "--gain" }, { "read_noise", "--read-noise" }, { "offset", "--offset" },
 	{ "z_min_nm", "--z-range min" }, { "z_max_nm", "--z-range max" }, { "filaments", "--filaments" },
 	{ "density_per_um", "--density" }, { "persistence_nm", "--persistence" }, { "emitters_csv", "--emitters" },
-	{ "drift_nm", "--drift-nm" }, { "hot_pixels", "--hot-pixels" }, { "srf", "--srf" }, { NULL, NULL },
+	{ "drift_nm", "--drift-nm" }, { "hot_pixels", "--hot-pixels" }, { "srf", "--srf" },
+	{ "camera", "--camera" }, { "em_gain", "--em-gain" }, { "offset_sd", "--offset-sd" }, { "gain_cv", "--gain-cv" },
+	{ "read_e", "--read-e" }, { "read_spread", "--read-spread" }, { "dark_frames", "--dark-frames" }, { NULL, NULL },
 };
 
 static int fail(void)
@@ -32,7 +34,7 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 {
 	struct c0_sim_conf c = *conf;
 	int verbose = 0, nangles = c.nangles, nz = 2, ndrift = 0;
-	const char *order = "sequential";
+	const char *order = "sequential", *camera = "ccd";
 	long long seed = (long long)c.seed;
 	double zr[2] = { c.z_min_nm, c.z_max_nm }, hot[2] = { c.hot_fraction, c.hot_sd };
 	int nhot = 0;
@@ -77,6 +79,16 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 		{ "hot-pixels", 0, C0_OPT_DOUBLES, hot, "SHARE[,SD]", "a fixed share of pixels (sCMOS) with extra Gaussian read noise of sd SD ADU (30 unless given)", "0", 2, &nhot },
 		{ "drift-nm", 0, C0_OPT_DOUBLES, c.drift_nm, "X,Y", "stage drift over the whole acquisition (all angles in order): displacement at the last frame", "0,0", 2, &ndrift },
 		{ "drift-walk", 0, C0_OPT_FLAG, &c.drift_walk, NULL, "drift as a Gaussian random walk (per-axis step sd |X|/sqrt(frames), |Y|/...) instead of linear", NULL, 0, NULL },
+		{ "camera", 0, C0_OPT_STRING, &camera, "ccd|emccd|scmos",
+		  "ccd: one gain, offset and Gaussian read noise; emccd: electron multiplication (Gamma, excess noise sqrt 2); "
+		  "scmos: per-pixel offset, gain and read noise (log-normal), 1 % noisy pixels unless --hot-pixels, and the truth "
+		  "calibration calib_offset/variance/gain.tif with dark frames dark.tif", NULL, 0, NULL },
+		{ "em-gain", 0, C0_OPT_DOUBLE, &c.em_gain, "G", "emccd: EM gain (the read noise from --snr or --read-noise is divided by it)", NULL, 0, NULL },
+		{ "offset-sd", 0, C0_OPT_DOUBLE, &c.offset_sd, "ADU", "scmos: spread (sd) of the per-pixel offset around --offset", NULL, 0, NULL },
+		{ "gain-cv", 0, C0_OPT_DOUBLE, &c.gain_cv, "F", "scmos: spread (coefficient of variation) of the per-pixel gain around --gain", NULL, 0, NULL },
+		{ "read-e", 0, C0_OPT_DOUBLE, &c.read_e, "E", "scmos: median per-pixel read-noise sd in electrons (photons)", NULL, 0, NULL },
+		{ "read-spread", 0, C0_OPT_DOUBLE, &c.read_spread, "S", "scmos: log-normal sigma of the per-pixel read-noise sd (its long tail)", NULL, 0, NULL },
+		{ "dark-frames", 0, C0_OPT_INT, &c.dark_frames, "N", "scmos: frames of dark.tif (0: none)", NULL, 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
 	};
@@ -84,7 +96,8 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 		"Simulate one blinking TIRF stack per angle (uint16, calibrated) with ground truth:\n"
 		"stack_qNN.tif, truth_intensity_qNN.tif (ADU/frame, fine grid), truth_background_qNN.tif,\n"
 		"truth_depth.tif (nm), truth_support.tif (positions at the first frame), emitters.csv,\n"
-		"drift_truth.csv (with --drift-nm) and sim.json.",
+		"drift_truth.csv (with --drift-nm) and sim.json; with --camera scmos also calib_offset.tif,\n"
+		"calib_variance.tif, calib_gain.tif (the camera's truth calibration) and dark.tif.",
 		opts, C0_NOPTS(opts), 0, 0, 1 };
 	char **pos = malloc(sizeof(char *) * (size_t)argc);
 	int np, rc = c0_opts_parse(&spec, argc, argv, &np, pos);
@@ -96,6 +109,10 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 	c.z_max_nm = nz > 1 ? zr[1] : zr[0];
 	c.nangles = nangles;
 	c.hot_fraction = hot[0], c.hot_sd = hot[1];
+	if (c0_sim_camera_parse(camera, &c.camera))
+		return fail();
+	if (c.camera == C0_CAM_SCMOS && !nhot)   /* an sCMOS has its noisy pixels */
+		c.hot_fraction = 0.01;
 	if (ndrift == 1)
 		return c0_fail(C0_EINVAL, "--drift-nm: expected X,Y in nm"), fail();
 	if (c0_sim_order_parse(order, &c.order))

@@ -21,7 +21,7 @@ struct c0_conf_cli {
 
 /* The MA-TIRF parameters of 'run' and 'matirf', in help order. */
 #define C0_MATIRF_PARAMS "angles", "n_glass", "n_sample", "wavelength_nm", "s_fraction", "gains", "z_range_nm", "reg", \
-	"kappa", "sparsity", "axial_weight", "matirf_iterations", "matirf_solver", "matirf_coarse"
+	"kappa", "sparsity", "axial_weight", "matirf_iterations", "matirf_tol", "matirf_solver", "matirf_coarse"
 
 void c0_conf_cli_init(struct c0_conf_cli *m);
 /* Appends the rows of the NULL-terminated parameter names to o (room

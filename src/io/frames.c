@@ -18,6 +18,18 @@ static int sums_new(struct c0_frames *f)
 	return C0_OK;
 }
 
+/* rows y0.. of the calibration, in place */
+static void calibrate(const struct c0_frames *f, int y0, int ny, float *v)
+{
+	const size_t o = (size_t)y0 * f->width, n = (size_t)ny * f->width;
+	if (f->cal_offset)
+		for (size_t i = 0; i < n; i++)
+			v[i] -= f->cal_offset[o + i];
+	if (f->cal_scale)
+		for (size_t i = 0; i < n; i++)
+			v[i] *= f->cal_scale[o + i];
+}
+
 static void note_sum(struct c0_frames *f, int64_t t, const float *v)
 {
 	const size_t n = (size_t)f->height * f->width;
@@ -62,7 +74,7 @@ int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
 	if (f->tiff) {
 		int st = c0_tiff_read_f32(f->tiff, t, dst);
 		if (!st)
-			note_sum(f, t, dst);
+			calibrate(f, 0, f->height, dst), note_sum(f, t, dst);
 		return st;
 	}
 	if (t < 0 || t >= f->count)
@@ -74,6 +86,7 @@ int c0_frames_read(struct c0_frames *f, int64_t t, float *dst)
 			return c0_fail(C0_EINVAL, "%s: frame %lld, pixel (x %zu, y %zu) is %s; non-finite pixels are not supported",
 				       f->name, (long long)t + 1, i % (size_t)f->width, i / (size_t)f->width,
 				       isnan(dst[i]) ? "NaN" : "infinite");
+	calibrate(f, 0, f->height, dst);
 	note_sum(f, t, dst);
 	return C0_OK;
 }
@@ -90,6 +103,8 @@ int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *d
 		memcpy(dst, f->data + (size_t)t * n + (size_t)y0 * f->width, (size_t)ny * f->width * sizeof *dst);
 		st = C0_OK;
 	}
+	if (!st)
+		calibrate(f, y0, ny, dst);
 	if (!st && y0 == 0 && ny == f->height)
 		note_sum(f, t, dst);
 	return st;

@@ -13,12 +13,16 @@ struct c0_frames {
 	struct c0_tiff_reader *tiff;   /* a file, or */
 	const float *data;             /* an array the caller owns */
 	double *sum;                   /* count sums of the raw frames, NaN until one is read whole */
+	const float *cal_offset;       /* NULL, or height x width: subtracted from every frame read (camera dark level) */
+	const float *cal_scale;        /* NULL, or height x width: then multiplied (per-pixel gain made even) */
 };
 
 int c0_frames_open(struct c0_frames *f, const char *path);
 /* Wraps data without copying; it must outlive f. */
 int c0_frames_wrap(struct c0_frames *f, const float *data, int64_t count, int height, int width, double pixel_nm,
 		   const char *name);
+/* With cal_offset / cal_scale set (the caller owns them), frames are read as
+ * (raw - offset) * scale, the sums too. */
 /* Frame t (0-based) into dst (height x width values). Every whole-frame
  * read also notes the frame's sum, so that a later pass that only needs
  * the sums (bleaching) does not read the stack again. */

@@ -56,6 +56,14 @@ static void on_signal(int sig)
 	raise(sig);
 }
 
+/* exit() in the middle of a run (a library's fatal error: libgomp's when a
+ * thread cannot be made) leaves no partial output either */
+static void on_exit_clean(void)
+{
+	if (g_active)
+		remove_flat(g_stage);
+}
+
 static void guard(const char *stage)
 {
 	static int installed;
@@ -64,8 +72,9 @@ static void guard(const char *stage)
 	if (installed)
 		return;
 	installed = 1;
-	int sigs[] = { SIGINT, SIGTERM, SIGHUP };
-	for (int i = 0; i < 3; i++) {
+	atexit(on_exit_clean);
+	int sigs[] = { SIGINT, SIGTERM, SIGHUP, SIGABRT };   /* abort: a library's failed assertion (FFTW's malloc) */
+	for (int i = 0; i < 4; i++) {
 		struct sigaction sa, old;
 		memset(&sa, 0, sizeof sa);
 		sa.sa_handler = on_signal;

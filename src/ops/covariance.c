@@ -25,7 +25,11 @@ struct c0_cov_acc {
 	int nb, block;
 	int dropped;        /* rows [0, dropped) of sum are given back */
 	double guard;       /* c0_cov_acc_set_guard's g; 0: none */
+	const float *noise; /* c0_cov_acc_set_noise's map (NULL: none), its width and this accumulator's origin in it */
+	int noise_w, noise_x0, noise_y0;
 };
+
+static void subtract_noise(const struct c0_cov_acc *a, int y0, int x0, struct c0_cov *c);
 
 /* lag (dy, dx) is stored: in the disk of radius d, and in the half that
  * stands for its mirror (dy > 0, or dy = 0 and dx >= 0) */
@@ -248,6 +252,7 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++)
 			c->mean[(size_t)y * w + x] += a->shift[(size_t)(y0 + y) * a->W + x0 + x];
+	subtract_noise(a, y0, x0, c);
 	int st = a->guard > 0 ? c0_cov_guard(c, a->guard, NULL) : C0_OK;
 	if (st)
 		c0_cov_free(c);
@@ -255,6 +260,22 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 }
 
 void c0_cov_acc_set_guard(struct c0_cov_acc *a, double g) { a->guard = g; }
+
+void c0_cov_acc_set_noise(struct c0_cov_acc *a, const float *map, int map_w, int x0, int y0)
+{
+	a->noise = map, a->noise_w = map_w, a->noise_x0 = x0, a->noise_y0 = y0;
+}
+
+/* lag 0 of the window at (y0, x0) of a minus a's noise map there */
+static void subtract_noise(const struct c0_cov_acc *a, int y0, int x0, struct c0_cov *c)
+{
+	if (!a->noise)
+		return;
+	for (int y = 0; y < c->H; y++)
+		for (int x = 0; x < c->W; x++)
+			c->r[(size_t)y * c->W + x] -=
+				a->noise[(size_t)(a->noise_y0 + y0 + y) * a->noise_w + a->noise_x0 + x0 + x];
+}
 
 static int lag_index(const struct c0_cov *c, int dy, int dx)
 {
@@ -411,6 +432,7 @@ int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y
 		for (int x = 0; x < w; x++)
 			c->mean[(size_t)y * w + x] += all->shift[(size_t)(y0 + y) * all->W + x0 + x];
 	free(s1), free(dl), free(tr);
+	subtract_noise(all, y0, x0, c);
 	int st = all->guard > 0 ? c0_cov_guard(c, all->guard, NULL) : C0_OK;
 	if (st)
 		c0_cov_free(c);

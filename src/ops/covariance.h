@@ -48,6 +48,11 @@ int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y
  * T frames, is set to S + N. g = 0: no guard (the default). */
 #define C0_COV_GUARD_Z 4.0
 void c0_cov_acc_set_guard(struct c0_cov_acc *a, double g);
+/* A per-pixel noise variance map (camera read noise, map_w wide; this
+ * accumulator's pixel (0, 0) is its (y0, x0)) subtracted from every window's
+ * lag 0 before the guard: the model's single noise variance then meets an
+ * even noise. The map must outlive a. */
+void c0_cov_acc_set_noise(struct c0_cov_acc *a, const float *map, int map_w, int x0, int y0);
 /* The same on a finished covariance; *set (or NULL): how many variances it set. */
 int c0_cov_guard(struct c0_cov *c, double g, size_t *set);
 /* Temporal variance of one pixel so far. */

@@ -198,5 +198,5 @@ int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy)
 			give(s, &wk);
 	}
 	fftw_free(wr), fftw_free(wc);
-	return fail ? c0_fail(C0_ENOMEM, "drift: out of memory for a %dx%d frame", W, H) : C0_OK;
+	return fail ? c0_mem_fail(0) : C0_OK;
 }

@@ -22,6 +22,7 @@
 #pragma once
 #include "optics/tirf.h"
 
+#include <stddef.h>
 #include <stdint.h>
 
 #define C0_MAX_ANGLES 32
@@ -72,7 +73,46 @@ struct c0_sim_conf {
 	/* stage drift over the whole acquisition (the angles one after another) */
 	double drift_nm[2];        /* 0,0: x, y displacement of the sample at the last frame */
 	int drift_walk;            /* 0: linear; 1: Gaussian random walk (per-axis step sd |drift|/sqrt(frames)) */
+	/* the camera (camera.c): enum c0_sim_camera_kind */
+	int camera;                /* ccd: the model above */
+	double em_gain;            /* 100 (emccd): the read noise is divided by it (added after the multiplication) */
+	double offset_sd;          /* 2 ADU (scmos): spread of the per-pixel offset around offset */
+	double gain_cv;            /* 0.03 (scmos): spread of the per-pixel gain around gain */
+	double read_e;             /* 1.5 (scmos): median read-noise sd, electrons (photons) */
+	double read_spread;        /* 0.45 (scmos): log-normal sigma of the per-pixel read-noise sd */
+	int dark_frames;           /* 200 (scmos): frames of dark.tif */
 };
+
+/* Cameras (camera.c). ccd: ADU = gain Poisson + offset + read noise (above).
+ * emccd: gain * Gamma(Poisson, 1) + offset + Normal(0, (read_noise / em_gain)^2):
+ * the multiplication's excess noise factor sqrt 2, the readout noise referred
+ * to photons divided by the EM gain, --gain ADU per photon as before.
+ * scmos: per pixel i, gain_i = gain (1 + gain_cv N), offset_i = offset +
+ * offset_sd N, read sd_i = gain_i read_e exp(read_spread N) (log-normal: a
+ * median of read_e electrons, a tail to 4x at 0.1 %), plus the noisy pixels
+ * (hot_fraction, hot_sd) as for the ccd; snr_db and read_noise are not used.
+ * ADU = gain_i Poisson + offset_i + Normal(0, sd_i^2) (+ the noisy pixels'). */
+enum c0_sim_camera_kind { C0_CAM_CCD, C0_CAM_EMCCD, C0_CAM_SCMOS };
+int c0_sim_camera_parse(const char *name, int *camera);
+const char *c0_sim_camera_name(int camera);
+int c0_sim_camera_check(const struct c0_sim_conf *c);
+/* The sCMOS pixels' maps (all NULL for the other cameras). */
+struct c0_sim_cam {
+	float *offset, *gain, *sd;   /* ADU, ADU per photon, ADU */
+	uint8_t *hot;                /* 1: a noisy pixel */
+};
+int c0_sim_cam_new(const struct c0_sim_conf *c, struct c0_sim_cam *m);
+void c0_sim_cam_free(struct c0_sim_cam *m);
+/* Pixel i's dark variance (ADU^2): read noise, noisy pixel, rounding (1/12). */
+double c0_sim_cam_variance(const struct c0_sim_conf *c, const struct c0_sim_cam *m, size_t i);
+double c0_sim_cam_median_sd(const struct c0_sim_conf *c, const struct c0_sim_cam *m);
+/* One frame through c's camera (ccd: c0_sim_camera, the same numbers). */
+void c0_sim_expose(const struct c0_sim_conf *c, const struct c0_sim_cam *m, int q, int t, double read_noise,
+		   const double *photons, float *adu);
+/* scmos: calib_offset.tif, calib_variance.tif, calib_gain.tif (float32) and
+ * dark.tif (dark_frames, uint16); nothing for the other cameras. */
+struct c0_outdir;
+int c0_sim_write_camera(const struct c0_sim_conf *c, const struct c0_sim_cam *m, struct c0_outdir *out);
 
 void c0_sim_defaults(struct c0_sim_conf *c);
 /* enum c0_sim_order by its name in sim.json (sequential, interleaved, restart)

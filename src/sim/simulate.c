@@ -63,7 +63,7 @@ static double noisefree_variance(const struct c0_sim_conf *c, const struct c0_si
 }
 
 /* To the TIFF at path, or with path NULL into mem (frames x H x W). */
-static int write_stack(const struct c0_sim_conf *c, int q, const struct c0_sim_scene *s, double read_noise,
+static int write_stack(const struct c0_sim_conf *c, const struct c0_sim_cam *cam, int q, const struct c0_sim_scene *s, double read_noise,
 		       const char *path, float *mem, struct c0_progress *pr, double done0)
 {
 	const size_t n = (size_t)c->width * c->height;
@@ -83,7 +83,7 @@ static int write_stack(const struct c0_sim_conf *c, int q, const struct c0_sim_s
 #pragma omp parallel for schedule(dynamic, 1)
 		for (int b = 0; b < nb; b++) {
 			c0_sim_render(s, t0 + b, ph + b * n);
-			c0_sim_camera(c, q, t0 + b, read_noise, ph + b * n, a + b * n);
+			c0_sim_expose(c, cam, q, t0 + b, read_noise, ph + b * n, a + b * n);
 		}
 		for (int b = 0; b < nb && !st && w; b++)
 			st = c0_tiff_write_plane(w, a + b * n);
@@ -211,6 +211,10 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 	if (st)
 		return st;
 	double *bg[C0_MAX_ANGLES] = { 0 };
+	struct c0_sim_cam cam;
+	if ((st = c0_sim_cam_new(c, &cam)))
+		return st;
+	const double cam_sd = c->camera == C0_CAM_SCMOS ? c0_sim_cam_median_sd(c, &cam) : 0;
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "simulate", (double)c->nangles * c->frames * (c->snr_db > 0 ? 2 : 1));
 	double done = 0;
@@ -249,13 +253,16 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 			a->read_noise = sqrt(var / pow(10, c->snr_db / 10));
 			done += c->frames;
 		}
+		const double rn = a->read_noise;   /* what the camera uses; an sCMOS reports its median */
+		if (c->camera == C0_CAM_SCMOS)
+			a->read_noise = cam_sd;
 		a->snr_db = a->read_noise > 0 && var == var ? 10 * log10(var / (a->read_noise * a->read_noise)) : INFINITY;
 		char name[64];
 		snprintf(name, sizeof name, "stack_q%02d.tif", q + 1);
 		if (!out && !(res->stack[q] = c0_alloc((size_t)c->frames * c->width * c->height, sizeof(float))))
 			st = C0_ENOMEM;
 		else
-			st = write_stack(c, q, s, a->read_noise, out ? c0_outdir_file(out, name) : NULL, res->stack[q], &pr, done);
+			st = write_stack(c, &cam, q, s, rn, out ? c0_outdir_file(out, name) : NULL, res->stack[q], &pr, done);
 		done += c->frames;
 		c0_sim_scene_free(s);
 	}
@@ -264,6 +271,9 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 		st = write_truth(c, out, res, bg);
 	if (!st && out)
 		st = write_csv(c, out, res);
+	if (!st && out)
+		st = c0_sim_write_camera(c, &cam, out);
+	c0_sim_cam_free(&cam);
 	if (!st && (c->drift_nm[0] != 0 || c->drift_nm[1] != 0))
 		st = write_drift(c, out);
 	for (int q = 0; q < C0_MAX_ANGLES; q++)

@@ -32,6 +32,8 @@ void c0_sim_defaults(struct c0_sim_conf *c)
 		.z_min_nm = 0, .z_max_nm = 400, .pair_sep_nm = 120, .pair_dz_nm = 100, .tau_on_ms = 20, .tau_off_ms = 40, .tau_bleach_s = 35, .fps = 100,
 		.brightness = 300, .brightness_cv = 0.3, .background = 40, .offset = 100, .gain = 1,
 		.read_noise = 0, .snr_db = 14.75, .hot_fraction = 0, .hot_sd = 30,
+		.camera = C0_CAM_CCD, .em_gain = 100, .offset_sd = 2, .gain_cv = 0.03, .read_e = 1.5, .read_spread = 0.45,
+		.dark_frames = 200,
 	};
 	c0_sim_default_angles(c, 5);
 }
@@ -93,6 +95,8 @@ int c0_sim_check(const struct c0_sim_conf *c)
 	if (!(c->hot_fraction >= 0 && c->hot_fraction <= 1) || !(c->hot_sd >= 0))
 		return c0_fail(C0_EINVAL, "hot_pixels %g,%g: need a share of pixels in [0, 1] and a noise sd >= 0 (ADU)", c->hot_fraction,
 			       c->hot_sd);
+	if ((st = c0_sim_camera_check(c)))
+		return st;
 	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
 		return c0_fail(C0_EINVAL, "z_min_nm %g / z_max_nm %g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
 	/* every real parameter finite: infinity passes the >= 0 tests above */

@@ -46,16 +46,21 @@ int c0_cg(c0_linop_fn A, void *ctx, size_t n, const double *b, const double *din
 		double pq = dot(p, q, n);
 		if (!(pq > 0))           /* semidefinite direction: nothing more to gain */
 			break;
-		double a = rz / pq;
-		for (size_t i = 0; i < n; i++)
+		/* one pass for the update, the preconditioner and both sums (each
+		 * summed in index order, as apart: the same numbers); two
+		 * independent sums, where apart each waited on its own adds */
+		const double a = rz / pq;
+		double rz2 = 0, rr = 0;
+		for (size_t i = 0; i < n; i++) {
 			x[i] += a * p[i], r[i] -= a * q[i];
-		for (size_t i = 0; i < n; i++)
 			z[i] = dinv ? dinv[i] * r[i] : r[i];
-		double rz2 = dot(r, z, n);
+			rz2 += r[i] * z[i], rr += r[i] * r[i];
+		}
+		const double beta = rz2 / rz;
 		for (size_t i = 0; i < n; i++)
-			p[i] = z[i] + rz2 / rz * p[i];
+			p[i] = z[i] + beta * p[i];
 		rz = rz2;
-		rn = sqrt(dot(r, r, n));
+		rn = sqrt(rr);
 		info->iters = it + 1;
 	}
 	info->relres = rn / bn;

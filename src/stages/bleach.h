@@ -17,6 +17,9 @@
 #include <stdint.h>
 
 #define C0_BLEACH_MAX 64
+/* The estimated rate counts as measured when it is this many sds from zero;
+ * below, the run warns that the stacks do not show the fade. */
+#define C0_BLEACH_SIGNIF 2
 
 enum c0_bleach_mode { C0_BLEACH_ESTIMATE, C0_BLEACH_KNOWN, C0_BLEACH_OFF };
 

@@ -97,7 +97,7 @@ static int xcorr_buffers(struct xcorr *x, const struct xcorr *share)
 		x->ref = fftw_malloc(x->ns * sizeof(fftw_complex));
 	}
 	if (!x->win || !x->re || !x->ref || !x->sp || !x->xs)
-		return c0_fail(C0_ENOMEM, "drift: out of memory for the correlations of %dx%d", x->W, x->H);
+		return c0_mem_fail((double)x->PH * x->PW * sizeof(double) + 3.0 * x->ns * sizeof(fftw_complex));
 #pragma omp critical(c0_fftw_plan)
 	{
 		x->f = fftw_plan_dft_r2c_2d(x->PH, x->PW, x->re, x->sp, FFTW_ESTIMATE);
@@ -340,8 +340,8 @@ static int add_frames(struct stack_blocks *o, struct xcorr *x, double *sum, cons
 			continue;
 		for (size_t i = 0; i < n; i++)
 			sum[i] /= (double)(b2 - b1);
-		if (!(o->bm[k] = malloc(n * sizeof(float))))
-			return c0_fail(C0_ENOMEM, "drift: out of memory for the block means");
+		if (!(o->bm[k] = c0_alloc(n, sizeof(float))))
+			return C0_ENOMEM;
 		for (size_t i = 0; i < n; i++)
 			o->bm[k][i] = (float)sum[i];
 		if (k > 0)
@@ -370,7 +370,7 @@ static int stack_pass(struct c0_frames *r, int64_t B, struct stack_blocks *o)
 	o->sx = c0_alloc((size_t)nb, sizeof *o->sx);
 	o->sy = c0_alloc((size_t)nb, sizeof *o->sy);
 	if (!st && (!sum || !buf || !o->bm || !o->sx || !o->sy))
-		st = c0_fail(C0_ENOMEM, "drift: out of memory");
+		st = C0_ENOMEM;   /* c0_alloc said which */
 	struct c0_progress pr;
 	c0_progress_begin(&pr, "drift", (double)T);
 	/* One thread reads batch i while another adds batch i - 1 (reading and
@@ -463,7 +463,7 @@ static int chain(struct c0_drift *d, const struct c0_frames *f, int n, struct st
 		nball += sb[q].nb;
 	if (!(d->bt = c0_alloc((size_t)nball, sizeof *d->bt)) || !(d->bx = c0_alloc((size_t)nball, sizeof *d->bx)) ||
 	    !(d->by = c0_alloc((size_t)nball, sizeof *d->by)) || !(d->bm = c0_alloc((size_t)nball, sizeof *d->bm)))
-		return c0_fail(C0_ENOMEM, "drift: out of memory");
+		return C0_ENOMEM;
 	int prev0 = 0;
 	int64_t g = 0;
 	for (int q = 0; q < n; q++) {

@@ -43,6 +43,7 @@ struct prob {
 	double bscale;            /* constant mode: b = bscale * v_b */
 	double mu;
 	const double *ybar;
+	const double *yw;         /* w ybar (ybar without weights) */
 	uint8_t *fixed;           /* n + nb */
 	double *dinv;             /* Jacobi preconditioner */
 	double *psi2;             /* ||psi_k||^2 on the support */
@@ -81,6 +82,9 @@ static void normal(void *ctx, const double *in, double *out)
 	else if (nb == 1)
 		for (int i = 0; i < NN; i++)
 			p->y[i] += p->bscale * v[n];
+	if (p->c->weight)
+		for (int i = 0; i < NN; i++)
+			p->y[i] *= p->c->weight[i];
 	c0_psi_omega_adjoint(&p->P, p->y, out);
 	c0_grad_omega(&p->P, v, p->g);
 	double *gx = p->rhs + n + nb;      /* spare room after rhs */
@@ -111,13 +115,13 @@ static int solve(struct prob *p, double *sol)
 	memset(p->fixed, 0, (size_t)(n + nb));
 	for (int round = 0; round < 20; round++) {
 		/* rhs = A^T ybar on the free set */
-		c0_psi_omega_adjoint(&p->P, p->ybar, b);
+		c0_psi_omega_adjoint(&p->P, p->yw, b);
 		if (nb == NN)
-			memcpy(b + n, p->ybar, sizeof *b * NN);
+			memcpy(b + n, p->yw, sizeof *b * NN);
 		else if (nb == 1) {
 			double s = 0;
 			for (int i = 0; i < NN; i++)
-				s += p->ybar[i];
+				s += p->yw[i];
 			b[n] = p->bscale * s;
 		}
 		for (int i = 0; i < n + nb; i++)
@@ -155,7 +159,7 @@ static double residual2(struct prob *p, const double *sol)
 	for (int i = 0; i < NN; i++) {
 		double bi = p->nb == NN ? sol[n + i] : p->nb == 1 ? p->bscale * sol[n] : 0;
 		double r = p->y[i] + bi - p->ybar[i];
-		s += r * r;
+		s += (p->c->weight ? p->c->weight[i] : 1) * r * r;
 	}
 	return s;
 }
@@ -290,18 +294,23 @@ static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, in
 		const size_t nw = (size_t)t->h * t->w, Lw = nw * r * r;
 		double *y = malloc(nw * sizeof *y);
 		uint8_t *m = malloc(Lw);
+		float *wt = c->weight ? malloc(nw * sizeof *wt) : NULL;
 		struct c0_intensity_result tr;
 		memset(&tr, 0, sizeof tr);
-		int tst = y && m ? C0_OK : C0_ENOMEM, any = 0;
+		int tst = y && m && (wt || !c->weight) ? C0_OK : C0_ENOMEM, any = 0;
 		for (int a = 0; !tst && a < t->h; a++)
 			memcpy(y + (size_t)a * t->w, ybar + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *y);
+		for (int a = 0; !tst && wt && a < t->h; a++)
+			memcpy(wt + (size_t)a * t->w, c->weight + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *wt);
+		struct c0_intensity_conf tc = cc;   /* this tile's weights */
+		tc.weight = wt;
 		for (int a = 0; !tst && a < t->h * r; a++) {
 			memcpy(m + (size_t)a * t->w * r, mask + (size_t)(t->y0 * r + a) * Lx + (size_t)t->x0 * r, (size_t)t->w * r);
 			for (int b = 0; b < t->w * r && !any; b++)
 				any = m[(size_t)a * t->w * r + b];
 		}
 		if (!tst)
-			tst = any ? solve_whole(&cc, y, t->h, t->w, T, m, sigma2, &tr) : background_only(&cc, y, t->h, t->w, &tr);
+			tst = any ? solve_whole(&tc, y, t->h, t->w, T, m, sigma2, &tr) : background_only(&tc, y, t->h, t->w, &tr);
 		if (!tst) {
 			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
 			for (int a = 0; a < t->ih * r; a++)
@@ -317,7 +326,7 @@ static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, in
 		}
 		c0_first_fail_note(&fail, tst);
 		c0_intensity_result_free(&tr);
-		free(y), free(m);
+		free(y), free(m), free(wt);
 	}
 	st = c0_first_fail_raise(&fail);
 	/* in tile order: the same sums whatever the schedule */
@@ -345,7 +354,7 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
 {
 	int st;
-	struct prob p = { .c = c, .ybar = ybar, .NN = Ny * Nx };
+	struct prob p = { .c = c, .ybar = ybar, .yw = ybar, .NN = Ny * Nx };
 	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->grid.srf, c0_grid_sigma_px(&c->grid), mask, c->graph_radius)))
 		return st;
 	p.n = p.P.n;
@@ -361,9 +370,15 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 	p.g = c0_alloc((size_t)p.P.ne + 1, sizeof *p.g);
 	p.v = c0_alloc(nv, sizeof *p.v);
 	p.rhs = c0_alloc(nv + p.n, sizeof *p.rhs);
+	double *yw = c->weight ? c0_alloc((size_t)p.NN, sizeof *yw) : NULL;
+	for (int i = 0; yw && i < p.NN; i++)
+		yw[i] = c->weight[i] * ybar[i];
+	if (yw)
+		p.yw = yw;
 	res->x = c0_alloc((size_t)p.P.Ly * p.P.Lx, sizeof *res->x);
 	res->b = c0_alloc((size_t)p.NN, sizeof *res->b);
-	if (!sol || !p.fixed || !p.y || !p.g || !p.v || !p.rhs || !res->x || !res->b || !p.dinv || !p.psi2 || !p.deg) {
+	if (!sol || !p.fixed || !p.y || !p.g || !p.v || !p.rhs || !res->x || !res->b || !p.dinv || !p.psi2 || !p.deg ||
+	    (c->weight && !yw)) {
 		st = C0_ENOMEM;
 		goto out;
 	}
@@ -414,6 +429,7 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 	res->tiles = 1, res->tiles_met = res->dp_status <= 0;
 out:
 	free(sol), free(fsol), free(p.fixed), free(p.dinv), free(p.psi2), free(p.deg), free(p.y), free(p.g), free(p.v), free(p.rhs);
+	free(yw);
 	c0_psi_omega_free(&p.P);
 	return st;
 }

@@ -28,8 +28,11 @@ struct c0_intensity_conf {
 	int relative;              /* 1: residual^2 = floor^2 + target^2, floor = the residual at the smallest mu */
 	int tile;                  /* 0: one solve on the whole image; else tiles of this side (camera
 				    * pixels) with a halo of two PSF lags, each with its own mu */
+	const float *weight;       /* NULL, or Ny x Nx: the data term is 1/2 sum_i w_i (Psi x + b - ybar)_i^2
+				    * (w about 1 where a pixel's noise is the typical one: the principle's
+				    * target stays; the camera's noisy pixels weigh less) */
 };
-#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0 }
+#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {

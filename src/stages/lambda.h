@@ -28,6 +28,10 @@
 #define C0_LAMBDA_CURVE 33
 double c0_lambda_curve_rel(int k);
 
+/* The cross-validation path (stages/lambda_cv.c): at most this many
+ * points, lambda / lambda_max = C0_LAMBDA_CV_TOP 2^(-k/2) */
+#define C0_LAMBDA_CV_MAX 24
+
 struct c0_lambda_result {
 	double chosen_rel;    /* lambda / lambda_max for the solve on all frames */
 	double noise_rel;     /* sigma_C / lambda_max (l1 scale) */
@@ -41,6 +45,12 @@ struct c0_lambda_result {
 	double peaks;         /* how many peaks */
 	double seconds;
 	double curve_signal[C0_LAMBDA_CURVE], curve_noise[C0_LAMBDA_CURVE];
+	/* cross-validation (l1): chosen_rel from it when cv is 1 */
+	int cv, cv_points, cv_min, cv_pick;   /* points on the path, the criterion's least, the chosen */
+	double cv_rel[C0_LAMBDA_CV_MAX], cv_err[C0_LAMBDA_CV_MAX];  /* lambda / lambda_max, error / error at x = 0 */
+	double cv_se[C0_LAMBDA_CV_MAX];   /* standard error of err - least (same units), up to the chosen */
+	int cv_iters;                 /* iterations per point and half */
+	double cv_seconds;
 };
 
 /* lambda_max on the l1 and the l0 scale (lm[0], lm[1]) of the gradient at
@@ -70,6 +80,42 @@ int c0_lambda_peaks(const struct c0_support_conf *c, const float *rx, double nor
 /* The second step from the peaks' histogram and the first solve's
  * lambda_max: out->chosen_rel becomes its lambda (kept when there is no peak). */
 void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *out);
+
+/* The l1 lambda by symmetric covariance cross-validation (DESIGN.md §8):
+ * each half of the frames (a: even, b: odd) is solved along a path of
+ * decreasing lambda, C0_LAMBDA_CV_TOP 2^(-k/2) lambda_max, warm started,
+ * every point with the same iteration budget; the support of each is
+ * refitted without penalty, and predicts the other half's off-diagonal
+ * covariance (lags != 0, where the noise variance is absent); the two
+ * squared errors are summed. The path stops C0_LAMBDA_CV_PATIENCE points
+ * after its least. The choice is the largest lambda whose error exceeds the
+ * least by no more than its standard error, from the paired differences
+ * over blocks of lag x lag camera pixels (the one-standard-error rule: the
+ * curve is flat near its least, within 1e-4 of it over a factor 4 of
+ * lambda, and its noise would otherwise pick). Sets out's cv fields and
+ * chosen_rel (relative to the halves' mean's lambda_max, as c0_lambda_auto). */
+#define C0_LAMBDA_CV_TOP 0.1
+#define C0_LAMBDA_CV_ITERS 200
+#define C0_LAMBDA_CV_REFIT 100
+#define C0_LAMBDA_CV_PATIENCE 3
+int c0_lambda_cv(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
+		 struct c0_lambda_result *out);
+/* Its pieces, for tiles. The path point k's lambda / lambda_max; the sums
+ * one window gives (all doubles, so that windows and ranks add them): the
+ * errors, their paired differences' sums and squares over the blocks
+ * (s1[k][q], s2[k][q]: of err_k - err_q), the error of x = 0, the blocks
+ * and the points; one window's path (halves a, b; norm and lmax the
+ * image's, or 0: the halves' own; the errors over the camera pixels of
+ * interior = { y, x, h, w } in the window, NULL: all); the choice from such
+ * sums. */
+double c0_lambda_cv_rel(int k);
+struct c0_lambda_cv_sums {
+	double err[C0_LAMBDA_CV_MAX], s1[C0_LAMBDA_CV_MAX][C0_LAMBDA_CV_MAX], s2[C0_LAMBDA_CV_MAX][C0_LAMBDA_CV_MAX];
+	double e0, nb, npts;
+};
+int c0_lambda_cv_window(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b, double norm,
+			double lmax, const int *interior, struct c0_lambda_cv_sums *v);
+void c0_lambda_cv_choose(const struct c0_lambda_cv_sums *v, struct c0_lambda_result *out);
 
 /* The tiled path (stages/support_tiles.c), where the band of the whole image is
  * kept for all frames, and the halves only for some tiles' windows.

@@ -42,11 +42,13 @@ double c0_support_guard_ratio(const struct c0_support_conf *c)
 	return g < 1 ? g : 1;
 }
 
-int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a)
+int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, int x0, int y0, struct c0_cov_acc **a)
 {
 	int st = c0_cov_acc_new(W, H, d, a);
 	if (!st && c->guard)
 		c0_cov_acc_set_guard(*a, c0_support_guard_ratio(c));
+	if (!st && c->noise_map)
+		c0_cov_acc_set_noise(*a, c->noise_map, c->noise_map_w, x0, y0);
 	return st;
 }
 
@@ -190,7 +192,10 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 	c0_progress_begin(&ps, "support", 1);
 	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel, res->lambda_auto = 1;
-	if (!st && automatic && c->penalty == C0_PENALTY_L1)
+	if (!st && automatic && c->penalty == C0_PENALTY_L1 && c->lambda_cv &&
+	    !(st = c0_lambda_cv(c, &half[0], &half[1], &res->cv)))
+		cc.lambda_rel = res->cv.chosen_rel;
+	else if (!st && automatic && c->penalty == C0_PENALTY_L1)
 		st = second_step(&cc, &cov, res);
 	if (!st)
 		st = c0_support_solve(&cc, &cov, res);
@@ -300,7 +305,8 @@ static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
 
 /* lambda relative to the image's lambda_max: the largest of the tiles';
  * automatic: chosen from the noise of the subset's correlation images,
- * then for l1 from the peaks of a first solve. Collective. */
+ * then for l1 from the peaks of a first solve, or (lambda_cv) by
+ * cross-validation on the subset's halves. Collective. */
 static int stack_lambda(struct stack *k, struct c0_support_result *res)
 {
 	const struct c0_support_conf *c = k->c;
@@ -328,8 +334,12 @@ static int stack_lambda(struct stack *k, struct c0_support_result *res)
 	k->lm = k->hist = NULL;
 	if (!st && k->automatic && c->penalty == C0_PENALTY_L1) {
 		tn = c0_now();
-		st = c0_support_tiles_second(c, &k->s, &(struct c0_support_scale){ k->norm, k->rel * l1 }, l1, res);
+		if (c->lambda_cv)
+			st = c0_support_tiles_cv(c, &k->s, k->norm, l1, res);
+		else
+			st = c0_support_tiles_second(c, &k->s, &(struct c0_support_scale){ k->norm, k->rel * l1 }, l1, res);
 		k->rel = res->cv.chosen_rel;
+		res->cv.cv_seconds = c->lambda_cv ? c0_now() - tn : 0;
 		res->cv.seconds += c0_now() - tn;
 	}
 	return st;

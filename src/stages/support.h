@@ -34,8 +34,13 @@ struct c0_support_conf {
 	void *frame_ctx;
 	int guard;                 /* 1: streamed covariances clip each pixel's variance (c0_cov_guard
 				    * with c0_support_guard_ratio) */
+	const float *noise_map;    /* NULL, or the stack's H x W: subtracted from each pixel's variance before
+				    * the guard (c0_cov_acc_set_noise; the camera's read noise made even) */
+	int noise_map_w;           /* its width (the stack's) */
+	int lambda_cv;             /* automatic l1 lambda: 0 the rule's second step (peaks), 1 by
+				    * cross-validation of the frame halves (c0_lambda_cv) */
 };
-#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1 }
+#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0 }
 /* g of c0_cov_guard for this PSF: the smallest mean ratio of a point
  * source's signal in a pixel's 4 neighbours to its signal in the pixel,
  * over positions in and around the pixel (0.6 at 229 nm / 100 nm). */

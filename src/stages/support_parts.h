@@ -22,8 +22,9 @@ double c0_support_lambda_rel(const struct c0_support_conf *c);
 /* The errors that several paths share (their texts are read by users and tests) */
 int c0_support_fail_flat(void);
 int c0_support_fail_short(const struct c0_frames *in);
-/* A covariance accumulator for c's streamed stacks: with its pixel guard. */
-int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, struct c0_cov_acc **a);
+/* A covariance accumulator for c's streamed stacks: with its pixel guard and
+ * noise map; its pixel (0, 0) is the image's (y0, x0). */
+int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, int x0, int y0, struct c0_cov_acc **a);
 
 /* The covariance operator on cov's window for c's optics. */
 int c0_support_covop(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_covop *op);
@@ -36,6 +37,15 @@ void c0_support_correlate(struct c0_covop *op, const struct c0_cov *cov, double 
  * scale, else the window's own normalisation and lambda. */
 int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
 			    double **band, const struct c0_support_scale *g, struct c0_support_result *res);
+
+/* The l1 solve of ctx at ctx->lam from x as it is (a warm start), with c's
+ * solver and tolerance and at most maxit iterations (the automatic lambda's
+ * path, stages/lambda_cv.c); *iters: how many it made. */
+struct c0_covfit;
+int c0_support_l1_warm(const struct c0_support_conf *c, struct c0_covfit *ctx, int maxit, double *x, int *iters);
+/* x refitted without penalty on its own support (x > 0), from x, at most
+ * maxit iterations (tolerance C0_SUPPORT_TOL). */
+int c0_support_refit(struct c0_covfit *ctx, int maxit, double *x);
 
 /* The checks on in for c, and its tile grid (halo: two lags). */
 int c0_support_grid(const struct c0_support_conf *c, const struct c0_frames *in, struct c0_tiling *tl);
@@ -69,6 +79,11 @@ int c0_support_tiles_lambda(const struct c0_support_conf *c, struct c0_support_s
  * lambda, their peaks summed over tiles and ranks. Collective. */
 int c0_support_tiles_second(const struct c0_support_conf *c, struct c0_support_share *s,
 			    const struct c0_support_scale *g, double lmax, struct c0_support_result *res);
+/* The automatic lambda by cross-validation (stages/lambda.h): each subset
+ * tile's halves along the path at the image's norm and lambda_max (l1
+ * scale), the errors summed over tiles and ranks. Collective. */
+int c0_support_tiles_cv(const struct c0_support_conf *c, struct c0_support_share *s, double norm, double lmax,
+			struct c0_support_result *res);
 /* The localisation precision from the subset's halves. Collective: its
  * status is every rank's. */
 int c0_support_tiles_precision(const struct c0_support_conf *c, struct c0_support_share *s,

@@ -110,6 +110,36 @@ static int solve_l1(struct c0_covfit *ctx, const struct c0_fista_conf *fc, doubl
 	return st;
 }
 
+int c0_support_l1_warm(const struct c0_support_conf *c, struct c0_covfit *ctx, int maxit, double *x, int *iters)
+{
+	struct c0_fista_conf fc = { maxit, c0_support_tol(c) };
+	struct c0_fista_info info = { 0 };
+	int st = solve_l1(ctx, &fc, ctx->op->lip, c->solver == C0_SUPPORT_PRUNED, x, &info);
+	*iters = info.iters;
+	return st;
+}
+
+static int solve_masked(struct c0_covfit *ctx, const struct c0_fista_conf *fc, double lip, const uint8_t *mask, double *x,
+			struct c0_fista_info *info);
+
+int c0_support_refit(struct c0_covfit *ctx, int maxit, double *x)
+{
+	const size_t L = (size_t)ctx->op->Ly * ctx->op->Lx;
+	uint8_t *mask = c0_alloc(L, 1);
+	if (!mask)
+		return C0_ENOMEM;
+	for (size_t i = 0; i < L; i++)
+		mask[i] = x[i] > 0;
+	struct c0_fista_conf fc = { maxit, C0_SUPPORT_TOL };
+	struct c0_fista_info info = { 0 };
+	const double lam = ctx->lam;
+	ctx->lam = 0;
+	int st = solve_masked(ctx, &fc, ctx->op->lip, mask, x, &info);
+	ctx->lam = lam;
+	free(mask);
+	return st;
+}
+
 /* lambda = 0 with x free only on the mask (the noise variance on a given
  * support): FISTA on the mask's pixels alone, the whole grid's step */
 static int solve_masked(struct c0_covfit *ctx, const struct c0_fista_conf *fc, double lip, const uint8_t *mask, double *x,

@@ -69,7 +69,7 @@ static int stream_cov(const struct c0_support_conf *c, struct c0_frames *in, int
 	double t0 = c0_now();
 	struct c0_cov_acc *acc[2] = { NULL, NULL };
 	for (int k = 0; k < nacc && !st; k++)
-		st = c0_support_acc_new(c, in->width, in->height, c0_support_lag(c), &acc[k]);
+		st = c0_support_acc_new(c, in->width, in->height, c0_support_lag(c), 0, 0, &acc[k]);
 	if (!st)
 		st = each_frame(c, in, 0, 0, in->height, "covariance", add_alternate, &(struct alternate){ acc, nacc });
 	for (int k = 0; k < nacc; k++) {
@@ -174,7 +174,7 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 		return st;
 	double t0 = c0_now();
 	struct c0_cov_acc *acc = NULL;
-	st = c0_support_acc_new(c, W, H, c0_support_lag(c), &acc);
+	st = c0_support_acc_new(c, W, H, c0_support_lag(c), 0, 0, &acc);
 	if (!st)
 		st = each_frame(c, in, 0, 0, H, NULL, add_one, acc);
 	if (!st && in->count < 3)
@@ -235,13 +235,13 @@ int c0_support_stream_tiles(const struct c0_support_conf *c, struct c0_frames *i
 {
 	const int W = in->width, rows = s->yb - s->ya, d = c0_support_lag(c);
 	const int block = c0_cov_block_frames((size_t)W * in->height);
-	int st = c0_support_acc_new(c, W, rows, d, &s->acc);
+	int st = c0_support_acc_new(c, W, rows, d, 0, s->ya, &s->acc);
 	if (!st)
 		st = c0_cov_acc_set_block(s->acc, block);
 	size_t wmax = 0;
 	for (int k = s->k0; k < s->k1 && !st; k++) {
 		const struct c0_tile *t = &s->tl.t[k];
-		if (s->sub[k] && !(st = c0_support_acc_new(c, t->w, t->h, d, &s->odd[k - s->k0])))
+		if (s->sub[k] && !(st = c0_support_acc_new(c, t->w, t->h, d, t->x0, t->y0, &s->odd[k - s->k0])))
 			st = c0_cov_acc_set_block(s->odd[k - s->k0], block);
 		wmax = s->sub[k] && (size_t)t->w * t->h > wmax ? (size_t)t->w * t->h : wmax;
 	}

@@ -141,6 +141,79 @@ int c0_support_tiles_second(const struct c0_support_conf *c, struct c0_support_s
 	return st;
 }
 
+/* One subset tile's cross-validation path (stages/lambda.h) at the image's
+ * scale, the errors over its interior: its sums into v */
+static int tile_cv(const struct c0_support_conf *c, struct c0_support_share *s, int k, double norm, double lmax,
+		   struct c0_lambda_cv_sums *v)
+{
+	const struct c0_tile *t = &s->tl.t[k];
+	struct c0_cov_acc *o = s->odd[k - s->k0];
+	struct c0_cov ev, od;
+	int st = c0_cov_acc_window_even(s->acc, o, t->y0 - s->ya, t->x0, &ev);
+	if (st)
+		return st;
+	if (!(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od))) {
+		const int in[4] = { t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw };
+		st = c0_lambda_cv_window(c, &ev, &od, norm, lmax, in, v);
+		c0_cov_free(&od);
+	}
+	c0_cov_free(&ev);
+	return st;
+}
+
+/* The tiles' sums in tile order, on the points every tile reached (each
+ * went C0_LAMBDA_CV_PATIENCE past its own least) */
+static void cv_add(const struct c0_tiling *tl, const uint8_t *sub, const struct c0_lambda_cv_sums *v,
+		   struct c0_lambda_cv_sums *all)
+{
+	const int M = C0_LAMBDA_CV_MAX;
+	memset(all, 0, sizeof *all);
+	all->npts = M;
+	for (int k = 0; k < tl->n; k++) {
+		if (!sub[k])
+			continue;
+		all->npts = fmin(all->npts, v[k].npts), all->e0 += v[k].e0, all->nb += v[k].nb;
+		for (int j = 0; j < M; j++) {
+			all->err[j] += v[k].err[j];
+			for (int q = 0; q < M; q++)
+				all->s1[j][q] += v[k].s1[j][q], all->s2[j][q] += v[k].s2[j][q];
+		}
+	}
+}
+
+int c0_support_tiles_cv(const struct c0_support_conf *c, struct c0_support_share *s, double norm, double lmax,
+			struct c0_support_result *res)
+{
+	const struct c0_tiling *tl = &s->tl;
+	struct c0_first_fail fail = { 0 };
+	struct c0_progress pr;
+	int done = 0, nsub = 0;
+	struct c0_lambda_cv_sums *v = c0_alloc((size_t)tl->n + 1, sizeof *v), *all = v ? v + tl->n : NULL;
+	if (!v)
+		c0_first_fail_note(&fail, C0_ENOMEM);
+	for (int k = s->k0; k < s->k1; k++)
+		nsub += s->sub[k];
+	c0_progress_begin(&pr, "support (lambda, cross-validation)", nsub);
+#pragma omp parallel for schedule(dynamic, 1) if (tl->n > 1)
+	for (int k = s->k0; k < s->k1; k++) {
+		if (!s->sub[k] || !v)
+			continue;
+		c0_first_fail_note(&fail, tile_cv(c, s, k, norm, lmax, &v[k]));
+#pragma omp critical(c0_support_progress)
+		c0_progress_update(&pr, ++done);
+	}
+	c0_progress_end(&pr);
+	int st = c0_comm_status(c0_first_fail_raise(&fail));
+	if (!st) {
+		/* each tile's from one rank: the sums over ranks are exact */
+		c0_comm_sum((double *)v, (int)(tl->n * (sizeof *v / sizeof(double))));
+		cv_add(tl, s->sub, v, all);
+		c0_lambda_cv_choose(all, &res->cv);
+	}
+	free(v);
+	return st;
+}
+
 /* The automatic lambda on tiles needs the odd frames' covariance too; it is
  * kept for a subset of the tiles only, spread evenly over the grid in tile
  * order, whose interiors hold at most SUBSET_PX camera pixels (every tile up

@@ -8,7 +8,12 @@ SEEDS=5,6,7 in the environment: each member simulated with each seed, the
 Jaccard indices averaged over them (one 48x48 field of a sparse member holds
 a few short filaments, and its index jumps between neighbouring lambdas).
 SWEEP=... in the environment replaces the sweep's lambdas; MEMBERS=a,b,...
-keeps only those members; JOBS=N runs N solves at a time (one thread each)."""
+keeps only those members; JOBS=N runs N solves at a time (one thread each).
+GRID=1: the grid panel instead (angles x cameras x blinking x frames, issue 29)
+with a finer sweep (ratio sqrt 2, 11 points) and a column for the
+cross-validated lambda (--lambda-rule cv); the table then gives per member
+the Jaccard index and lambda / lambda_max of each automatic rule, its gap to
+the sweep's best and its ratio to the best lambda."""
 import json, os, subprocess, sys
 from concurrent.futures import ThreadPoolExecutor
 
@@ -41,10 +46,40 @@ PANEL = {
     "depth 0-400": ["--z-range", "0,400"],
     "no bleaching": ["--tau-bleach", "0"],
 }
+# the grid (issue 29): cameras ccd (the default), "scmos" (hot pixels) and
+# "emccd" (gain 10); blinking default (on 20 / off 40 ms), sparse fast
+# (10 / 120), dense slow (50 / 50); 500 and 200 frames; angles 62, 65, 70
+SCMOS = ["--hot-pixels", "0.01", "--snr", "0", "--read-noise", "3"]
+EMCCD = ["--gain", "10", "--snr", "0", "--read-noise", "2"]
+FAST = ["--tau-on", "10", "--tau-off", "120"]
+SLOW = ["--tau-on", "50", "--tau-off", "50"]
+F200 = ["--frames", "200"]
+GRID = {
+    "ccd 65 500": [],
+    "ccd 65 200": F200,
+    "ccd 62 500": ["--angles", "62"],
+    "ccd 70 500": ["--angles", "70"],
+    "scmos 65 500": SCMOS,
+    "emccd 65 500": EMCCD,
+    "ccd 65 500 fast": FAST,
+    "ccd 65 500 slow": SLOW,
+    "scmos 65 200": SCMOS + F200,
+    "emccd 65 500 fast": EMCCD + FAST,
+    "ccd 70 500 slow": ["--angles", "70"] + SLOW,
+    "ccd 62 200 fast": ["--angles", "62"] + F200 + FAST,
+    "scmos 70 500 slow": ["--angles", "70"] + SCMOS + SLOW,
+    "emccd 62 200": ["--angles", "62"] + EMCCD + F200,
+    "scmos 62 500 fast": ["--angles", "62"] + SCMOS + FAST,
+    "emccd 70 200 slow": ["--angles", "70"] + EMCCD + F200 + SLOW,
+}
+if os.environ.get("GRID"):
+    PANEL = GRID
 if os.environ.get("MEMBERS"):
     PANEL = {k: PANEL[k] for k in os.environ["MEMBERS"].split(",")}
 SWEEP = {"l1": ["4e-2", "2e-2", "1e-2", "5e-3", "2.5e-3", "1.2e-3"],
          "cel0": ["1e-4", "3e-5", "1e-5", "3e-6", "1e-6", "3e-7"]}[PEN]
+if os.environ.get("GRID"):
+    SWEEP = ["%.3g" % (2e-2 * 2 ** (-k / 2)) for k in range(11)]
 if os.environ.get("SWEEP"):      # another sweep, e.g. SWEEP=3e-2,2e-2,1.5e-2,1e-2,7e-3,5e-3
     SWEEP = os.environ["SWEEP"].split(",")
 
@@ -59,12 +94,14 @@ def ji(sim, out):
     return json.loads(r.stdout)["support"]["jaccard"]
 
 
+
+
 def solve(job):
     sim, lam = job
     out = sim + "_out_" + lam
     fwhm = str(json.load(open(sim + "/sim.json"))["parameters"]["fwhm_nm"])
     run([BIN, "support", "-o", out, "--force", "--fwhm", fwhm, "--penalty", PEN, "--threads", "1", *EXTRA,
-         sim + "/stack_q01.tif"] + ([] if lam == "auto" else ["--lambda", lam]))
+         sim + "/stack_q01.tif"] + ([] if lam == "auto" else ["--lambda-rule", "cv"] if lam == "cv" else ["--lambda", lam]))
     rep = json.load(open(out + "/report.json"))["support"][0]
     return ji(sim, out), rep["lambda_relative"]
 
@@ -77,12 +114,19 @@ for name, extra in PANEL.items():
         if not os.path.exists(sim + "/truth_support.tif"):
             run([BIN, "simulate", "-o", sim, "--force", "--seed", seed] + COMMON + extra)
         sims[(name, seed)] = sim
-jobs = [(sims[k], lam) for k in sims for lam in SWEEP + ["auto"]]
+AUTO = ["auto"] + (["cv"] if os.environ.get("GRID") else [])
+jobs = [(sims[k], lam) for k in sims for lam in SWEEP + AUTO]
 with ThreadPoolExecutor(int(os.environ.get("JOBS", "1"))) as ex:
     got = dict(zip(jobs, ex.map(solve, jobs)))
 for name in PANEL:
     res = {lam: [sum(got[(sims[(name, s)], lam)][i] for s in SEEDS) / len(SEEDS) for i in (0, 1)]
-           for lam in SWEEP + ["auto"]}
+           for lam in SWEEP + AUTO}
     best = max(res[l][0] for l in SWEEP)
+    if os.environ.get("GRID"):
+        lbest = max(SWEEP, key=lambda l: res[l][0])
+        print("| %s | %s | %.3f (%s) | %s |" % (name, " | ".join("%.3f" % res[l][0] for l in SWEEP), best, lbest, " | ".join(
+              "%.3f (%.2g) | %+.3f | %.2f" % (res[a][0], res[a][1], res[a][0] - best, res[a][1] / float(lbest))
+              for a in AUTO)), flush=True)
+        continue
     print("| %s | %s | %.3f (%.2g) | %.3f | %+.3f |" % (name, " | ".join("%.3f" % res[l][0] for l in SWEEP),
           res["auto"][0], res["auto"][1], best, res["auto"][0] - best), flush=True)

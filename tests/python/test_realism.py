@@ -58,7 +58,8 @@ def test_depth(tmp):
         print("seed %d: median depth error %.1f nm, median signed %+.1f nm; bleaching rate %.3g/frame (true %.3g, sd %.2g)"
               % (seed, med, bias, k, kt, rep["bleaching"]["rate_sd_per_frame"]), file=sys.stderr)
         check(med <= 15, "seed %d: median depth error %.1f <= 15 nm" % (seed, med))
-        check(abs(bias) <= 5, "seed %d: |median signed error| %.1f <= 5 nm" % (seed, bias))
+        # issue 29: measured -1.6 and -0.6 nm; the columns' mean depth read +3.0 and +3.9 (docs/parameters.md, "Depth bias")
+        check(abs(bias) <= 3, "seed %d: |median signed error| %.1f <= 3 nm" % (seed, bias))
         check(abs(k / kt - 1) <= 0.15, "seed %d: bleaching rate %.3g within 15%% of the simulated %.3g" % (seed, k, kt))
         fade = sim["estimates"]["bleaching"]["fade_last_vs_first"]
         check(0.14 <= fade <= 0.21, "seed %d: the simulated fade by the last stack is the paper's (%.3f)" % (seed, fade))
@@ -86,8 +87,11 @@ def test_close_pairs(tmp):
     if d is None or d0 is None:
         return
     med, med0 = d["median_abs_error_nm"], d0["median_abs_error_nm"]
-    print("pairs 90 nm apart: median depth error %.1f nm guided, %.1f nm plain window" % (med, med0), file=sys.stderr)
+    sg = d["median_signed_error_nm"]
+    print("pairs 90 nm apart: median depth error %.1f nm (signed %+.1f nm) guided, %.1f nm (signed %+.1f nm) plain window"
+          % (med, sg, med0, d0["median_signed_error_nm"]), file=sys.stderr)
     check(med <= 20, "pairs 90 nm apart: median depth error %.1f <= 20 nm" % med)
+    check(abs(sg) <= 5, "pairs 90 nm apart: |median signed depth error| %.1f <= 5 nm" % sg)
     check(med0 >= med + 8, "pairs 90 nm apart: the plain window %.1f nm, the guided %.1f nm" % (med0, med))
 
 

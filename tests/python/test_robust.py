@@ -3,12 +3,15 @@ every refusal is one line naming the file or option and the value, comes
 before the heavy work, and leaves OUTDIR as it was; outputs are a
 transaction (a failed or killed --force rerun keeps the previous set whole);
 multi-channel files are read as one stack per channel; the ImageJ
-calibration of the outputs is what Fiji shows.
+calibration of the outputs is what Fiji shows; running out of memory is
+one line naming the step and the size, and leaves no output (issue 36).
 
-usage: test_robust.py COL0RME
+usage: test_robust.py COL0RME [full|quick]   (quick: the sanitizer build, no memory limit)
 """
 import json
 import os
+import re
+import resource
 import shutil
 import signal
 import subprocess
@@ -22,6 +25,7 @@ import tifffile
 from checks import check, done, refused
 
 CLI = sys.argv[1]
+MODE = sys.argv[2] if len(sys.argv) > 2 else "full"
 
 
 def cli(*args, **kw):
@@ -319,6 +323,32 @@ def test_matirf_psf(tmp, big):
     check(not os.path.exists(bad), "nothing written by the refused FWHMs")
 
 
+def test_out_of_memory(tmp, big):
+    """issue 36: run under address-space limits rising from below what the program needs to load to above
+    what the run needs; each run either completes or fails with one line naming the step and the size it
+    asked for, a non-zero exit and no output folder (nor a staging one). One thread and one malloc arena
+    keep the need small and about the same on any machine (~35 MB on 40x40x200)."""
+    parent = os.path.join(tmp, "oom")
+    os.mkdir(parent)
+    out = os.path.join(parent, "out")
+    env = dict(os.environ, OMP_NUM_THREADS="1", MALLOC_ARENA_MAX="1")
+    said, ran = [], False
+    for mb in range(16, 132, 4):
+        lim = mb << 20
+        p = subprocess.run([CLI, "run", "--fwhm", "229", "--angles", "62,66", "-o", out, *big], capture_output=True,
+                           text=True, env=env, preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (lim, lim)))
+        if p.returncode == 0:
+            ran = os.path.isfile(os.path.join(out, "volume.tif"))
+            break
+        m = re.search(r"out of memory in the (\w+) step allocating [0-9.]+ MB \(peak resident so far [0-9]+ MB\)", p.stderr)
+        if m:
+            check(refused(p, "col0rme run: error: out of memory in the"), "%d MB: one line %r" % (mb, p.stderr.strip()))
+            said.append(m.group(1))
+        # below what loading needs, the loader or a library's own allocator fails (no line of ours): no output either way
+        check(not os.path.exists(out) and not staging_left(parent), "%d MB: no output folder left" % mb)
+    check(said and ran, "some limits fail naming a step (%s), a larger one completes" % ", ".join(sorted(set(said))))
+
+
 with tempfile.TemporaryDirectory() as tmp:
     s16 = simulate(tmp, "d16", 16, 16, 40)
     s20 = simulate(tmp, "d20", 20, 16, 40)
@@ -331,4 +361,6 @@ with tempfile.TemporaryDirectory() as tmp:
     test_outdir_messages(tmp, s16)
     test_subcritical(tmp)
     test_matirf_psf(tmp, big)
+    if MODE == "full":
+        test_out_of_memory(tmp, big)
 done()

@@ -54,7 +54,7 @@ def same_files(a, b, names):
     return all(np.array_equal(pages(os.path.join(a, n)), pages(os.path.join(b, n))) for n in names)
 
 
-VOLATILE = {"timings_s", "created", "argv", "versions", "omp_wait_policy", "threads", "wall_s", "cpu_s", "seconds",
+VOLATILE = {"timings_s", "peak_rss_mb", "rss_rise_mb", "created", "argv", "versions", "omp_wait_policy", "threads", "wall_s", "cpu_s", "seconds",
             "mpi_ranks"}
 
 

@@ -1,0 +1,109 @@
+"""Whole camera frames (issue 36): `col0rme run` on 5 angles of simulated
+stacks (simulate --seed 3, default angles) at 512x512, 1024x1024 and
+2048x2048, one table: frames, wall seconds, peak RSS, each step's seconds
+and the peak RSS after it from report.json, throughput, and the ratio to a baseline measured in the
+same run: main's binary on the same stacks when --baseline BIN is given,
+else the first row, per pixel and frame.
+
+usage (from the repository root, after the build):
+  /usr/bin/python3 bench/whole_frames.py [--sizes 512,1024,2048] [--frames 500]
+      [--frames-2048 100] [--baseline OTHER_BUILD/col0rme] [--data DIR]
+--data keeps the simulated stacks there and reuses them (5 stacks of
+2048x2048x100 are ~4 GB, of 1024x1024x500 ~5 GB); without it they go to a
+temporary folder, each size's removed after its rows.
+A run that fails (out of memory) gets its row with the last error line.
+
+Each run is its own process; peak RSS is its maximum resident set size
+(wait4). Throughput is camera pixels x frames x stacks per wall second."""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+STEPS = ("drift", "support", "intensity", "render", "bleaching", "matirf")
+
+
+def timed(cmd):
+    """(wall s, peak RSS MiB, exit status, last stderr line) of one child process"""
+    t0 = time.perf_counter()
+    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    err = p.stderr.read()
+    _, status, ru = os.wait4(p.pid, 0)
+    lines = err.strip().splitlines()
+    return time.perf_counter() - t0, ru.ru_maxrss / 1024.0, os.waitstatus_to_exitcode(status), lines[-1] if lines else ""
+
+
+def stacks(cli, data, w, frames):
+    d = os.path.join(data, "s%d_%d" % (w, frames))
+    if not os.path.isfile(os.path.join(d, "sim.json")):
+        shutil.rmtree(d, ignore_errors=True)
+        t = time.perf_counter()
+        subprocess.run([cli, "simulate", "-o", d, "--width", str(w), "--height", str(w), "--frames", str(frames),
+                        "--seed", "3"], check=True, capture_output=True)
+        print("simulated %dx%dx%d in %.0f s" % (w, w, frames, time.perf_counter() - t), file=sys.stderr, flush=True)
+    angles = json.load(open(os.path.join(d, "sim.json")))["parameters"]["angles_deg"]
+    return d, ",".join("%.6g" % a for a in angles), [os.path.join(d, "stack_q%02d.tif" % q) for q in range(1, len(angles) + 1)]
+
+
+def run(cli, d, angles, files, tag):
+    out = os.path.join(d, "out_" + tag)
+    dt, mem, rc, last = timed([cli, "run", "--fwhm", "229", "--angles", angles, "--force", "-o", out, *files])
+    rep = json.load(open(os.path.join(out, "report.json"))) if rc == 0 else {}
+    shutil.rmtree(out, ignore_errors=True)
+    return dict(wall=dt, mem=mem, rc=rc, last=last, t=rep.get("timings_s", {}), peak=rep.get("peak_rss_mb", {}))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--build", default=os.environ.get("BUILD", "build"))
+    ap.add_argument("--sizes", default="512,1024,2048")
+    ap.add_argument("--frames", type=int, default=500)
+    ap.add_argument("--frames-2048", type=int, default=100, help="frames at 2048x2048 (stacks of 2048x2048x500 are 21 GB)")
+    ap.add_argument("--baseline", help="another build's col0rme, run on the same stacks (the ratio column)")
+    ap.add_argument("--data", help="keep and reuse the simulated stacks here")
+    a = ap.parse_args()
+    cli = os.path.join(a.build, "col0rme")
+    data = a.data or tempfile.mkdtemp(prefix="c0_whole_")
+    os.makedirs(data, exist_ok=True)
+    rows, ref = [], None
+    try:
+        for w in (int(s) for s in a.sizes.split(",")):
+            T = a.frames_2048 if w >= 2048 else a.frames
+            d, angles, files = stacks(cli, data, w, T)
+            work = w * w * T * len(files)
+            r = run(cli, d, angles, files, "new")
+            b = run(a.baseline, d, angles, files, "base") if a.baseline else None
+            if b and b["rc"] == 0 and r["rc"] == 0:
+                ratio = "%.2fx faster, %.2fx the memory of the baseline" % (b["wall"] / r["wall"], r["mem"] / b["mem"])
+            elif b:
+                ratio = "baseline: %s" % ("%.0f s, %.0f MiB" % (b["wall"], b["mem"]) if b["rc"] == 0 else "failed: " + b["last"])
+            elif r["rc"] == 0 and ref is None:
+                ref, ratio = r["wall"] / work, "reference"
+            else:
+                ratio = "%.2fx the reference's time per pixel-frame" % (r["wall"] / work / ref) if r["rc"] == 0 and ref else ""
+            steps = ", ".join("%s %.1f s %s MiB" % (k, r["t"][k], r["peak"].get(k, "?")) for k in STEPS if k in r["t"]) \
+                if r["rc"] == 0 else \
+                "FAILED (exit %d) after %.0f s: %s" % (r["rc"], r["wall"], r["last"])
+            rows.append(("%dx%d" % (w, w), "%d x %d" % (len(files), T), "%.1f" % r["wall"], "%.0f" % r["mem"], steps,
+                         "%.1f" % (work / r["wall"] / 1e6), ratio))
+            print(" | ".join(rows[-1]), file=sys.stderr, flush=True)
+            if not a.data:
+                shutil.rmtree(d)
+    finally:
+        if not a.data:
+            shutil.rmtree(data, ignore_errors=True)
+    hdr = ("frame", "stacks x frames", "wall s", "peak RSS MiB", "steps: seconds, peak RSS after it", "Mpx-frames/s", "ratio")
+    wd = [max(len(str(x[i])) for x in rows + [hdr]) for i in range(len(hdr))]
+    print("load %.1f, %d CPUs, %s" % (os.getloadavg()[0], os.cpu_count(), cli))
+    print(" | ".join(h.ljust(n) for h, n in zip(hdr, wd)))
+    print("-+-".join("-" * n for n in wd))
+    for x in rows:
+        print(" | ".join(str(c).ljust(n) for c, n in zip(x, wd)))
+
+
+if __name__ == "__main__":
+    main()
