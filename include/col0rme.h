@@ -181,7 +181,7 @@ int c0_result_nstacks(const struct c0_result *r);
 const uint8_t *c0_result_support(const struct c0_result *r, int *h, int *w);          /* union of the masks, fine grid */
 const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *w);   /* stack q (0-based), fine grid */
 const float *c0_result_background(const struct c0_result *r, int q, int *h, int *w);  /* stack q, camera grid */
-const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w);    /* NULL in 2D mode */
+const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w);    /* NULL in 2D mode; made on the first call (NULL when out of memory) */
 const float *c0_result_depth(const struct c0_result *r, int *h, int *w);              /* depth (nm), 0 where empty */
 const float *c0_result_baseline_volume(const struct c0_result *r, int *nz, int *h, int *w); /* camera grid; with baseline */
 const double *c0_result_z_nm(const struct c0_result *r, int *nz);                     /* depth bin centres */

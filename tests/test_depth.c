@@ -50,12 +50,20 @@ static void test_pool_window(void)
 	for (int i = 0; i < 8; i++)
 		f[i] = (float)(1 + i);
 	const float *own[2] = { own0, own1 }, *pool[2] = { p0, p1 };
-	c0_pool_rescale(f, 2, 2, 2, 2, own, pool);
+	const int all[4] = { 0, 1, 2, 3 }, two[2] = { 1, 3 };
+	c0_pool_rescale(f, 2, all, 4, 2, own, pool);
 	CHECK_CLOSE(f[0], 1 * 2.0 / 4, 1e-6);   /* (1 + 1) / (2 + 2) */
 	CHECK_CLOSE(f[4], 5 * 2.0 / 4, 1e-6);
 	CHECK_CLOSE(f[1], 2 * 3.0 / 3, 1e-6);
 	CHECK_CLOSE(f[2], 0, 0);
 	CHECK_CLOSE(f[7], 8 * 6.0 / 4, 1e-6);
+	/* by columns: pixels 1 and 3 only, bin j of column k at f[2 j + k] */
+	float g[4] = { 2, 8, 6, 8 };
+	c0_pool_rescale(g, 2, two, 2, 2, own, pool);
+	CHECK_CLOSE(g[0], 2 * 3.0 / 3, 1e-6);
+	CHECK_CLOSE(g[1], 8 * 6.0 / 4, 1e-6);
+	CHECK_CLOSE(g[2], 6 * 3.0 / 3, 1e-6);
+	CHECK_CLOSE(g[3], 8 * 6.0 / 4, 1e-6);
 }
 
 /* The guided window against the slow obvious sum (a neighbour counts when
@@ -162,10 +170,18 @@ static void test_depthcode(void)
 	f[(NZ - 1) * W + 1] = 3;        /* pixel 1, last bin */
 	uint8_t *rgb;
 	int ow, oh;
-	CHECK(c0_depthcode(f, NZ, H, W, 0, 400, &rgb, &ow, &oh) == C0_OK);
+	CHECK(c0_depthcode(f, NULL, H * W, NZ, H, W, 0, 400, &rgb, &ow, &oh) == C0_OK);
 	CHECK(ow > W + 12 && oh >= H);
 	CHECK(rgb[0] == 255 && rgb[1] == 0 && rgb[2] == 0);          /* near the glass: red */
 	CHECK(rgb[3] == 0 && rgb[4] == 0 && rgb[5] == 255);          /* deep: blue */
+	/* the same volume by columns (pixel 1 alone): the same image, pixel 0 black */
+	float g[NZ] = { 0 };
+	const int one[1] = { 1 };
+	g[NZ - 1] = 3;
+	uint8_t *rgb2;
+	CHECK(c0_depthcode(g, one, 1, NZ, H, W, 0, 400, &rgb2, &ow, &oh) == C0_OK);
+	CHECK(rgb2[0] == 0 && rgb2[1] == 0 && rgb2[2] == 0 && memcmp(rgb2 + 3, rgb + 3, (size_t)ow * oh * 3 - 3) == 0);
+	free(rgb2);
 	/* the bar runs from red at the top to blue at the bottom */
 	int bx = W + 8 + 6;
 	const uint8_t *top = rgb + ((size_t)2 * ow + bx) * 3, *bot = rgb + ((size_t)(oh - 3 - 10) * ow + bx) * 3;
@@ -255,7 +271,8 @@ static void test_depth_noise_free(void)
 	c0_run_conf_matirf(&rc, &c);
 	struct c0_matirf_result r;
 	CHECK(c0_matirf_solve(&c, NQ, ANG, NULL, (const float *const *)img, N, N, &r) == C0_OK);
-	CHECK(c0_depth_fit(&t, NQ, ANG, NULL, r.nz, c.z0_nm, c.dz_nm, r.f, (size_t)N * N, r.depth) == C0_OK);
+	float *f = c0_matirf_dense(&r);   /* the volume on the whole grid (the solve holds its columns) */
+	CHECK(f && c0_depth_fit(&t, NQ, ANG, NULL, r.nz, c.z0_nm, c.dz_nm, f, (size_t)N * N, r.depth) == C0_OK);
 	double *e = malloc(sizeof *e * N * N), *em = malloc(sizeof *em * N * N), *ea = malloc(sizeof *ea * N * N);
 	int n = 0;
 	for (int k = 0; k < N * N; k++) {
@@ -263,7 +280,7 @@ static void test_depth_noise_free(void)
 			continue;
 		double s = 0, sz = 0;
 		for (int j = 0; j < r.nz; j++)
-			s += r.f[(size_t)j * N * N + k], sz += r.f[(size_t)j * N * N + k] * r.z_nm[j];
+			s += f[(size_t)j * N * N + k], sz += f[(size_t)j * N * N + k] * r.z_nm[j];
 		e[n] = r.depth[k] - truth[k], ea[n] = fabs(e[n]), em[n] = sz / s - truth[k], n++;
 	}
 	qsort(e, n, sizeof *e, cmp_double), qsort(em, n, sizeof *em, cmp_double), qsort(ea, n, sizeof *ea, cmp_double);
@@ -276,7 +293,7 @@ static void test_depth_noise_free(void)
 	c0_matirf_result_free(&r);
 	for (int q = 0; q < NQ; q++)
 		free(img[q]);
-	free(truth), free(e), free(em), free(ea);
+	free(f), free(truth), free(e), free(em), free(ea);
 }
 
 int main(void)

@@ -10,6 +10,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static char dir[256];
@@ -91,6 +92,29 @@ static void test_bigtiff(void)
 	CHECK(c0_tiff_open(path, &r) == C0_OK);
 	CHECK(c0_tiff_get_info(r)->bigtiff);
 	c0_tiff_close(r);
+}
+
+/* deflated strips: the same values back, several strips a plane (rows of
+ * 512 KiB, 2 a strip), several planes, mostly zero; the bound on the bytes
+ * keeps a large one classic TIFF (ImageJ reads no BigTIFF) */
+static void test_deflate(void)
+{
+	char path[512];
+	snprintf(path, sizeof path, "%s/deflate.tif", dir);
+	enum { W = 131072, H = 5, Z = 3 };
+	float *v = calloc((size_t)W * H * Z, sizeof *v);
+	for (int i = 0; i < 1000; i++)
+		v[(size_t)i * 1231 % ((size_t)W * H * Z)] = (float)i - 300.5f;
+	struct c0_tiff_wopts o = { .width = W, .height = H, .slices = Z, .dtype = C0_F32, .deflate = 1, .max_bytes = 1 << 20 };
+	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
+	struct c0_tiff_info in;
+	float *b = NULL;
+	CHECK(c0_tiff_load_f32(path, &in, &b) == C0_OK);
+	CHECK(b && memcmp(b, v, sizeof *v * W * H * Z) == 0);
+	CHECK(strcmp(in.compression, "deflate") == 0 && !in.bigtiff && in.slices == Z);
+	struct stat st;
+	CHECK(stat(path, &st) == 0 && st.st_size < (off_t)W * H * Z * 4 / 20);
+	free(b), free(v);
 }
 
 static void test_abort_leaves_nothing(void)
@@ -262,6 +286,7 @@ int main(void)
 	RUN(test_roundtrip);
 	RUN(test_integer_clamp);
 	RUN(test_bigtiff);
+	RUN(test_deflate);
 	RUN(test_abort_leaves_nothing);
 	RUN(test_bad_input);
 	RUN(test_imagej_meta);

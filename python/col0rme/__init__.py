@@ -161,16 +161,31 @@ class Result:
             p = L.c0_result_background(handle, q, ref(h), ref(w))
             if p:
                 self.background.append(_copy(p, (h.value, w.value), np.float32))
-        p = L.c0_result_volume(handle, ref(nz), ref(h), ref(w))
-        self.volume = _copy(p, (nz.value, h.value, w.value), np.float32)
-        p = L.c0_result_baseline_volume(handle, ref(nz), ref(h), ref(w))
-        self.baseline_volume = _copy(p, (nz.value, h.value, w.value), np.float32)
+        self._vols = {}
         p = L.c0_result_depth(handle, ref(h), ref(w))
         self.depth = _copy(p, (h.value, w.value), np.float32)
         p = L.c0_result_z_nm(handle, ref(nz))
         self.z_nm = _copy(p, (nz.value,), np.float64)
         j = L.c0_result_report_json(handle)
         self.report = json.loads(j.decode()) if j else {}
+
+    def _volume(self, name):
+        """The whole volume, copied on first use: the run holds only the
+        support's columns, and on a whole camera frame the volume is GBs."""
+        if name not in self._vols:
+            nz, h, w = ctypes.c_int(), ctypes.c_int(), ctypes.c_int()
+            ref = ctypes.byref
+            p = getattr(_L(), name)(self._h, ref(nz), ref(h), ref(w))
+            self._vols[name] = _copy(p, (nz.value, h.value, w.value), np.float32)
+        return self._vols[name]
+
+    @property
+    def volume(self):
+        return self._volume("c0_result_volume")
+
+    @property
+    def baseline_volume(self):
+        return self._volume("c0_result_baseline_volume")
 
     def write(self, outdir, force=False):
         """Writes the files `col0rme run` writes (volume.tif, report.json, report.html, ...)."""

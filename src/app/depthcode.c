@@ -51,9 +51,10 @@ static int cmp_float(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-int c0_depthcode(const float *f, int nz, int h, int w, double z0, double z1, uint8_t **rgb, int *ow, int *oh)
+int c0_depthcode(const float *f, const int *pixel, size_t M, int nz, int h, int w, double z0, double z1, uint8_t **rgb,
+		 int *ow, int *oh)
 {
-	const size_t np = (size_t)h * w;
+	const size_t np = M;
 	char top[32], bot[32];
 	snprintf(top, sizeof top, "%g", z0);
 	snprintf(bot, sizeof bot, "%gnm", z1);
@@ -84,23 +85,22 @@ int c0_depthcode(const float *f, int nz, int h, int w, double z0, double z1, uin
 	double col[512][3];
 	for (int j = 0; j < nz && j < 512; j++)
 		lut(nz > 1 ? (double)j / (nz - 1) : 0, col[j]);
-	for (int y = 0; y < h; y++)
-		for (int x = 0; x < w; x++) {
-			double c[3] = { 0, 0, 0 }, t = 0;
-			size_t p = (size_t)y * w + x;
-			for (int j = 0; j < nz && j < 512; j++) {
-				double v = fmax(f[j * np + p], 0);
-				t += v;
-				for (int k = 0; k < 3; k++)
-					c[k] += v * col[j][k];
-			}
-			/* the hue is the intensity-weighted mix; the brightness goes as
-			 * the square root of the intensity so that dim structures show */
-			double b = t > 0 ? sqrt(fmin(t / norm, 1)) / t : 0;
-			uint8_t *o = *rgb + ((size_t)y * *ow + x) * 3;
+	for (size_t p = 0; p < M; p++) {    /* the image's other pixels stay black */
+		const size_t y = pixel ? (size_t)pixel[p] / w : p / w, x = pixel ? (size_t)pixel[p] % w : p % w;
+		double c[3] = { 0, 0, 0 }, t = 0;
+		for (int j = 0; j < nz && j < 512; j++) {
+			double v = fmax(f[j * np + p], 0);
+			t += v;
 			for (int k = 0; k < 3; k++)
-				o[k] = (uint8_t)lrint(255 * fmin(c[k] * b, 1));
+				c[k] += v * col[j][k];
 		}
+		/* the hue is the intensity-weighted mix; the brightness goes as
+		 * the square root of the intensity so that dim structures show */
+		double b = t > 0 ? sqrt(fmin(t / norm, 1)) / t : 0;
+		uint8_t *o = *rgb + ((size_t)y * *ow + x) * 3;
+		for (int k = 0; k < 3; k++)
+			o[k] = (uint8_t)lrint(255 * fmin(c[k] * b, 1));
+	}
 	/* the bar: z0 at the top, z1 at the bottom, as the labels say */
 	const int bar_top = 2, bar_h = *oh - 4 - 5 * SCALE;
 	for (int y = 0; y < bar_h; y++) {

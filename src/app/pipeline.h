@@ -59,6 +59,9 @@ struct c0_result {
 	float *render;               /* n planes Ly x Lx, after the render step */
 	double render_sd_nm;
 	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
+	/* vol and base on the whole grid, made when the library's caller first
+	 * asks for them (c0_result_volume): the run holds only their columns */
+	float *vol_dense, *base_dense;
 };
 
 /* A step's bookkeeping: its name for the out-of-memory message while it

@@ -9,6 +9,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -77,6 +78,54 @@ static int write_means(const struct c0_result *r, struct c0_outdir *out)
 	return st;
 }
 
+/* A volume past this many bytes whose columns cover less than half the grid
+ * is written deflated: mostly-zero planes shrink a hundredfold and more. */
+#define C0_VOLUME_DEFLATE_BYTES (256LL << 20)
+
+/* Deflate for a large, mostly-zero volume, and a bound on its file: at
+ * most 10 bytes a column value (4 literals of at most 9 bits, and the zero
+ * run it breaks resumed by a match of at most 31 bits), the zeros at 50:1
+ * (deflate reaches 1000:1 on them) and 64 bytes a strip. A bound too low
+ * only makes libtiff refuse the write past 4 GiB, never a broken file. */
+static void volume_deflate(const struct c0_matirf_result *v, struct c0_tiff_wopts *o)
+{
+	const size_t np = (size_t)v->ny * v->nx, plane = np * sizeof(float);
+	if (!((int64_t)(plane * v->nz) > C0_VOLUME_DEFLATE_BYTES && (size_t)v->M < np / 2))
+		return;
+	o->deflate = 1;
+	o->max_bytes = (int64_t)v->nz * (int64_t)(10.0 * v->M + plane / 50.0 + 64.0 * v->ny) + (1 << 20);
+}
+
+/* The volume, plane by plane from its columns (stages/matirf.h): one
+ * plane in memory, never the whole grid times the depth bins. The display
+ * range is the values' (0 among them when some pixel is off the columns),
+ * as c0_tiff_save_f32 would set it. */
+static int save_volume(const char *path, struct c0_tiff_wopts o, const struct c0_matirf_result *v)
+{
+	const size_t np = (size_t)v->ny * v->nx, n = (size_t)v->M * v->nz;
+	volume_deflate(v, &o);
+	float lo = (size_t)v->M < np ? 0 : INFINITY, hi = (size_t)v->M < np ? 0 : -INFINITY;
+	for (size_t i = 0; i < n; i++) {
+		if (v->f[i] < lo) lo = v->f[i];
+		if (v->f[i] > hi) hi = v->f[i];
+	}
+	if (lo <= hi)
+		o.display_min = lo, o.display_max = hi > lo ? hi : lo + 1;
+	float *plane = c0_alloc(np, sizeof *plane);
+	struct c0_tiff_writer *w = NULL;
+	int st = plane ? c0_tiff_create(path, &o, &w) : C0_ENOMEM;
+	for (int j = 0; !st && j < v->nz; j++) {
+		c0_matirf_plane(v, j, plane);
+		st = c0_tiff_write_plane(w, plane);
+	}
+	free(plane);
+	if (st) {
+		c0_tiff_abort(w);
+		return st;
+	}
+	return c0_tiff_commit(w);
+}
+
 /* PREFIXvolume.tif, PREFIXdepth.tif (mean depth) and PREFIXdepth.png */
 static int write_volume(const struct c0_result *r, const struct c0_matirf_result *v, double pixel_nm,
 			const char *prefix, struct c0_outdir *out)
@@ -86,7 +135,7 @@ static int write_volume(const struct c0_result *r, const struct c0_matirf_result
 				   .pixel_size_nm = pixel_nm, .z_spacing_nm = r->dz_nm, .z_origin_nm = r->z0_nm + r->dz_nm / 2,
 				   .software = "col0rme" };
 	snprintf(name, sizeof name, "%svolume.tif", prefix);
-	int st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, v->f);
+	int st = save_volume(c0_outdir_file(out, name), o, v);
 	if (st)
 		return st;
 	o.slices = 1;
@@ -95,7 +144,7 @@ static int write_volume(const struct c0_result *r, const struct c0_matirf_result
 		return st;
 	uint8_t *rgb;
 	int w, h;
-	if ((st = c0_depthcode(v->f, v->nz, v->ny, v->nx, r->z0_nm, r->z0_nm + v->nz * r->dz_nm, &rgb, &w, &h)))
+	if ((st = c0_depthcode(v->f, v->pixel, (size_t)v->M, v->nz, v->ny, v->nx, r->z0_nm, r->z0_nm + v->nz * r->dz_nm, &rgb, &w, &h)))
 		return st;
 	snprintf(name, sizeof name, "%sdepth.png", prefix);
 	st = c0_png_write_rgb(c0_outdir_file(out, name), w, h, rgb);

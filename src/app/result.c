@@ -65,6 +65,7 @@ void c0_result_free(struct c0_result *r)
 	free(r->sres), free(r->ires), free(r->corrected), free(r->mask), free(r->names), free(r->json);
 	c0_drift_free(r->drift), free(r->render), free(r->mean);
 	c0_matirf_result_free(&r->vol), c0_matirf_result_free(&r->base);
+	free(r->vol_dense), free(r->base_dense);
 	cJSON_Delete(r->rep);
 	free(r);
 }
@@ -104,22 +105,26 @@ const float *c0_result_background(const struct c0_result *r, int q, int *h, int 
 	return r->ires[q].b;
 }
 
-static const float *vol(const struct c0_matirf_result *v, int *nz, int *h, int *w)
+/* the whole volume, made from its columns on the first call and kept in
+ * *dense (the result is const to its callers, the cache is not) */
+static const float *vol(const struct c0_matirf_result *v, float **dense, int *nz, int *h, int *w)
 {
 	if (nz)
 		*nz = v->nz;
 	dims(h, w, v->ny, v->nx);
-	return v->f;
+	if (v->f && !*dense)
+		*dense = c0_matirf_dense(v);
+	return *dense;
 }
 
 const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w)
 {
-	return vol(&r->vol, nz, h, w);
+	return vol(&r->vol, &((struct c0_result *)r)->vol_dense, nz, h, w);
 }
 
 const float *c0_result_baseline_volume(const struct c0_result *r, int *nz, int *h, int *w)
 {
-	return vol(&r->base, nz, h, w);
+	return vol(&r->base, &((struct c0_result *)r)->base_dense, nz, h, w);
 }
 
 const float *c0_result_depth(const struct c0_result *r, int *h, int *w)

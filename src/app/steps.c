@@ -243,6 +243,20 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	return C0_OK;
 }
 
+/* the single-depth fit of each column (stages/depthfit.h) into res->depth
+ * at its pixel; 0 off the columns, as their volume */
+static int depth_fit_cols(const struct c0_matirf_conf *m, const struct c0_run_conf *c, int nq, struct c0_matirf_result *res)
+{
+	float *d = c0_alloc(res->M ? (size_t)res->M : 1, sizeof *d);
+	int st = d ? c0_depth_fit(&m->tirf, nq, c->angles, c->ngains ? c->gains : NULL, res->nz, m->z0_nm, m->dz_nm, res->f,
+				  (size_t)res->M, d)
+		   : C0_ENOMEM;
+	for (size_t k = 0; !st && k < (size_t)res->M; k++)
+		res->depth[res->pixel[k]] = d[k];
+	free(d);
+	return st;
+}
+
 int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
 		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline)
 {
@@ -254,12 +268,13 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	if (st)
 		return st;
 	if (own) {
-		c0_pool_rescale(res->f, res->nz, ny, nx, nq, own, img);
-		for (size_t p = 0; p < (size_t)ny * nx; p++) {
+		const size_t M = res->M;
+		c0_pool_rescale(res->f, res->nz, res->pixel, M, nq, own, img);
+		for (size_t k = 0; k < M; k++) {     /* off the columns the total stays 0 */
 			double s = 0;
 			for (int j = 0; j < res->nz; j++)
-				s += res->f[j * (size_t)ny * nx + p];
-			res->total[p] = (float)s;
+				s += res->f[j * M + k];
+			res->total[res->pixel[k]] = (float)s;
 		}
 	}
 	/* the fine grid's depth map: each column's single-depth fit, not its mean,
@@ -267,8 +282,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	 * mean: its 100 nm pixels hold several depths, whose brightness-weighted
 	 * mean the single fit misses (demo: -29 nm signed, the mean -8 nm) */
 	const double tfit = c0_now();
-	if (!baseline && (st = c0_depth_fit(&m->tirf, nq, c->angles, c->ngains ? c->gains : NULL, res->nz, m->z0_nm, m->dz_nm,
-					    res->f, (size_t)ny * nx, res->depth)))
+	if (!baseline && (st = depth_fit_cols(m, c, nq, res)))
 		return st;
 	if (!baseline)
 		r->vol_pixel_nm = pixel_nm;

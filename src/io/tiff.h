@@ -70,6 +70,13 @@ struct c0_tiff_wopts {
 	double display_min, display_max;   /* both 0: not written */
 	int bigtiff;                       /* 1: force BigTIFF; 0: only when needed */
 	const char *software;              /* Software tag, e.g. the command line */
+	/* 1: deflate (zlib) in strips of about 1 MiB, which ImageJ, Fiji and
+	 * tifffile read; pays for mostly-zero planes (a volume on a sparse
+	 * support: 5.4 GB of floats in 0.1 GB) */
+	int deflate;
+	/* with deflate, a bound on the bytes written (0: the uncompressed size),
+	 * which decides BigTIFF: classic TIFF where it fits, as ImageJ reads no BigTIFF */
+	int64_t max_bytes;
 };
 
 struct c0_tiff_writer;

@@ -58,9 +58,11 @@ static void set_tags(struct c0_tiff_writer *w, int64_t p)
 	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, o->dtype == C0_F32 ? SAMPLEFORMAT_IEEEFP : SAMPLEFORMAT_UINT);
 	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
 	TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
-	size_t plane_bytes = (size_t)o->width * o->height * (bps / 8);
+	TIFFSetField(t, TIFFTAG_COMPRESSION, o->deflate ? COMPRESSION_ADOBE_DEFLATE : COMPRESSION_NONE);
+	size_t plane_bytes = (size_t)o->width * o->height * (bps / 8), row = (size_t)o->width * (bps / 8);
 	uint32_t rps = plane_bytes <= (64u << 20) ? (uint32_t)o->height : TIFFDefaultStripSize(t, 0);
+	if (o->deflate)   /* strips of about 1 MiB: a reader of a few rows inflates little */
+		rps = (uint32_t)((1u << 20) / row > 0 ? ((1u << 20) / row < (size_t)o->height ? (1u << 20) / row : (size_t)o->height) : 1);
 	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
 	if (o->pixel_size_nm > 0) {
 		float res = (float)(1000.0 / o->pixel_size_nm);   /* pixels per µm */
@@ -93,7 +95,7 @@ int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_ti
 	snprintf(w->path, sizeof w->path, "%s", path);
 	c0_tmp_name(path, w->tmp, sizeof w->tmp);
 	int64_t bytes = w->planes * o->width * o->height * (int64_t)c0_dtype_size(o->dtype);
-	int big = o->bigtiff || c0_tiff_needs_bigtiff(bytes);
+	int big = o->bigtiff || c0_tiff_needs_bigtiff(o->deflate && o->max_bytes > 0 ? o->max_bytes : bytes);
 	int dl = c0_ij_format(w->desc, sizeof w->desc, w->o.channels, w->o.slices, w->o.frames, o->pixel_size_nm > 0,
 			      o->z_spacing_nm / 1000, o->frame_interval_s, o->display_min, o->display_max);
 	/* ImageJ's z origin is in slices: slice k is at (k - zorigin) * spacing */

@@ -31,16 +31,16 @@ int c0_pool_window(const float *x, const uint8_t *mask, int ny, int nx, int h, f
 	return C0_OK;
 }
 
-void c0_pool_rescale(float *f, int nz, int ny, int nx, int nq, const float *const *x, const float *const *pooled)
+void c0_pool_rescale(float *f, int nz, const int *pixel, size_t M, int nq, const float *const *x, const float *const *pooled)
 {
-	const size_t np = (size_t)ny * nx;
-	for (size_t p = 0; p < np; p++) {
+	for (size_t k = 0; k < M; k++) {
+		const size_t p = (size_t)pixel[k];
 		double a = 0, b = 0;
 		for (int q = 0; q < nq; q++)
 			a += x[q][p], b += pooled[q][p];
 		double s = b > 0 ? a / b : 0;
 		for (int j = 0; j < nz; j++)
-			f[j * np + p] = (float)(f[j * np + p] * s);
+			f[j * M + k] = (float)(f[j * M + k] * s);
 	}
 }
 

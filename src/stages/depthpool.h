@@ -24,10 +24,11 @@ int c0_pool_guided(const float *const *x, int nq, const uint8_t *mask, const flo
 void c0_depth_single(const double *W, int nq, int nz, double z0, double dz, const float *const *x, const uint8_t *mask,
 		     size_t np, float *out);
 
-/* f (nz x ny x nx) reconstructed from pooled images: scale each pixel's
- * column by sum_q x_q / sum_q pooled_q, so the volume keeps the pixel's own
- * intensity (the depth profile, hence the depth map, is unchanged). */
-void c0_pool_rescale(float *f, int nz, int ny, int nx, int nq, const float *const *x, const float *const *pooled);
+/* f (nz x M: the columns at raster indices pixel[0..M), stages/matirf.h)
+ * reconstructed from pooled images: scale each column by
+ * sum_q x_q / sum_q pooled_q at its pixel, so the volume keeps the pixel's
+ * own intensity (the depth profile, hence the depth map, is unchanged). */
+void c0_pool_rescale(float *f, int nz, const int *pixel, size_t M, int nq, const float *const *x, const float *const *pooled);
 
 /* Default window of run's depth pooling, as a fraction of the PSF FWHM:
  * wide enough to average the per-angle splitting noise (docs/parameters.md). */

@@ -12,6 +12,7 @@
 #include "core/progress.h"
 
 #include <stdlib.h>
+#include <limits.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -40,6 +41,8 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 	if (!(c->kappa >= 0 && isfinite(c->kappa)) || !(c->wz >= 0 && isfinite(c->wz)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
 		return c0_fail(C0_EINVAL, "matirf: kappa %g, wz %g, sparsity %g: must be finite and >= 0", c->kappa, c->wz,
 			       c->sparsity);
+	if (c->halo < 0 || c->halo > 64)
+		return c0_fail(C0_EINVAL, "matirf: halo %d: must be 0..64", c->halo);
 	if (c->coarse < 0 || c->coarse > 8)
 		return c0_fail(C0_EINVAL, "matirf: coarse %d: must be 0..8", c->coarse);
 	if (c->pdhg.maxit < 1)
@@ -69,8 +72,24 @@ int c0_matirf_subtract(float *const *x, int nq, size_t np, double v, const char 
 
 void c0_matirf_result_free(struct c0_matirf_result *r)
 {
-	free(r->f), free(r->z_nm), free(r->depth), free(r->total), free(r->background);
+	free(r->f), free(r->pixel), free(r->z_nm), free(r->depth), free(r->total), free(r->background);
 	memset(r, 0, sizeof *r);
+}
+
+void c0_matirf_plane(const struct c0_matirf_result *r, int j, float *plane)
+{
+	memset(plane, 0, sizeof *plane * r->ny * (size_t)r->nx);
+	for (size_t k = 0; k < (size_t)r->M; k++)
+		plane[r->pixel[k]] = r->f[j * (size_t)r->M + k];
+}
+
+float *c0_matirf_dense(const struct c0_matirf_result *r)
+{
+	const size_t np = (size_t)r->ny * r->nx;
+	float *v = r->f ? c0_alloc(np * r->nz, sizeof *v) : NULL;
+	for (int j = 0; v && j < r->nz; j++)
+		c0_matirf_plane(r, j, v + j * np);
+	return v;
 }
 
 /* The objective at u (scaled units): 1/2 ||B W u - b||^2 + kappa R(u) + l1 sum u,
@@ -132,6 +151,8 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
 	int st = c0_matirf_check(c, nq, angles);
 	if (st)
 		return st;
+	if ((double)ny * nx > INT_MAX)
+		return c0_fail(C0_EINVAL, "matirf: a %dx%d grid has more pixels than the columns' index holds", nx, ny);
 	if (fw > (ny < nx ? ny : nx) / 4.0)
 		return c0_fail(C0_EINVAL, "psf_fwhm_nm: a FWHM of %.3g pixels is wider than a quarter of the %dx%d field", fw,
 			       nx, ny);
@@ -176,6 +197,23 @@ static int level_weights(struct level *L, const struct c0_matirf_conf *c, int nq
 	return C0_OK;
 }
 
+/* the mask (0/1) grown by steps 4-neighbour steps; a pixel added in a step
+ * is 2 until the step ends */
+static void mask_dilate(uint8_t *mask, int ny, int nx, int steps)
+{
+	for (int s = 0; s < steps; s++) {
+		for (int y = 0; y < ny; y++)
+			for (int x = 0; x < nx; x++) {
+				const size_t p = (size_t)y * nx + x;
+				if (!mask[p])
+					mask[p] = 2 * ((x > 0 && mask[p - 1] == 1) || (x + 1 < nx && mask[p + 1] == 1) ||
+						       (y > 0 && mask[p - nx] == 1) || (y + 1 < ny && mask[p + nx] == 1));
+			}
+		for (size_t p = 0; p < (size_t)ny * nx; p++)
+			mask[p] = mask[p] != 0;
+	}
+}
+
 /* The columns solved for and the solver: TV solves only for the pixels with
  * signal in some image (a pixel that is zero at every angle has f = 0); the
  * Hessian, the background and the blur work on the full grid. */
@@ -189,7 +227,8 @@ static int level_grid(struct level *L, const struct c0_matirf_conf *c, int nq, c
 		return C0_ENOMEM;
 	for (size_t p = 0; p < np; p++)
 		for (int q = 0; q < nq; q++)
-			mask[p] |= c->reg == C0_REG_HESSIAN || c->bg_smooth > 0 || c->psf_sigma_px > 0 || x[q][p] > 0;
+			mask[p] |= c->reg == C0_REG_HESSIAN || c->bg_smooth > 0 || c->psf_sigma_px > 0 || c->full_grid || x[q][p] > 0;
+	mask_dilate(mask, ny, nx, c->halo);
 	int st = c0_grad3m_init(&ctx->g, mask, ny, nx, nz, 1, c->wz);
 	free(mask);
 	if (st)
@@ -239,7 +278,7 @@ static int level_alloc(struct level *L, const struct c0_matirf_conf *c, size_t n
 		st = C0_ENOMEM;
 	if (c->reg == C0_REG_HESSIAN && !(ctx->d.work = c0_alloc(2 * N, sizeof *ctx->d.work)))
 		st = C0_ENOMEM;
-	res->f = c0_alloc(np * nz, sizeof *res->f);
+	res->f = c0_alloc(N, sizeof *res->f);
 	res->z_nm = c0_alloc((size_t)nz, sizeof *res->z_nm);
 	res->depth = c0_alloc(np, sizeof *res->depth);
 	res->total = c0_alloc(np, sizeof *res->total);
@@ -330,26 +369,15 @@ static struct c0_pdhg_problem level_problem(struct level *L, const struct c0_mat
 }
 
 /* the coarse start: the apg and exact solvers with TV (no background), on
- * grids large enough to bin; u and y from the coarse levels */
+ * grids large enough to bin; u and y at the columns from the coarse levels */
 static int level_warm(struct level *L, const struct c0_matirf_conf *c, int nq, const double *angles,
 		      const double *gain, const float *const *x, int ny, int nx, int coarse, int *iters)
 {
 	struct matirf_ctx *ctx = &L->ctx;
 	if (!(coarse > 0 && ctx->exact && c->reg == C0_REG_TV && !ctx->bg && ny >= 16 && nx >= 16 && ctx->g.nc <= 2))
 		return C0_OK;
-	const int nz = ctx->nz;
-	const size_t np = (size_t)ny * nx, M = ctx->M, N = ctx->N;
-	float *u0 = c0_alloc(np * nz, sizeof *u0), *y0 = c0_alloc(2 * np * nz, sizeof *y0);
-	int st = C0_ENOMEM;
-	if (u0 && y0 && !(st = matirf_coarse_start(c, nq, angles, gain, x, ny, nx, nz, L->mx, coarse, L->col, u0, y0, iters)))
-		for (int j = 0; j < nz; j++)
-			for (size_t k = 0; k < M; k++) {
-				L->u[j * M + k] = u0[j * np + ctx->g.pixel[k]];
-				for (int e = 0; e < ctx->g.nc; e++)
-					L->y[e * N + j * M + k] = y0[(e * nz + j) * np + ctx->g.pixel[k]];
-			}
-	free(u0), free(y0);
-	return st;
+	const struct matirf_cols cols = { ctx->g.pixel, ctx->M };
+	return matirf_coarse_start(c, nq, angles, gain, x, ny, nx, ctx->nz, L->mx, coarse, L->col, &cols, L->u, L->y, iters);
 }
 
 /* PDHG from u, y with the solver's default tolerance */
@@ -371,24 +399,20 @@ static int level_run(struct level *L, const struct c0_matirf_conf *c, const stru
 	return st;
 }
 
-/* The result on the full grid: f = u / col in image units, its depth and
- * sum, the background and the objective; yout: the TV dual */
+/* The result by columns: f = u / col in image units, its depth and sum on
+ * the full grid, the background and the objective; yout: the TV dual (the
+ * level's own, handed over) */
 static void level_unpack(struct level *L, const struct c0_matirf_conf *c, const struct c0_pdhg_info *info,
-			 float *yout, struct c0_matirf_result *res)
+			 float **yout, struct c0_matirf_result *res)
 {
 	struct matirf_ctx *ctx = &L->ctx;
 	const int nz = ctx->nz, ny = ctx->ny, nx = ctx->nx;
-	const size_t np = (size_t)ny * nx, M = ctx->M, N = ctx->N;
+	const size_t M = ctx->M, N = ctx->N;
 	const double mx = L->mx;
 	res->nz = nz, res->ny = ny, res->nx = nx, res->iters = info->iters, res->converged = info->converged;
 	res->exact = ctx->exact, res->apg = ctx->apg, res->rel_change = fmax(info->dx, info->dy);
-	if (yout && ctx->exact && c->reg == C0_REG_TV && ctx->g.nc <= 2) {
-		memset(yout, 0, sizeof *yout * 2 * np * nz);
-		for (int j = 0; j < nz; j++)
-			for (size_t k = 0; k < M; k++)
-				for (int e = 0; e < ctx->g.nc; e++)
-					yout[(e * nz + j) * np + ctx->g.pixel[k]] = L->y[e * N + j * M + k];
-	}
+	if (yout && ctx->exact && c->reg == C0_REG_TV && ctx->g.nc <= 2)
+		*yout = L->y, L->y = NULL;     /* 2 N: component e of bin j of column k at e N + j M + k */
 	if (ctx->bg) {
 		matirf_background_update(ctx, L->W);      /* the background of the final iterate */
 		double sb = 0;
@@ -402,19 +426,20 @@ static void level_unpack(struct level *L, const struct c0_matirf_conf *c, const 
 	for (int j = 0; j < nz; j++) {
 		res->z_nm[j] = c->z0_nm + (j + 0.5) * c->dz_nm;
 		for (size_t k = 0; k < M; k++)
-			res->f[j * np + ctx->g.pixel[k]] = (float)(L->u[j * M + k] / L->col[j] * mx);
+			res->f[j * M + k] = (float)(L->u[j * M + k] / L->col[j] * mx);
 	}
-	for (size_t p = 0; p < np; p++) {
+	for (size_t k = 0; k < M; k++) {     /* total and depth stay 0 off the columns */
 		double s = 0, sz = 0;
 		for (int j = 0; j < nz; j++)
-			s += res->f[j * np + p], sz += res->f[j * np + p] * res->z_nm[j];
-		res->total[p] = (float)s;
-		res->depth[p] = s > 0 ? (float)(sz / s) : 0;
+			s += res->f[j * M + k], sz += res->f[j * M + k] * res->z_nm[j];
+		res->total[ctx->g.pixel[k]] = (float)s;
+		res->depth[ctx->g.pixel[k]] = s > 0 ? (float)(sz / s) : 0;
 	}
+	res->M = ctx->M, res->pixel = ctx->g.pixel, ctx->g.pixel = NULL;   /* handed over */
 }
 
 int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-		 const float *const *x, int ny, int nx, double mx0, int coarse, float *yout, struct c0_matirf_result *res)
+		 const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res)
 {
 	memset(res, 0, sizeof *res);
 	double t0 = c0_now();

@@ -41,17 +41,32 @@ struct c0_matirf_conf {
 	double psf_sigma_px;
 	/* levels of the warm start from 2x2-binned images and PSF (apg and exact with TV) */
 	int coarse;
+	/* 1: TV solves on every pixel, like the Hessian (tests: the oracle of
+	 * the default, which solves only on the pixels with data) */
+	int full_grid;
+	/* TV: the pixels with data and those within this many steps (4-neighbour)
+	 * of them. 0 (the default): TV has free borders at the data's edge; 1:
+	 * the jump to the zeros around counts, as on the whole grid (within 1.6 %
+	 * of its volume, depths 1.8 nm, on the phantom: tests/test_matirf.c), in memory that
+	 * still follows the support */
+	int halo;
 };
 /* kappa where the run conf deconvolves (psf_fwhm_nm > 0) and gives none:
  * measured with the blur modelled, 1e-3 halves the depth error of 3e-2 and
  * doubles the sum-over-depth image's fine detail, short of the truth's
  * (3e-4 overshoots it: noise) (docs/parameters.md) */
 #define C0_MATIRF_KAPPA_DECONV 1e-3
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0 }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0, 0, 0 }
 
+/* The volume is held by columns: the M lateral pixels solved for (with
+ * TV, those with data in some image; 0.1 % of a whole camera frame's fine
+ * grid, say), the rest being 0, so that no array is depth bins x the
+ * whole grid. */
 struct c0_matirf_result {
 	int nz, ny, nx;
-	float *f;                    /* nz x ny x nx, in the images' units per bin */
+	int M;                       /* columns */
+	int *pixel;                  /* M raster indices (y nx + x), increasing */
+	float *f;                    /* nz x M: bin j of column k at f[j M + k], in the images' units per bin */
 	double *z_nm;                /* bin centres */
 	float *depth;                /* ny x nx intensity-weighted mean depth (nm), 0 where empty */
 	float *total;                /* ny x nx sum over depth */
@@ -74,3 +89,8 @@ int c0_matirf_solve(const struct c0_matirf_conf *c, int nq, const double *angles
  * refused when v is not below the mean of some image; what names the option. */
 int c0_matirf_subtract(float *const *x, int nq, size_t np, double v, const char *what);
 void c0_matirf_result_free(struct c0_matirf_result *r);
+/* Plane j of the volume on the whole ny x nx grid (0 off the columns). */
+void c0_matirf_plane(const struct c0_matirf_result *r, int j, float *plane);
+/* The whole volume, nz x ny x nx (allocated; NULL when that fails):
+ * small cases, tests and the library's c0_result_volume. */
+float *c0_matirf_dense(const struct c0_matirf_result *r);

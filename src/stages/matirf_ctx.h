@@ -102,12 +102,15 @@ void matirf_exact_rhs(struct matirf_ctx *x);
 
 /* One level of the solve: mx0 > 0 fixes the data scale (a coarse level
  * solves in the fine level's units); coarse: levels of warm start below it;
- * yout, when not NULL, receives the final TV dual on the full grid (2 nz ny
- * nx floats). */
+ * yout, when not NULL, receives the final TV dual of the exact and apg
+ * solvers by columns (2 nz M floats, allocated; NULL for the others). */
 int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-		 const float *const *x, int ny, int nx, double mx0, int coarse, float *yout, struct c0_matirf_result *res);
-/* The warm start from 2x2-binned images (levels deep): u0 (nz np, u units)
- * and y0 (the TV dual, 2 nz np) on the full ny x nx grid. */
+		 const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res);
+/* columns: M raster indices, increasing */
+struct matirf_cols { const int *pixel; size_t M; };
+/* The warm start from 2x2-binned images (levels deep) at the columns
+ * (nothing on the whole grid times the depth bins): u0 (nz M, u units) and
+ * y0 (the TV dual, 2 nz M). */
 int matirf_coarse_start(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
 			const float *const *x, int ny, int nx, int nz, double mx, int levels, const double *col,
-			float *u0, float *y0, int *iters);
+			const struct matirf_cols *cols, float *u0, float *y0, int *iters);
