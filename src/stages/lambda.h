@@ -105,6 +105,10 @@ void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *
  * variance; lambda follows the noise sd). */
 #define C0_LAMBDA_CV_START 4.0
 #define C0_LAMBDA_CV_WHOLE 0.70710678118654752
+/* On tiles (an interior given) each path runs at least this many points:
+ * the sums stop at the shortest tile's path, which could end before the
+ * least of the sum (down to 1/4 of the rule's first step) */
+#define C0_LAMBDA_CV_TILE_POINTS 9
 int c0_lambda_cv(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		 struct c0_lambda_result *out);
 /* Its pieces, for tiles. The path point k's lambda / lambda_max; the sums

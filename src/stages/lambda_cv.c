@@ -99,7 +99,8 @@ int c0_lambda_cv_first(double rule_rel)
 /* The path, point by point to C0_LAMBDA_CV_PATIENCE after its least: the
  * errors per block into eb (npts rows of nb), the sums into v */
 static int path(const struct c0_support_conf *c, struct c0_covop *op, const struct c0_cov *hv[2], double norm,
-		double lmax, int k0, const int in[4], struct half h[2], double *m, double *eb, struct c0_lambda_cv_sums *v)
+		double lmax, int k0, int min_pts, const int in[4], struct half h[2], double *m, double *eb,
+		struct c0_lambda_cv_sums *v)
 {
 	const int B = hv[0]->d > 0 ? hv[0]->d : 1, nbx = (in[3] + B - 1) / B;
 	const size_t nb = (size_t)nbx * ((in[2] + B - 1) / B);
@@ -130,7 +131,9 @@ static int path(const struct c0_support_conf *c, struct c0_covop *op, const stru
 		v->npts = k + 1;
 		if (best < 0 || v->err[k] < v->err[best])
 			best = k;
-		if (k - best >= C0_LAMBDA_CV_PATIENCE)
+		/* a tile's path (min_pts) runs on to min_pts: the tiles' sums
+		 * hold the points all of them reached */
+		if (k - best >= C0_LAMBDA_CV_PATIENCE && k + 1 - k0 >= min_pts)
 			break;
 	}
 	/* the paired differences' sums, for the standard errors */
@@ -173,7 +176,7 @@ int c0_lambda_cv_window(const struct c0_support_conf *c, const struct c0_cov *a,
 	if (!st && !(lmax > 0))
 		st = path_scale(&op, a, h, &lmax);
 	if (!st)
-		st = path(c, &op, hv, norm, lmax, k0, in, h, m, eb, v);
+		st = path(c, &op, hv, norm, lmax, k0, interior ? C0_LAMBDA_CV_TILE_POINTS : 0, in, h, m, eb, v);
 	half_close(&h[0]), half_close(&h[1]);
 	free(m), free(eb);
 	c0_covop_free(&op);
