@@ -27,7 +27,7 @@ static const struct c0_param table[] = {
 	NUM(lambda, C0_P_DOUBLE, "lambda", "F", "support regularisation relative to lambda_max (the smallest that gives an empty support)",
 	    "automatic: for l1 a first solve at max(2e-2 of the correlation's 90th percentile, 4 noise sds), then max(0.28 of the median emitter peak, 4 noise sds) (see the guide)"),
 	ENUM(lambda_rule, "peaks|cv", "lambda-rule",
-	     "automatic l1 lambda: the rule from a first solve's peaks, or cross-validation of the interleaved frame halves (a warm-started path; chooses the largest lambda within one standard error of the least prediction error; measured worse on the simulated grid, see docs/parameters.md)", "peaks"),
+	     "automatic l1 lambda: the rule from a first solve's peaks, or cross-validation of the interleaved frame halves (a warm-started path from 4x the rule's first step; the largest lambda within one standard error of the least prediction error, over sqrt 2 for all frames; measured worse on the simulated grid, see docs/parameters.md)", "peaks"),
 	ENUM(support_solver, "fista|pruned", "support-solver",
 	     "l1 support solver, both FISTA on a working set re-made every 100 iterations (momentum kept): with the whole grid's step, or with the set's own step (converges, see the guide)", "fista"),
 	NUM(iterations, C0_P_INT, "iterations", "N", "maximum FISTA iterations (per reweighting for cel0; -1: the default)", "2000, or 10000 with pruned"),

@@ -15,10 +15,13 @@ static void cross_validation(cJSON *l, const struct c0_lambda_result *v)
 				"lambda, its support refitted without penalty; the error of those emitter variances "
 				"predicting the other half's off-diagonal covariance lags, both directions summed, "
 				"relative to the error of x = 0; chosen: the largest lambda whose error is within one "
-				"standard error (paired, over blocks of lag x lag pixels) of the least");
+				"standard error (paired, over blocks of lag x lag pixels) of the least (chosen_relative); the path "
+				"starts at most 4 times the peaks rule's first step; the solve's lambda is the chosen over "
+				"sqrt 2 (each half's covariance has twice the whole's noise variance)");
 	c0_report_add_array(x, "lambda_relative", v->cv_rel, v->cv_points);
 	c0_report_add_array(x, "error", v->cv_err, v->cv_points);
 	cJSON_AddNumberToObject(x, "least_relative", v->cv_rel[v->cv_min]);
+	cJSON_AddNumberToObject(x, "chosen_relative", v->cv_rel[v->cv_pick]);
 	c0_report_add_array(x, "standard_error", v->cv_se, v->cv_pick);
 	cJSON_AddNumberToObject(x, "iterations", v->cv_iters);
 	cJSON_AddNumberToObject(x, "seconds", v->cv_seconds);

@@ -95,9 +95,20 @@ void c0_lambda_second(const double *hist, double lmax, struct c0_lambda_result *
  * lambda, and its noise would otherwise pick). Sets out's cv fields and
  * chosen_rel (relative to the halves' mean's lambda_max, as c0_lambda_auto). */
 #define C0_LAMBDA_CV_TOP 0.1
-#define C0_LAMBDA_CV_ITERS 200
-#define C0_LAMBDA_CV_REFIT 100
-#define C0_LAMBDA_CV_PATIENCE 3
+#define C0_LAMBDA_CV_ITERS 100
+#define C0_LAMBDA_CV_REFIT 50
+#define C0_LAMBDA_CV_PATIENCE 2
+/* The path starts at its first point at most C0_LAMBDA_CV_START times the
+ * rule's first step (out->chosen_rel on entry; the choice was at most 2.3
+ * times it on the panel), and the whole's lambda is the halves' choice
+ * times C0_LAMBDA_CV_WHOLE (each half's covariance has twice the noise
+ * variance; lambda follows the noise sd). */
+#define C0_LAMBDA_CV_START 4.0
+#define C0_LAMBDA_CV_WHOLE 0.70710678118654752
+/* On tiles (an interior given) each path runs at least this many points:
+ * the sums stop at the shortest tile's path, which could end before the
+ * least of the sum (down to 1/4 of the rule's first step) */
+#define C0_LAMBDA_CV_TILE_POINTS 9
 int c0_lambda_cv(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		 struct c0_lambda_result *out);
 /* Its pieces, for tiles. The path point k's lambda / lambda_max; the sums
@@ -109,13 +120,14 @@ int c0_lambda_cv(const struct c0_support_conf *c, const struct c0_cov *a, const 
  * interior = { y, x, h, w } in the window, NULL: all); the choice from such
  * sums. */
 double c0_lambda_cv_rel(int k);
+int c0_lambda_cv_first(double rule_rel);
 struct c0_lambda_cv_sums {
 	double err[C0_LAMBDA_CV_MAX], s1[C0_LAMBDA_CV_MAX][C0_LAMBDA_CV_MAX], s2[C0_LAMBDA_CV_MAX][C0_LAMBDA_CV_MAX];
 	double e0, nb, npts;
 };
 int c0_lambda_cv_window(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b, double norm,
-			double lmax, const int *interior, struct c0_lambda_cv_sums *v);
-void c0_lambda_cv_choose(const struct c0_lambda_cv_sums *v, struct c0_lambda_result *out);
+			double lmax, int k0, const int *interior, struct c0_lambda_cv_sums *v);
+void c0_lambda_cv_choose(const struct c0_lambda_cv_sums *v, int k0, struct c0_lambda_result *out);
 
 /* The tiled path (stages/support_tiles.c), where the band of the whole image is
  * kept for all frames, and the halves only for some tiles' windows.

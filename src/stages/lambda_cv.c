@@ -88,10 +88,19 @@ double c0_lambda_cv_rel(int k)
 	return C0_LAMBDA_CV_TOP * pow(2, -0.5 * k);
 }
 
+int c0_lambda_cv_first(double rule_rel)
+{
+	int k = 0;
+	while (k < C0_LAMBDA_CV_MAX - C0_LAMBDA_CV_PATIENCE - 1 && c0_lambda_cv_rel(k) > C0_LAMBDA_CV_START * rule_rel)
+		k++;
+	return k;
+}
+
 /* The path, point by point to C0_LAMBDA_CV_PATIENCE after its least: the
  * errors per block into eb (npts rows of nb), the sums into v */
 static int path(const struct c0_support_conf *c, struct c0_covop *op, const struct c0_cov *hv[2], double norm,
-		double lmax, const int in[4], struct half h[2], double *m, double *eb, struct c0_lambda_cv_sums *v)
+		double lmax, int k0, int min_pts, const int in[4], struct half h[2], double *m, double *eb,
+		struct c0_lambda_cv_sums *v)
 {
 	const int B = hv[0]->d > 0 ? hv[0]->d : 1, nbx = (in[3] + B - 1) / B;
 	const size_t nb = (size_t)nbx * ((in[2] + B - 1) / B);
@@ -101,13 +110,14 @@ static int path(const struct c0_support_conf *c, struct c0_covop *op, const stru
 		off_error(hv[1 - j], norm, NULL, in, B, nbx, eb);
 	for (size_t b = 0; b < nb; b++)
 		v->e0 += eb[b];
-	for (int k = 0; k < C0_LAMBDA_CV_MAX && !st; k++) {
+	for (int k = k0; k < C0_LAMBDA_CV_MAX && !st; k++) {
 		double *e = eb + k * nb;
 		memset(e, 0, nb * sizeof *e);
 		for (int j = 0; j < 2 && !st; j++) {
 			int it;
 			h[j].fit.lam = c0_lambda_cv_rel(k) * lmax;
-			st = c0_support_l1_warm(c, &h[j].fit, C0_LAMBDA_CV_ITERS, h[j].x, &it);
+			/* the first point starts from x = 0: twice the budget */
+			st = c0_support_l1_warm(c, &h[j].fit, (k == k0 ? 2 : 1) * C0_LAMBDA_CV_ITERS, h[j].x, &it);
 			/* the prediction from the support alone, refitted without
 			 * shrinkage: the l1 shrinkage would favour the lowest lambda */
 			memcpy(h[j].xr, h[j].x, (size_t)op->Ly * op->Lx * sizeof *h[j].xr);
@@ -121,12 +131,14 @@ static int path(const struct c0_support_conf *c, struct c0_covop *op, const stru
 		v->npts = k + 1;
 		if (best < 0 || v->err[k] < v->err[best])
 			best = k;
-		if (k - best >= C0_LAMBDA_CV_PATIENCE)
+		/* a tile's path (min_pts) runs on to min_pts: the tiles' sums
+		 * hold the points all of them reached */
+		if (k - best >= C0_LAMBDA_CV_PATIENCE && k + 1 - k0 >= min_pts)
 			break;
 	}
 	/* the paired differences' sums, for the standard errors */
-	for (int k = 0; k < (int)v->npts; k++)
-		for (int q = 0; q < (int)v->npts; q++)
+	for (int k = k0; k < (int)v->npts; k++)
+		for (int q = k0; q < (int)v->npts; q++)
 			for (size_t b = 0; b < nb; b++) {
 				const double d = eb[k * nb + b] - eb[q * nb + b];
 				v->s1[k][q] += d, v->s2[k][q] += d * d;
@@ -136,7 +148,7 @@ static int path(const struct c0_support_conf *c, struct c0_covop *op, const stru
 }
 
 int c0_lambda_cv_window(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b, double norm,
-			double lmax, const int *interior, struct c0_lambda_cv_sums *v)
+			double lmax, int k0, const int *interior, struct c0_lambda_cv_sums *v)
 {
 	memset(v, 0, sizeof *v);
 	const int whole[4] = { 0, 0, a->H, a->W }, *in = interior ? interior : whole;
@@ -164,35 +176,37 @@ int c0_lambda_cv_window(const struct c0_support_conf *c, const struct c0_cov *a,
 	if (!st && !(lmax > 0))
 		st = path_scale(&op, a, h, &lmax);
 	if (!st)
-		st = path(c, &op, hv, norm, lmax, in, h, m, eb, v);
+		st = path(c, &op, hv, norm, lmax, k0, interior ? C0_LAMBDA_CV_TILE_POINTS : 0, in, h, m, eb, v);
 	half_close(&h[0]), half_close(&h[1]);
 	free(m), free(eb);
 	c0_covop_free(&op);
 	return st;
 }
 
-void c0_lambda_cv_choose(const struct c0_lambda_cv_sums *v, struct c0_lambda_result *out)
+void c0_lambda_cv_choose(const struct c0_lambda_cv_sums *v, int k0, struct c0_lambda_result *out)
 {
 	const int n = (int)v->npts;
-	int best = 0, pick;
-	for (int k = 0; k < n; k++) {
-		out->cv_rel[k] = c0_lambda_cv_rel(k), out->cv_err[k] = v->e0 > 0 ? v->err[k] / v->e0 : v->err[k];
+	int best = k0, pick;
+	for (int k = k0; k < n; k++) {
+		out->cv_rel[k - k0] = c0_lambda_cv_rel(k), out->cv_err[k - k0] = v->e0 > 0 ? v->err[k] / v->e0 : v->err[k];
 		if (v->err[k] < v->err[best])
 			best = k;
 	}
 	/* the largest lambda within one standard error of the least (the
 	 * error's difference to it over the blocks, paired) */
-	for (pick = 0; pick < best; pick++) {
+	for (pick = k0; pick < best; pick++) {
 		const double d = v->err[pick] - v->err[best];
 		const double se = sqrt(fmax(0, v->s2[pick][best] - v->s1[pick][best] * v->s1[pick][best] / v->nb));
-		out->cv_se[pick] = se / (v->e0 > 0 ? v->e0 : 1);
+		out->cv_se[pick - k0] = se / (v->e0 > 0 ? v->e0 : 1);
 		if (d <= se)
 			break;
 	}
-	out->cv = n > 0, out->cv_points = n, out->cv_min = best, out->cv_pick = pick;
+	out->cv = n > k0, out->cv_points = n - k0, out->cv_min = best - k0, out->cv_pick = pick - k0;
 	out->cv_iters = C0_LAMBDA_CV_ITERS;
-	if (n > 0)
-		out->chosen_rel = c0_lambda_cv_rel(pick);
+	/* each half's covariance has twice the noise variance of the whole's:
+	 * lambda follows the noise sd, so the whole's is the halves' over sqrt 2 */
+	if (n > k0)
+		out->chosen_rel = C0_LAMBDA_CV_WHOLE * c0_lambda_cv_rel(pick);
 }
 
 int c0_lambda_cv(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
@@ -200,9 +214,10 @@ int c0_lambda_cv(const struct c0_support_conf *c, const struct c0_cov *a, const 
 {
 	const double t0 = c0_now();
 	struct c0_lambda_cv_sums *v = c0_alloc(1, sizeof *v);
-	int st = v ? c0_lambda_cv_window(c, a, b, 0, 0, NULL, v) : C0_ENOMEM;
+	const int k0 = c0_lambda_cv_first(out->chosen_rel);
+	int st = v ? c0_lambda_cv_window(c, a, b, 0, 0, k0, NULL, v) : C0_ENOMEM;
 	if (!st)
-		c0_lambda_cv_choose(v, out);
+		c0_lambda_cv_choose(v, k0, out);
 	free(v);
 	out->cv_seconds = c0_now() - t0;
 	out->seconds += out->cv_seconds;

@@ -144,7 +144,7 @@ int c0_support_tiles_second(const struct c0_support_conf *c, struct c0_support_s
 /* One subset tile's cross-validation path (stages/lambda.h) at the image's
  * scale, the errors over its interior: its sums into v */
 static int tile_cv(const struct c0_support_conf *c, struct c0_support_share *s, int k, double norm, double lmax,
-		   struct c0_lambda_cv_sums *v)
+		   int k0, struct c0_lambda_cv_sums *v)
 {
 	const struct c0_tile *t = &s->tl.t[k];
 	struct c0_cov_acc *o = s->odd[k - s->k0];
@@ -154,7 +154,7 @@ static int tile_cv(const struct c0_support_conf *c, struct c0_support_share *s, 
 		return st;
 	if (!(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od))) {
 		const int in[4] = { t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw };
-		st = c0_lambda_cv_window(c, &ev, &od, norm, lmax, in, v);
+		st = c0_lambda_cv_window(c, &ev, &od, norm, lmax, k0, in, v);
 		c0_cov_free(&od);
 	}
 	c0_cov_free(&ev);
@@ -188,6 +188,7 @@ int c0_support_tiles_cv(const struct c0_support_conf *c, struct c0_support_share
 	struct c0_first_fail fail = { 0 };
 	struct c0_progress pr;
 	int done = 0, nsub = 0;
+	const int k0 = c0_lambda_cv_first(res->cv.chosen_rel);
 	struct c0_lambda_cv_sums *v = c0_alloc((size_t)tl->n + 1, sizeof *v), *all = v ? v + tl->n : NULL;
 	if (!v)
 		c0_first_fail_note(&fail, C0_ENOMEM);
@@ -198,7 +199,7 @@ int c0_support_tiles_cv(const struct c0_support_conf *c, struct c0_support_share
 	for (int k = s->k0; k < s->k1; k++) {
 		if (!s->sub[k] || !v)
 			continue;
-		c0_first_fail_note(&fail, tile_cv(c, s, k, norm, lmax, &v[k]));
+		c0_first_fail_note(&fail, tile_cv(c, s, k, norm, lmax, k0, &v[k]));
 #pragma omp critical(c0_support_progress)
 		c0_progress_update(&pr, ++done);
 	}
@@ -208,7 +209,7 @@ int c0_support_tiles_cv(const struct c0_support_conf *c, struct c0_support_share
 		/* each tile's from one rank: the sums over ranks are exact */
 		c0_comm_sum((double *)v, (int)(tl->n * (sizeof *v / sizeof(double))));
 		cv_add(tl, s->sub, v, all);
-		c0_lambda_cv_choose(all, &res->cv);
+		c0_lambda_cv_choose(all, k0, &res->cv);
 	}
 	free(v);
 	return st;
