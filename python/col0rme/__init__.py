@@ -141,7 +141,7 @@ class Result:
     support: H' x W' bool (fine grid, the union of the supports)
     intensity: list of H' x W' float32, one per stack (fine grid)
     background: list of H x W float32 (camera grid)
-    volume: Z x H' x W' float32 (3D mode), depth: H' x W' mean depth (nm)
+    volume: Z x H' x W' float32 (3D mode), depth: H' x W' depth (nm, each pixel's single-depth fit)
     z_nm: Z depth bin centres, baseline_volume (with baseline=True)
     report: the report.json dict (parameters, estimates, timings)
     """

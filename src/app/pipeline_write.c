@@ -126,7 +126,7 @@ static int save_volume(const char *path, struct c0_tiff_wopts o, const struct c0
 	return c0_tiff_commit(w);
 }
 
-/* PREFIXvolume.tif, PREFIXdepth.tif (mean depth) and PREFIXdepth.png */
+/* PREFIXvolume.tif, PREFIXdepth.tif (each column's fitted depth; the baseline's: its mean) and PREFIXdepth.png */
 static int write_volume(const struct c0_result *r, const struct c0_matirf_result *v, double pixel_nm,
 			const char *prefix, struct c0_outdir *out)
 {

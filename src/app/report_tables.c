@@ -114,7 +114,7 @@ static void warn_pixels(struct c0_html *h, const struct c0_rundir *d, struct not
 				deep += d->vol.depth[i] >= d->z1 - dz;
 			}
 		if (lit && deep > 0.05 * lit) {
-			snprintf(line, sizeof line, "%.1f %% of the pixels with signal have their mean depth in the deepest bin "
+			snprintf(line, sizeof line, "%.1f %% of the pixels with signal have their depth in the deepest bin "
 				 "(%g nm and below): the depth range clips them (--z-range).", 100.0 * deep / lit, d->z1 - dz);
 			warn(h, w, 1, line);
 		}
