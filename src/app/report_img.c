@@ -248,7 +248,8 @@ void c0_fig_depth(struct c0_html *h, const struct c0_rundir *d)
 		absent(h, "depth", "Depth", "No MA-TIRF volume in this run (give --angles for 3D).");
 		return;
 	}
-	section(h, "depth", "Depth", "Each pixel's depth (depth.tif: in a run, the single depth that best fits its column; from col0rme matirf, the column's mean) as colour, its total intensity over depth "
+	section(h, "depth", "Depth", "Each pixel's depth (depth.tif: in a run, the single depth that best fits its column; from "
+		"col0rme matirf, the column's mean) as colour, its total intensity over depth "
 		"(volume.tif) as brightness (square root, full at the 99.5th percentile); beside it the standard MA-TIRF "
 		"baseline on the camera grid when --baseline was given.");
 	depth_panel(h, &d->vol, d->z0, d->z1, "3D-COL0RME (fine grid)");
