@@ -171,6 +171,7 @@ void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct 
 	} else if (bc->mode == C0_BLEACH_ESTIMATE)
 		cJSON_AddStringToObject(o, "source", "slope");
 	c0_report_add_array(o, "factors", br->factor, n);
+	cJSON_AddBoolToObject(o, "rate_significant", br->significant);
 	const int first = bc->norder ? bc->order[0] : 0, last = bc->norder ? bc->order[n - 1] : n - 1;
 	cJSON_AddNumberToObject(o, "fade_last_vs_first", 1 - br->factor[last] / br->factor[first]);
 	cJSON_AddStringToObject(o, "meaning",

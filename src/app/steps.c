@@ -375,15 +375,12 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 	/* a fade the stacks cannot show (sparse or fast blinking: the frame sums
 	 * carry more blinking noise than fade) leaves the factors near 1 and the
 	 * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth bias") */
-	const int significant = !(bc.mode == C0_BLEACH_ESTIMATE) || fabs(br.k) >= C0_BLEACH_SIGNIF * br.k_sd;
-	cJSON *bj = cJSON_GetObjectItem(r->rep, "bleaching");
-	cJSON_AddBoolToObject(bj, "rate_significant", significant);
-	if (!significant) {   /* in the report's bleaching object and its warnings (the CLI prints those) */
+	if (!br.significant) {   /* in the report's bleaching object and its warnings (the CLI prints those) */
 		char msg[320];
 		snprintf(msg, sizeof msg, "the fade rate %.3g +- %.2g per frame is within %g sds of zero: the stacks do not show the "
 			 "fade, and their factors may be off; record a repeat of the first angle at the end and run with bleach "
 			 "repeat, or give bleach_factors measured otherwise", br.k, br.k_sd, (double)C0_BLEACH_SIGNIF);
-		cJSON_AddStringToObject(bj, "warning", msg);
+		cJSON_AddStringToObject(cJSON_GetObjectItem(r->rep, "bleaching"), "warning", msg);
 		c0_result_warn(r, "bleaching: %s", msg);
 	}
 	c0_step_end(r, &t);

@@ -139,6 +139,7 @@ static int frame_sums(struct c0_frames *f, double **S, int64_t *T)
 int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res)
 {
 	memset(res, 0, sizeof *res);
+	res->significant = 1;
 	int st = c0_bleach_check(c, n);
 	if (st)
 		return st;
@@ -167,6 +168,7 @@ int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, co
 		st = c0_bleach_fit(n, (const double *const *)S, T, B, res);
 	if (!st)
 		c0_bleach_factors(c, n, T, res);
+	res->significant = fabs(res->k) >= C0_BLEACH_SIGNIF * res->k_sd;
 	for (int q = 0; q < n; q++)
 		free(S[q]);
 	return st;

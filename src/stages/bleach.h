@@ -45,6 +45,7 @@ struct c0_bleach_result {
 	double factor[C0_BLEACH_MAX]; /* F_q */
 	double start[C0_BLEACH_MAX];  /* first frame's time on the acquisition clock (frames) */
 	double signal[C0_BLEACH_MAX]; /* m_q, mean signal part of a frame sum */
+	int significant;              /* 0: estimated, and |k| within C0_BLEACH_SIGNIF sds of zero */
 };
 
 /* The order is a permutation of the n stacks, the gap count 0, 1 or n - 1
