@@ -225,8 +225,13 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
 		any |= r->mask[i];
 	if (!any)
 		st = c0_fail(C0_EINVAL, "the support is empty: no emitter found (try a smaller lambda)");
+	int share[C0_MAX_STACKS] = { 0 };   /* the MA-TIRF stacks share one intensity mu */
+	for (int i = 0; three_d && i < ct->nangles; i++)
+		share[tirf[i]] = 1;
+	if (three_d && c->bleach == C0_BLEACHING_REPEAT)
+		share[r->n - 1] = 1;   /* the repeat's total is compared with the first's */
 	if (!st)
-		st = c0_step_intensity(r, &s->intensity, &s->support, f, NULL, c->baseline && three_d);
+		st = c0_step_intensity(r, &s->intensity, &s->support, f, NULL, c->baseline && three_d, three_d ? share : NULL);
 	if (!st)
 		st = c0_step_render(r);
 	for (int q = 0; q < r->n; q++)

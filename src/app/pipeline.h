@@ -109,9 +109,11 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struc
 /* Intensity and background of every stack on r->mask: the support step's
  * mean and noise variance where it ran on the stack, else one pass (the
  * mean when sigma2[i] > 0, else the covariance, for the noise variance on
- * the mask). With corrected, keeps each mean minus its background. */
+ * the mask). With corrected, keeps each mean minus its background. With
+ * share (NULL or one flag per stack, and mu not given), the flagged stacks
+ * get one mu, the largest of their discrepancy ones. */
 int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
-		      struct c0_frames *f, const double *sigma2, int corrected);
+		      struct c0_frames *f, const double *sigma2, int corrected, const int *share);
 /* MA-TIRF volume from nq images (ny x nx at pixel_nm) into r->vol, or
  * r->base with baseline; own (or NULL): the pixels' own images when img
  * are pooled (stages/depthpool.h). */

@@ -71,11 +71,15 @@ static cJSON *intensity_stack(const char *name, const struct c0_intensity_result
 }
 
 void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_intensity_conf *ic,
-			 const int64_t *frames, const double *tc)
+			 const int64_t *frames, const double *tc, const double *mu_own)
 {
 	cJSON *arr = cJSON_AddArrayToObject(rep, "intensity");
-	for (int i = 0; i < r->n; i++)
-		cJSON_AddItemToArray(arr, intensity_stack(r->names[i], &r->ires[i], ic, frames[i], tc[i]));
+	for (int i = 0; i < r->n; i++) {
+		cJSON *j = intensity_stack(r->names[i], &r->ires[i], ic, frames[i], tc[i]);
+		if (mu_own)
+			cJSON_AddNumberToObject(j, "mu_own", mu_own[i]);
+		cJSON_AddItemToArray(arr, j);
+	}
 	cJSON *p = cJSON_AddObjectToObject(rep, "intensity_parameters");
 	cJSON_AddNumberToObject(p, "pixel_size_nm", ic->grid.pixel_nm);   /* the forward model, for report.html's error map */
 	cJSON_AddNumberToObject(p, "fwhm_nm", ic->grid.fwhm_nm);
@@ -91,6 +95,8 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 		: ic->relative ? "mu is the largest smoothness whose residual exceeds the model's floor (the residual at mu = 1e-3) by no more than the noise explains (nu^2 H W sigma2 / T): smoothing that costs less than the noise is kept. The floor is the model error (continuous positions on the fine grid, background shape), larger than the noise on real data, which is why the plain principle is never met there. Larger nu smooths more; mu fixes it."
 		: "mu makes the residual equal to the noise level nu^2 H W sigma2 / T; on data whose model error exceeds the noise this is never met and mu stays at its smallest value");
 	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
+	if (mu_own)
+		cJSON_AddStringToObject(p, "mu_shared", "the MA-TIRF stacks share one mu, the largest of their own (mu_own): the depth reads the ratios between angles, so each angle is smoothed alike");
 }
 
 cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c, const struct c0_matirf_conf *m,

@@ -12,9 +12,11 @@ void c0_report_render(cJSON *rep, double sd_nm, double precision_nm, double fine
 cJSON *c0_report_support_stack(const char *name, const struct c0_support_result *s, const struct c0_support_conf *c);
 /* "support_parameters". */
 void c0_report_support_params(cJSON *rep, const struct c0_support_conf *c);
-/* "intensity" (each stack, frames[] and extra seconds tc[]) and "intensity_parameters". */
+/* "intensity" (each stack, frames[] and extra seconds tc[]; mu_own: each
+ * stack's own discrepancy mu when the MA-TIRF stacks share one, else NULL)
+ * and "intensity_parameters". */
 void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_intensity_conf *ic,
-			 const int64_t *frames, const double *tc);
+			 const int64_t *frames, const double *tc, const double *mu_own);
 /* The MA-TIRF section key ("matirf" or "baseline_matirf") of res, and the run's "z_nm". */
 cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
 			const struct c0_matirf_result *res);

@@ -161,6 +161,48 @@ static int intensity_solve(const struct c0_intensity_conf *ic, const double *mea
 	return st;
 }
 
+/* One smoothness for the stacks that share[] (the MA-TIRF angles): the
+ * largest of their discrepancy mu, the one the weakest stack needs. The depth
+ * is read from the ratios between angles, and a mu per angle smooths each
+ * angle's intensities differently along the support: on sparse blinking
+ * (mu 0.1 at the first angle, 1.7 at the steepest) shallow structures read
+ * deeper by 6 nm (docs/parameters.md, "Sparse blinking"). The others are
+ * solved again at that mu; the discrepancy figures of their own solve stay
+ * in the report beside their own mu (mu_own). */
+static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, double *const *own,
+		     const struct c0_support_result *const *known, const int64_t *frames, const double *s2, int corrected,
+		     double *mu_own, int *sts, char (*msg)[256])
+{
+	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
+	double mu = 0;
+	for (int i = 0; i < n; i++) {
+		mu_own[i] = r->ires[i].mu;
+		if (share[i] && r->ires[i].mu > mu)
+			mu = r->ires[i].mu;
+	}
+	struct c0_intensity_conf c = *ic;
+	c.mu = mu;
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile)
+	for (int i = 0; i < n; i++) {
+		if (!share[i] || !(r->ires[i].mu < mu))
+			continue;
+		struct c0_intensity_result first = r->ires[i], res;
+		float *cor = NULL;
+		sts[i] = intensity_solve(&c, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &res,
+					 corrected ? &cor : NULL);
+		if (sts[i]) {
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+			continue;
+		}
+		res.target2 = first.target2, res.floor2 = first.floor2, res.dp_status = first.dp_status, res.tiles_met = first.tiles_met;
+		res.solves += first.solves, res.cg_iters += first.cg_iters, res.seconds += first.seconds;
+		c0_intensity_result_free(&r->ires[i]);
+		r->ires[i] = res;
+		if (corrected)
+			free(r->corrected[i]), r->corrected[i] = cor;
+	}
+}
+
 /* Every stack's mean and noise variance side by side (each reads its own
  * file), then the solves: side by side when each is one tile, else one
  * stack after the other with its tiles side by side (5 stacks on 2 threads
@@ -168,7 +210,8 @@ static int intensity_solve(const struct c0_intensity_conf *ic, const double *mea
  * (error messages are per thread). */
 static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
 			  struct c0_frames *f, const double *sigma2, int corrected,
-			  const struct c0_support_result *const *known, int64_t *frames, double *tc, int *sts, char (*msg)[256])
+			  const struct c0_support_result *const *known, int64_t *frames, double *tc, int *sts, char (*msg)[256],
+			  const int *share, double *mu_own)
 {
 	const int n = r->n;
 	double *own[C0_MAX_STACKS] = { 0 }, s2[C0_MAX_STACKS];
@@ -202,12 +245,14 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 		c0_progress_update(&pr, ++done);
 	}
 	c0_progress_end(&pr);
+	if (share && !bad)
+		share_mu(r, ic, share, own, known, frames, s2, corrected, mu_own, sts, msg);
 	for (int i = 0; i < n; i++)
 		free(own[i]);
 }
 
 int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
-		      struct c0_frames *f, const double *sigma2, int corrected)
+		      struct c0_frames *f, const double *sigma2, int corrected, const int *share)
 {
 	const int n = r->n;
 	const struct c0_support_result *known[C0_MAX_STACKS] = { 0 };
@@ -217,8 +262,10 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels at srf %d do not match the %dx%d support", f[0].name, f[0].width,
 			       f[0].height, sc->grid.srf, r->Lx, r->Ly);
 	int64_t frames[C0_MAX_STACKS];
-	double tc[C0_MAX_STACKS];
+	double tc[C0_MAX_STACKS], mu_own[C0_MAX_STACKS];
 	const struct c0_step_clock t = c0_step_begin("intensity");
+	if (ic->mu > 0)
+		share = NULL;   /* a given mu is every stack's already */
 	int sts[C0_MAX_STACKS];
 	char (*msg)[256] = c0_alloc((size_t)n, sizeof *msg);
 	r->ires = c0_alloc((size_t)n, sizeof *r->ires);
@@ -229,7 +276,7 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		free(msg);
 		return C0_ENOMEM;
 	}
-	intensity_all(r, ic, sc, f, sigma2, corrected, known, frames, tc, sts, msg);
+	intensity_all(r, ic, sc, f, sigma2, corrected, known, frames, tc, sts, msg, share, mu_own);
 	for (int i = 0; i < n; i++)
 		if (sts[i]) {
 			int st = c0_fail(sts[i], "%s", msg[i]);
@@ -238,7 +285,7 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		}
 	free(msg);
 	r->pixel_nm = ic->grid.pixel_nm, r->srf = ic->grid.srf;
-	c0_report_intensity(r->rep, r, ic, frames, tc);
+	c0_report_intensity(r->rep, r, ic, frames, tc, share ? mu_own : NULL);
 	c0_step_end(r, &t);
 	return C0_OK;
 }
