@@ -1,0 +1,124 @@
+#!/usr/bin/python3
+"""What limits a run's depth: the run's depth readout redone outside it with
+one input at a time swapped for the simulator's truth (docs/parameters.md,
+"Sparse blinking: what limits the depth").
+
+    /usr/bin/python3 bench/depth_ladder.py SIMDIR RUNDIR [INTENSITY_DIR [--true-support]] [--windows]
+
+SIMDIR: `col0rme simulate` output; RUNDIR: `col0rme run --angles` output on its
+stacks. The readout: each stack's intensity over its bleaching factor, summed
+over the guided window (7 fine pixels, pixels whose 5-pixel guess lies within
+50 nm) and fitted with one depth (1 nm grid), as `run` does before and after
+its MA-TIRF solve; the solve itself is left out (it reproduces its input's
+projections: on the 5-angle sparse-blinking stack of seed 1 this proxy reads
+17.5 / -3.7 nm where the run reads 17.0 / -3.6). Rows: median |error|,
+median signed error (nm, positive deeper than the truth), coverage, and the
+signed error by true depth. Swaps: the true bleaching factors (sim.json), the
+true realised intensities (truth_intensity_qNN.tif: each emitter's brightness
+times its own on-fraction at that angle) on the run's or the true support, the
+model intensities (the emitters' mean on-fraction: no blinking noise), and
+with INTENSITY_DIR the intensities of a `col0rme intensity` run (e.g. on the
+true support, then --true-support, or on stacks with the true background
+taken out). --windows:
+the run's intensities with other windows and ranges."""
+import json
+import sys
+
+import numpy as np
+import tifffile as tf
+
+
+def load(sim, run):
+    S, R = json.load(open(sim + "/sim.json")), json.load(open(run + "/report.json"))
+    nq = len(R["matirf"]["angles_deg"])
+    A = S["estimates"]["angles"][:nq]
+    d = {"nq": nq, "p": 1 / np.array([a["penetration_depth_nm"] for a in A]),
+         "i0": np.array([a["i0_relative"] for a in A]),
+         "tb": np.array(S["estimates"]["bleaching"]["stack_factors"][:nq]),
+         "eb": np.array(R["bleaching"]["factors"][:nq]),
+         "zt": tf.imread(sim + "/truth_depth.tif"), "ts": tf.imread(sim + "/truth_support.tif") > 0,
+         "es": tf.imread(run + "/support.tif") > 0, "zrun": tf.imread(run + "/depth.tif")}
+    rd = lambda pat: np.array([tf.imread(pat % (q + 1)) for q in range(nq)]).astype(float)
+    d["xt"], d["xe"] = rd(sim + "/truth_intensity_q%02d.tif"), rd(run + "/intensity_q%02d.tif")
+    fp = S["parameters"]["pixel_size_nm"] / S["parameters"]["srf"]
+    em = np.genfromtxt(sim + "/emitters.csv", delimiter=",", names=True)
+    pon = S["parameters"]["tau_on_ms"] / (S["parameters"]["tau_on_ms"] + S["parameters"]["tau_off_ms"])
+    d["xm"] = np.zeros_like(d["xt"])
+    iy, ix = (em["y_nm"] / fp).astype(int), (em["x_nm"] / fp).astype(int)
+    for q in range(nq):
+        np.add.at(d["xm"][q], (iy, ix), em["brightness"] * d["i0"][q] * np.exp(-d["p"][q] * em["z_nm"]) * pon * d["tb"][q])
+    return d
+
+
+def single(W, z, x, mask):
+    """the depth whose exponential best fits each masked pixel's x (one non-negative amplitude)"""
+    s = W.T @ x[:, mask]
+    g = np.where(s > 0, s * s / (W * W).sum(0)[:, None], 0)
+    out = np.zeros(mask.shape)
+    out[mask] = np.where(g.max(0) > 0, z[g.argmax(0)], 0)
+    return out
+
+
+def box(x, mask, h):
+    xm = np.where(mask, x, 0)
+    c = np.pad(xm, ((h + 1, h), (h + 1, h))).cumsum(0).cumsum(1)
+    o = c[2 * h + 1:, 2 * h + 1:] - c[:-2 * h - 1, 2 * h + 1:] - c[2 * h + 1:, :-2 * h - 1] + c[:-2 * h - 1, :-2 * h - 1]
+    return np.where(mask, o, 0)
+
+
+def guided(x, mask, guide, rng, h):
+    out = np.zeros_like(x)
+    H, W = mask.shape
+    for y, xx in zip(*np.nonzero(mask)):
+        y0, y1, x0, x1 = max(0, y - h), min(H, y + h + 1), max(0, xx - h), min(W, xx + h + 1)
+        m = mask[y0:y1, x0:x1] & (np.abs(guide[y0:y1, x0:x1] - guide[y, xx]) <= rng)
+        out[:, y, xx] = x[:, y0:y1, x0:x1][:, m].sum(1)
+    return out
+
+
+def depth(d, x, mask, f, h=3, hg=2, rng=50.0):
+    p, i0 = d["p"][:, None], d["i0"][:, None]
+    zb, zc = np.arange(10, 400, 20.0), np.arange(0, 400.01, 1.0)
+    Wb = i0 * np.exp(-p * (zb[None] - 10)) * -np.expm1(-p * 20) / (p * 20)   # 20 nm bins, as the run's guess
+    Wc = i0 * np.exp(-p * zc[None])
+    x = x / f[:, None, None]
+    if h == 0:
+        return single(Wc, zc, x, mask)
+    g = single(Wb, zb, np.array([box(v, mask, hg) for v in x]), mask)
+    xp = guided(x, mask, g, rng, h) if rng > 0 else np.array([box(v, mask, h) for v in x])
+    return single(Wc, zc, xp, mask)
+
+
+def row(d, z, label):
+    m = d["zt"] > 0
+    v, t = z[m], d["zt"][m]
+    ok = v > 0
+    e, t = v[ok] - t[ok], t[ok]
+    by = ["%+5.1f" % np.median(e[(t >= a) & (t < a + 100)]) if ((t >= a) & (t < a + 100)).any() else "  -  "
+          for a in (0, 100, 200, 300)]
+    print("| %s | %.1f | %+.1f | %.2f | %s |" % (label, np.median(np.abs(e)), np.median(e), ok.mean(), " | ".join(by)), flush=True)
+
+
+def main():
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    d = load(args[0], args[1])
+    print("| input | median (nm) | signed (nm) | coverage | signed, true z 0-100 | 100-200 | 200-300 | 300-400 |")
+    print("|---|---|---|---|---|---|---|---|")
+    row(d, d["zrun"], "the run (depth.tif)")
+    row(d, depth(d, d["xe"], d["es"], d["eb"]), "readout redone, the run's inputs")
+    row(d, depth(d, d["xe"], d["es"], d["tb"]), "true bleaching factors")
+    row(d, depth(d, d["xt"], d["es"], d["tb"]), "true realised intensities, the run's support")
+    row(d, depth(d, d["xt"], d["ts"], d["tb"]), "true realised intensities, true support")
+    row(d, depth(d, d["xm"], d["ts"], d["tb"]), "model intensities (no blinking noise), true support")
+    if len(args) > 2:
+        xi = np.array([tf.imread(args[2] + "/intensity_q%02d.tif" % (q + 1)) for q in range(d["nq"])]).astype(float)
+        mask = d["ts"] if "--true-support" in sys.argv else d["es"]
+        row(d, depth(d, xi, mask, d["tb"]), "intensities of %s, true bleaching" % args[2])
+    if "--windows" in sys.argv:
+        for h in (2, 3, 4, 5, 6, 8):
+            for rng in (50, 100, 0):
+                row(d, depth(d, d["xe"], d["es"], d["eb"], h=h, rng=rng), "window %d px, range %d nm" % (2 * h + 1, rng))
+
+
+if __name__ == "__main__":
+    main()
