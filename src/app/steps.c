@@ -162,7 +162,9 @@ static int intensity_solve(const struct c0_intensity_conf *ic, const double *mea
 }
 
 /* One smoothness for the stacks that share[] (the MA-TIRF angles): the
- * largest of their discrepancy mu, the one the weakest stack needs. The depth
+ * largest of their discrepancy mu where the principle was met (a stack
+ * "above" sits at the search's end, 1e8), the one the weakest stack needs;
+ * none met, each keeps its own. The depth
  * is read from the ratios between angles, and a mu per angle smooths each
  * angle's intensities differently along the support: on sparse blinking
  * (mu 0.1 at the first angle, 1.7 at the steepest) shallow structures read
@@ -177,14 +179,16 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 	double mu = 0;
 	for (int i = 0; i < n; i++) {
 		mu_own[i] = r->ires[i].mu;
-		if (share[i] && r->ires[i].mu > mu)
+		if (share[i] && r->ires[i].dp_status == 0 && r->ires[i].mu > mu)
 			mu = r->ires[i].mu;
 	}
+	if (!(mu > 0))
+		return;
 	struct c0_intensity_conf c = *ic;
 	c.mu = mu;
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile)
 	for (int i = 0; i < n; i++) {
-		if (!share[i] || !(r->ires[i].mu < mu))
+		if (!share[i] || r->ires[i].mu == mu)
 			continue;
 		struct c0_intensity_result first = r->ires[i], res;
 		float *cor = NULL;
@@ -285,6 +289,12 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		}
 	free(msg);
 	r->pixel_nm = ic->grid.pixel_nm, r->srf = ic->grid.srf;
+	double mu = -1;   /* the report says the stacks share a mu only when they do */
+	for (int i = 0; share && i < n; i++)
+		if (share[i] && (mu < 0 || r->ires[i].mu == mu))
+			mu = r->ires[i].mu;
+		else if (share[i])
+			share = NULL;
 	c0_report_intensity(r->rep, r, ic, frames, tc, share ? mu_own : NULL);
 	c0_step_end(r, &t);
 	return C0_OK;
