@@ -868,6 +868,68 @@ static void test_accuracy(void)
 	if (system(p)) {}
 }
 
+/* The noise pass's fast paths against the plain ones, bit for bit: an
+ * accumulator with a region (the lags other than the guard's summed only
+ * there, 0 elsewhere) and C = A^T R at a mask's pixels alone. */
+static void test_noise_fast(void)
+{
+	enum { W = 23, H = 19, T = 45, D = 3 };
+	uint8_t keep[W * H];
+	for (int i = 0; i < W * H; i++)
+		keep[i] = (i % W) / 4 % 2 == (i / W) / 5 % 2;   /* spans of 4 columns, shifted every 5 rows */
+	struct c0_cov_acc *a, *b;
+	CHECK(c0_cov_acc_new(W, H, D, &a) == C0_OK && c0_cov_acc_new(W, H, D, &b) == C0_OK);
+	CHECK(c0_cov_acc_set_region(b, keep) == C0_OK);
+	c0_cov_acc_set_guard(a, 0.5), c0_cov_acc_set_guard(b, 0.5);
+	float fr[W * H];
+	for (int t = 0; t < T; t++) {
+		for (int i = 0; i < W * H; i++)
+			fr[i] = (float)(100 + 10 * c0_rng_normal(&rng) + (i % 7 == 0 ? 30 * c0_rng_uniform(&rng) : 0));
+		c0_cov_acc_add(a, fr), c0_cov_acc_add(b, fr);
+	}
+	CHECK(c0_cov_acc_set_region(b, keep) == C0_EINVAL);   /* after the first frame */
+	const int y0 = 2, x0 = 3, h = 15, w = 17;
+	struct c0_cov p, q;
+	CHECK(c0_cov_acc_window(a, y0, x0, h, w, &p) == C0_OK && c0_cov_acc_window(b, y0, x0, h, w, &q) == C0_OK);
+	int same = 1, zero = 1, kept = 0;
+	for (int l = 0; l < p.nlag; l++) {
+		const int whole = (p.dy[l] == 0 && p.dx[l] <= 1) || (p.dy[l] == 1 && p.dx[l] == 0);
+		for (int i = 0; i < w * h; i++) {
+			const double u = p.r[(size_t)l * w * h + i], v = q.r[(size_t)l * w * h + i];
+			if (whole || keep[(y0 + i / w) * W + x0 + i % w])
+				same &= memcmp(&u, &v, sizeof u) == 0, kept += !whole;
+			else
+				zero &= v == 0;
+		}
+	}
+	CHECK_MSG(same && zero && kept > 100, "region: kept values equal %d, others 0 %d (%d kept)", same, zero, kept);
+	same = 1;
+	for (int i = 0; i < w * h; i++)
+		same &= memcmp(&p.mean[i], &q.mean[i], sizeof *p.mean) == 0;
+	CHECK(same);
+	/* A^T R on a mask of the window's fine grid */
+	struct c0_covop op;
+	CHECK(c0_covop_init(&op, h, w, R, SIG, D) == C0_OK);
+	const size_t L = (size_t)h * w * R * R;
+	uint8_t *on = malloc(L);
+	double *C = malloc(sizeof *C * L), *Co = malloc(sizeof *Co * L);
+	for (size_t i = 0; i < L; i++)
+		on[i] = c0_rng_uniform(&rng) < 0.1;
+	c0_covop_adjoint(&op, &p, p.r, C);
+	c0_covop_adjoint_on(&op, &p, p.r, on, Co);
+	same = 1, zero = 1;
+	for (size_t i = 0; i < L; i++)
+		if (on[i])
+			same &= memcmp(&C[i], &Co[i], sizeof *C) == 0;
+		else
+			zero &= Co[i] == 0;
+	CHECK_MSG(same && zero, "A^T R on a mask: equal %d, 0 elsewhere %d", same, zero);
+	free(on), free(C), free(Co);
+	c0_covop_free(&op);
+	c0_cov_free(&p), c0_cov_free(&q);
+	c0_cov_acc_free(a), c0_cov_acc_free(b);
+}
+
 int main(void)
 {
 	c0_rng_init(&rng, 42, 0);
@@ -877,6 +939,7 @@ int main(void)
 	RUN(test_dense_identities);
 	RUN(test_covariance);
 	RUN(test_noise_map);
+	RUN(test_noise_fast);
 	RUN(test_covariance_operator);
 	RUN(test_covnormal);
 	RUN(test_covfit);

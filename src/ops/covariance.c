@@ -27,6 +27,7 @@ struct c0_cov_acc {
 	double guard;       /* c0_cov_acc_set_guard's g; 0: none */
 	const float *noise; /* c0_cov_acc_set_noise's map (NULL: none), its width and this accumulator's origin in it */
 	int noise_w, noise_x0, noise_y0;
+	int *span, *span_at; /* c0_cov_acc_set_region's row spans [x0, x1): row y's from span_at[y] to span_at[y + 1] (NULL: none) */
 };
 
 static void subtract_noise(const struct c0_cov_acc *a, int y0, int x0, struct c0_cov *c);
@@ -108,6 +109,7 @@ void c0_cov_acc_free(struct c0_cov_acc *a)
 	if (!a)
 		return;
 	free(a->dy), free(a->dx), free(a->sum), free(a->shift), free(a->s1), free(a->st), free(a->blk);
+	free(a->span), free(a->span_at);
 	free(a);
 }
 
@@ -136,6 +138,53 @@ static void row_products(double *row, const float *p, const float *q, int x0, in
 	}
 }
 
+/* the lags c0_cov_guard reads (and the variance): kept on every pixel */
+static int whole_lag(int dy, int dx)
+{
+	return (dy == 0 && dx <= 1) || (dy == 1 && dx == 0);
+}
+
+/* acc[x] += the block's products over [x0, x1), through row (in double) */
+static void sum_span(float *acc, double *row, const float *p, const float *q, int x0, int x1, int nb, size_t n)
+{
+	for (int x = x0; x < x1; x++)
+		row[x] = acc[x];
+	row_products(row, p, q, x0, x1, nb, n);
+	for (int x = x0; x < x1; x++)
+		acc[x] = (float)row[x];
+}
+
+int c0_cov_acc_set_region(struct c0_cov_acc *a, const uint8_t *keep)
+{
+	if (a->frames)
+		return c0_fail(C0_EINVAL, "covariance: the region is set before the first frame");
+	const int W = a->W, H = a->H;
+	size_t ns = 0;
+	for (size_t i = 0; i < (size_t)W * H; i++)   /* span starts */
+		ns += keep[i] && (i % W == 0 || !keep[i - 1]);
+	int *span = c0_alloc(2 * ns + 2, sizeof *span), *at = c0_alloc((size_t)H + 1, sizeof *at);
+	if (!span || !at) {
+		free(span), free(at);
+		return C0_ENOMEM;
+	}
+	int k = 0;
+	for (int y = 0; y < H; y++) {
+		at[y] = k;
+		const uint8_t *m = keep + (size_t)y * W;
+		for (int x = 0; x < W; x++)
+			if (m[x] && (x == 0 || !m[x - 1])) {
+				int e = x;
+				while (e < W && m[e])
+					e++;
+				span[2 * k] = x, span[2 * k + 1] = e, k++;
+			}
+	}
+	at[H] = k;
+	free(a->span), free(a->span_at);
+	a->span = span, a->span_at = at;
+	return C0_OK;
+}
+
 /* The sums are float (half the memory of the band: whole sCMOS frames fit);
  * each pass adds a block of frames in double and rounds once. */
 static void flush(struct c0_cov_acc *a)
@@ -158,11 +207,14 @@ static void flush(struct c0_cov_acc *a)
 					continue;
 				const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? W - dx : W;
 				float *acc = a->sum + (size_t)l * n + (size_t)y * W;
-				for (int x = x0; x < x1; x++)
-					row[x] = acc[x];
-				row_products(row, a->blk + (size_t)y * W, a->blk + (size_t)(y + dy) * W + dx, x0, x1, nb, n);
-				for (int x = x0; x < x1; x++)
-					acc[x] = (float)row[x];
+				const float *p = a->blk + (size_t)y * W, *q = a->blk + (size_t)(y + dy) * W + dx;
+				if (!a->span || whole_lag(dy, dx)) {
+					sum_span(acc, row, p, q, x0, x1, nb, n);
+					continue;
+				}
+				for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++)
+					sum_span(acc, row, p, q, a->span[2 * k] > x0 ? a->span[2 * k] : x0,
+						 a->span[2 * k + 1] < x1 ? a->span[2 * k + 1] : x1, nb, n);
 			}
 		free(row);
 	}
@@ -196,6 +248,27 @@ static double trend(const struct c0_cov_acc *a, size_t k)
 {
 	const double T = (double)a->frames, tbar = (T - 1) / 2, Stt = T * (T * T - 1) / 12;
 	return (a->st[k] - tbar * a->s1[k]) / sqrt(Stt);
+}
+
+/* a region's restricted lags are 0 outside it in the window at (y0, x0) */
+static void clear_outside(const struct c0_cov_acc *a, int y0, int x0, struct c0_cov *c)
+{
+	const size_t n = (size_t)c->W * c->H;
+	for (int l = 0; l < c->nlag; l++) {
+		if (whole_lag(c->dy[l], c->dx[l]))
+			continue;
+		for (int y = 0; y < c->H; y++) {
+			double *r = c->r + (size_t)l * n + (size_t)y * c->W;
+			int x = 0;   /* window column */
+			for (int k = a->span_at[y0 + y]; k <= a->span_at[y0 + y + 1]; k++) {
+				const int e = k < a->span_at[y0 + y + 1] ? a->span[2 * k] - x0 : c->W;   /* next span's start */
+				for (; x < (e < c->W ? e : c->W); x++)
+					r[x] = 0;
+				if (k < a->span_at[y0 + y + 1] && a->span[2 * k + 1] - x0 > x)
+					x = a->span[2 * k + 1] - x0;
+			}
+		}
+	}
 }
 
 int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct c0_cov *out)
@@ -249,6 +322,8 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 			}
 	}
 	free(tr);
+	if (a->span)
+		clear_outside(a, y0, x0, c);
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++)
 			c->mean[(size_t)y * w + x] += a->shift[(size_t)(y0 + y) * a->W + x0 + x];

@@ -53,6 +53,12 @@ void c0_cov_acc_set_guard(struct c0_cov_acc *a, double g);
  * lag 0 before the guard: the model's single noise variance then meets an
  * even noise. The map must outlive a. */
 void c0_cov_acc_set_noise(struct c0_cov_acc *a, const float *map, int map_w, int x0, int y0);
+/* Only where keep (H x W, this accumulator's pixels) are the lags other
+ * than (0, 0), (0, 1) and (1, 0) summed; windows hold 0 for them elsewhere.
+ * For a fit that reads them only near a known support (the noise variance
+ * on it): every value kept is the one without a region, bit for bit, at a
+ * fraction of the cost. Before the first frame. */
+int c0_cov_acc_set_region(struct c0_cov_acc *a, const uint8_t *keep);
 /* The same on a finished covariance; *set (or NULL): how many variances it set. */
 int c0_cov_guard(struct c0_cov *c, double g, size_t *set);
 /* Temporal variance of one pixel so far. */

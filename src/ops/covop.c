@@ -82,6 +82,30 @@ static int axis(int N, int r, double sigma, int d, struct c0_band *G, struct c0_
 	return C0_OK;
 }
 
+/* lambda_max of an axis's H, which depends on (N, r, sigma) alone: the
+ * power iteration (most of an operator's set-up) once per run for each
+ * size, not for every tile of every stack. The same number either way. */
+#define LIP_CACHE 16
+static double axis_lambda(const struct c0_band *H, int N, int r, double sigma)
+{
+	static struct { int N, r; double sigma, lam; } cache[LIP_CACHE];
+	static int used;
+	double lam = NAN;
+#pragma omp critical(c0_covop_lip)
+	for (int k = 0; k < used; k++)
+		if (cache[k].N == N && cache[k].r == r && cache[k].sigma == sigma)
+			lam = cache[k].lam;
+	if (!isnan(lam))
+		return lam;
+	lam = c0_band_lambda_max(H, 500);
+#pragma omp critical(c0_covop_lip)
+	{
+		const int k = used < LIP_CACHE ? used++ : (int)(((unsigned)N * 31u + (unsigned)r) % LIP_CACHE);
+		cache[k].N = N, cache[k].r = r, cache[k].sigma = sigma, cache[k].lam = lam;
+	}
+	return lam;
+}
+
 int c0_covop_init(struct c0_covop *op, int Ny, int Nx, int r, double sigma, int d)
 {
 	memset(op, 0, sizeof *op);
@@ -106,7 +130,7 @@ int c0_covop_init(struct c0_covop *op, int Ny, int Nx, int r, double sigma, int 
 		for (int a = 0; a < op->Ly; a++)
 			for (int b = 0; b < op->Lx; b++)
 				op->n[(size_t)a * op->Lx + b] = ny[a] * nx[b];
-		op->lip = c0_band_lambda_max(&op->Hy, 500) * c0_band_lambda_max(&op->Hx, 500);
+		op->lip = axis_lambda(&op->Hy, Ny, r, sigma) * axis_lambda(&op->Hx, Nx, r, sigma);
 	}
 	free(ny), free(nx);
 	if (st)
@@ -159,6 +183,48 @@ void c0_covop_adjoint(struct c0_covop *op, const struct c0_cov *cov, const doubl
 		for (size_t i = 0; i < L; i++)
 			c[i] += t2[i];
 	}
+}
+
+/* One fine pixel (a, b) of c0_covop_adjoint: the same products and sums
+ * in the same order (each band product sums its terms in order from 0; the
+ * lags of one dy weighted into a sum from 0; the dy's summed from 0). */
+static double adjoint_at(const struct c0_covop *op, const struct c0_cov *cov, const double *R, int a, int b)
+{
+	const size_t n = (size_t)op->Ny * op->Nx;
+	double c = 0;
+	for (int dy = 0; dy <= cov->d; dy++) {
+		const struct c0_band *ky = &op->KyT[op->d + dy];
+		int any = 0;
+		for (int l = 0; l < cov->nlag && !any; l++)
+			any = cov->dy[l] == dy;
+		if (!any)
+			continue;
+		double sy = 0;
+		for (int k = 0; k < ky->w; k++) {
+			const int i = ky->start[a] + k;
+			double t = 0;
+			for (int l = 0; l < cov->nlag; l++) {
+				if (cov->dy[l] != dy)
+					continue;
+				const struct c0_band *kx = &op->KxT[op->d + cov->dx[l]];
+				const double *g = kx->v + (size_t)b * kx->w, *row = R + l * n + (size_t)i * op->Nx + kx->start[b];
+				double sx = 0;
+				for (int q = 0; q < kx->w; q++)
+					sx += g[q] * row[q];
+				t += c0_cov_weight(cov, l) * sx;
+			}
+			sy += ky->v[(size_t)a * ky->w + k] * t;
+		}
+		c += sy;
+	}
+	return c;
+}
+
+void c0_covop_adjoint_on(const struct c0_covop *op, const struct c0_cov *cov, const double *R, const uint8_t *on, double *c)
+{
+	const size_t L = (size_t)op->Ly * op->Lx;
+	for (size_t p = 0; p < L; p++)
+		c[p] = on[p] ? adjoint_at(op, cov, R, (int)(p / op->Lx), (int)(p % op->Lx)) : 0;
 }
 
 /* x is sparse in the solvers (a few % of the grid after their first

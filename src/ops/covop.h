@@ -33,6 +33,10 @@ void c0_covop_free(struct c0_covop *op);
 void c0_covop_forward(struct c0_covop *op, const struct c0_cov *cov, const double *x, double *m);
 /* Its adjoint for the band's Frobenius product: R (nlag x Ny x Nx) -> c (Ly x Lx). */
 void c0_covop_adjoint(struct c0_covop *op, const struct c0_cov *cov, const double *R, double *c);
+/* c0_covop_adjoint's values at the fine pixels where on (Ly x Lx), bit for
+ * bit, 0 elsewhere: for a fit on a known support, a few thousand pixels of
+ * the grid's millions. */
+void c0_covop_adjoint_on(const struct c0_covop *op, const struct c0_cov *cov, const double *R, const uint8_t *on, double *c);
 /* A^T A x over all pixel pairs. */
 void c0_covop_normal(struct c0_covop *op, const double *x, double *out);
 /* Psi x (fine -> coarse) and Psi^T y, for tests and the intensity step. */

@@ -200,9 +200,16 @@ static int normalise(const struct c0_support_conf *c, const struct c0_cov *cov, 
 			ctx->R2 += w * v * v;
 		}
 	}
-	/* C without a normalised copy of the band */
-	double lm[2];
-	c0_support_correlate(ctx->op, cov, mx, C, &ctx->trR, lm);
+	/* C without a normalised copy of the band; on a mask, the masked fit
+	 * reads C only there (and needs no lambda_max) */
+	double lm[2] = { 0, 0 };
+	if (mask) {
+		ctx->trR = 0;
+		for (size_t i = 0; i < n; i++)
+			ctx->trR += cov->r[i] / mx;
+		c0_covop_adjoint_on(ctx->op, cov, cov->r, mask, C);
+	} else
+		c0_support_correlate(ctx->op, cov, mx, C, &ctx->trR, lm);
 	for (size_t i = 0; i < L; i++)
 		C[i] /= mx;
 	if (band)
