@@ -99,8 +99,11 @@ const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *
 		return NULL;
 	dims(h, w, r->ires[q].Ly, r->ires[q].Lx);
 	struct c0_intensity_result *s = &((struct c0_result *)r)->ires[q];   /* the cache is not const to its callers */
-	if (!s->x && r->xs[q] && (s->x = c0_alloc((size_t)r->Ly * r->Lx, sizeof *s->x)))
-		c0_result_x_rows(r, q, 0, r->Ly, s->x);
+	float *x = s->x || !r->xs[q] ? NULL : c0_alloc((size_t)r->Ly * r->Lx, sizeof *x);
+	if (x) {
+		c0_result_x_rows(r, q, 0, r->Ly, x);   /* from xs, s->x being NULL */
+		s->x = x;
+	}
 	return s->x;
 }
 
