@@ -179,13 +179,14 @@ int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n
 /* Arrays owned by the result (NULL when absent or q out of range). */
 int c0_result_nstacks(const struct c0_result *r);
 const uint8_t *c0_result_support(const struct c0_result *r, int *h, int *w);          /* union of the masks, fine grid */
-const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *w);   /* stack q (0-based), fine grid */
+const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *w);   /* stack q (0-based), fine grid; made on the first call (NULL when out of memory) */
 const float *c0_result_background(const struct c0_result *r, int q, int *h, int *w);  /* stack q, camera grid */
 const float *c0_result_volume(const struct c0_result *r, int *nz, int *h, int *w);    /* NULL in 2D mode; made on the first call (NULL when out of memory) */
 const float *c0_result_depth(const struct c0_result *r, int *h, int *w);              /* depth (nm), 0 where empty */
 const float *c0_result_baseline_volume(const struct c0_result *r, int *nz, int *h, int *w); /* camera grid; with baseline */
 const double *c0_result_z_nm(const struct c0_result *r, int *nz);                     /* depth bin centres */
-/* stack q's intensity splatted with a Gaussian of the localisation precision, fine grid (render.tif) */
+/* stack q's intensity splatted with a Gaussian of the localisation precision, fine grid (render.tif);
+ * every stack's made on the first call (NULL when out of memory) */
 const float *c0_result_render(const struct c0_result *r, int q, int *h, int *w);
 const char *c0_result_report_json(const struct c0_result *r); /* report.json: every parameter, estimate, timing */
 void c0_result_free(struct c0_result *r);

@@ -9,6 +9,7 @@
 #include "optics/tirf.h"
 #include <stdio.h>
 #include "app/depthcode.h"
+#include "stages/splat.h"
 #include "eval/metrics.h"
 #include "core/rng.h"
 #include "core/err.h"
@@ -125,6 +126,89 @@ static void test_pool_guided(void)
 	for (int j = 0; j < NZ; j++)
 		CHECK_MSG(z[j] == (float)(100 + (j + 0.5) * 20), "bin %d: depth %g", j, z[j]);
 	CHECK(z[NZ] == 0);
+}
+
+/* The run's pooling on the support's pixel list against the dense oracles
+ * above, bit for bit (a band of the summed-area table is the same table),
+ * and the render's bands against the whole splat. */
+static void test_pool_sparse(void)
+{
+	enum { NY = 23, NX = 17, NQ = 3, NP = NY * NX };
+	float x[NQ][NP], dense[NQ][NP], guide[NP];
+	uint8_t m[NP];
+	for (int i = 0; i < NP; i++) {
+		m[i] = c0_rng_uniform(&rng) < 0.3, guide[i] = m[i] ? (float)(20 * (int)(10 * c0_rng_uniform(&rng))) : 0;
+		for (int q = 0; q < NQ; q++)
+			x[q][i] = m[i] ? (float)c0_rng_uniform(&rng) : 0;
+	}
+	m[0] = 1, m[NP - 1] = 1;   /* the corners */
+	struct c0_pixlist pl;
+	CHECK(c0_pixlist_from_mask(m, NY, NX, &pl) == C0_OK);
+	size_t M = 0;
+	for (int i = 0; i < NP; i++)
+		M += m[i];
+	CHECK(pl.M == M && pl.row[NY] == M);
+	float xs[NQ][NP], out[NQ][NP], gs[NP];
+	for (size_t k = 0; k < M; k++) {
+		CHECK(m[pl.pix[k]] && (k == 0 || pl.pix[k] > pl.pix[k - 1]) && c0_pixlist_find(&pl, pl.pix[k]) == (long)k);
+		gs[k] = guide[pl.pix[k]];
+		for (int q = 0; q < NQ; q++)
+			xs[q][k] = x[q][pl.pix[k]];
+	}
+	CHECK(c0_pixlist_find(&pl, 1) == (m[1] ? 1 : -1));
+	int bad = 0;
+	for (int h = 0; h <= 4; h++) {
+		CHECK(c0_pool_window(x[0], m, NY, NX, h, dense[0]) == C0_OK);
+		CHECK(c0_pool_window_at(xs[0], &pl, h, out[0]) == C0_OK);
+		for (size_t k = 0; k < M; k++)
+			bad += memcmp(&out[0][k], &dense[0][pl.pix[k]], sizeof(float)) != 0;
+		const float *xd[NQ] = { x[0], x[1], x[2] }, *xl[NQ] = { xs[0], xs[1], xs[2] };
+		float *od[NQ] = { dense[0], dense[1], dense[2] }, *ol[NQ] = { out[0], out[1], out[2] };
+		CHECK(c0_pool_guided(xd, NQ, m, guide, 30, NY, NX, h, od) == C0_OK);
+		CHECK(c0_pool_guided_at(xl, NQ, &pl, gs, 30, h, ol) == C0_OK);
+		for (int q = 0; q < NQ; q++)
+			for (size_t k = 0; k < M; k++)
+				bad += memcmp(&out[q][k], &dense[q][pl.pix[k]], sizeof(float)) != 0;
+		/* rescaling: columns on every other support pixel, and one off it */
+		int col[NP], nc = 0;
+		for (size_t k = 0; k < M; k += 2)
+			col[nc++] = pl.pix[k];
+		for (int p = 0; p < NP && nc < NP; p++)
+			if (!m[p]) {
+				col[nc] = p;
+				for (int i = nc; i > 0 && col[i - 1] > p; i--)
+					col[i] = col[i - 1], col[i - 1] = p;
+				nc++;
+				break;
+			}
+		float f0[2 * NP], f1[2 * NP];
+		for (int i = 0; i < 2 * nc; i++)
+			f0[i] = f1[i] = (float)(1 + i);
+		c0_pool_rescale(f0, 2, col, (size_t)nc, NQ, xd, (const float *const *)od);
+		c0_pool_rescale_at(f1, 2, col, (size_t)nc, NQ, &pl, xl, (const float *const *)ol);
+		bad += memcmp(f0, f1, sizeof(float) * 2 * nc) != 0;
+	}
+	CHECK_MSG(bad == 0, "%d values differ from the dense oracles", bad);
+	/* single depth on the list equals the dense map at its pixels */
+	double W[NQ * 4];
+	for (int i = 0; i < NQ * 4; i++)
+		W[i] = 1 + c0_rng_uniform(&rng);
+	const float *xd[NQ] = { x[0], x[1], x[2] }, *xl[NQ] = { xs[0], xs[1], xs[2] };
+	c0_depth_single(W, NQ, 4, 100, 20, xd, m, NP, dense[0]);
+	c0_depth_single(W, NQ, 4, 100, 20, xl, NULL, M, out[0]);
+	for (size_t k = 0; k < M; k++)
+		bad += out[0][k] != dense[0][pl.pix[k]];
+	CHECK(bad == 0);
+	c0_pixlist_free(&pl);
+	/* the render in bands of 5 rows (radius 3) against the whole */
+	float *whole = malloc(sizeof(float) * NP), *band = malloc(sizeof(float) * NP);
+	CHECK(c0_splat(x[0], NY, NX, 0.9, whole) == C0_OK);
+	for (int y0 = 0; y0 < NY; y0 += 5) {   /* x from the band's first row within the radius */
+		const int t0 = y0 - c0_splat_radius(0.9) < 0 ? 0 : y0 - c0_splat_radius(0.9);
+		CHECK(c0_splat_rows(x[0] + t0 * NX, t0, NY, NX, 0.9, y0, y0 + 5 < NY ? y0 + 5 : NY, band + y0 * NX) == C0_OK);
+	}
+	CHECK(memcmp(whole, band, sizeof(float) * NP) == 0);
+	free(whole), free(band);
 }
 
 static void test_depth_error(void)
@@ -301,6 +385,7 @@ int main(void)
 	c0_rng_init(&rng, 23, 0);
 	RUN(test_pool_window);
 	RUN(test_pool_guided);
+	RUN(test_pool_sparse);
 	RUN(test_depth_error);
 	RUN(test_depthcode);
 	RUN(test_depth_fit);

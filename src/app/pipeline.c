@@ -41,113 +41,97 @@ static int support_stacks(const struct c0_run_conf *c, const int *only, int n, s
 
 /* The guide of the depth pooling: each support pixel's depth from its own
  * intensities summed over a (2 hg + 1)^2 window, one depth per pixel fitted
- * against the model's bin weights (no volume, no regulariser). */
-static int depth_guide(const struct c0_run_conf *ct, const struct c0_matirf_conf *m, const uint8_t *mask,
-		       const float *const *own, int Ly, int Lx, int hg, float *guide)
+ * against the model's bin weights (no volume, no regulariser). own and
+ * guide over the support's pixels pl. */
+static int depth_guide(const struct c0_run_conf *ct, const struct c0_matirf_conf *m, const struct c0_pixlist *pl,
+		       const float *const *own, int hg, float *guide)
 {
 	const int nq = ct->nangles, nz = c0_matirf_nz(m);
-	const size_t L = (size_t)Ly * Lx;
 	float *g[C0_MAX_STACKS] = { 0 };
 	double *W = c0_alloc((size_t)nq * nz, sizeof *W);
 	int st = W ? c0_tirf_weights(&m->tirf, nq, ct->angles, ct->ngains ? ct->gains : NULL, nz, m->z0_nm, m->dz_nm, W)
 		   : C0_ENOMEM;
 	for (int i = 0; !st && hg > 0 && i < nq; i++)
-		st = (g[i] = c0_alloc(L, sizeof(float))) ? c0_pool_window(own[i], mask, Ly, Lx, hg, g[i]) : C0_ENOMEM;
+		st = (g[i] = c0_alloc(pl->M ? pl->M : 1, sizeof(float))) ? c0_pool_window_at(own[i], pl, hg, g[i]) : C0_ENOMEM;
 	if (!st)
-		c0_depth_single(W, nq, nz, m->z0_nm, m->dz_nm, hg > 0 ? (const float *const *)g : own, mask, L, guide);
+		c0_depth_single(W, nq, nz, m->z0_nm, m->dz_nm, hg > 0 ? (const float *const *)g : own, NULL, pl->M, guide);
 	for (int i = 0; i < nq; i++)
 		free(g[i]);
 	free(W);
 	return st;
 }
 
-/* The volume from the intensities, each pooled over a window of about
- * pool_nm (odd, in fine pixels) on the support, over the pixels whose guide
- * depth is within pool_range_nm of the centre's (0: all). */
-/* A stack's intensity over its bleaching factor is MA-TIRF's input: scaled
- * in place rather than copied (a copy is a whole fine grid per angle: 268 MB
- * at 2048 x 2048 camera pixels), its values kept on the few pixels where it
- * is not 0 (x is 0 off the support) and put back afterwards, bit for bit. */
-struct kept {
-	size_t n, *at;
-	float *v;
-};
-
-static int scale_in_place(float *x, size_t L, float g, struct kept *k)
+/* MA-TIRF's input: the intensities over their bleaching factors, each
+ * pooled over a window of about pool_nm (odd, in fine pixels) on the
+ * support, over the pixels whose guide depth is within pool_range_nm of the
+ * centre's (0: all). All of it on the support's pixels alone (own, pooled:
+ * nq arrays over pl), the fine grid being a thousand times larger. */
+static int pool_input(struct c0_result *r, const struct c0_run_conf *ct, const int *tirf, const struct c0_stage_confs *s,
+		      const struct c0_pixlist *pl, int h, int hg, float *const *own, float *const *pooled)
 {
-	*k = (struct kept){ 0 };
-	if (g == 1)
-		return C0_OK;
-	for (size_t p = 0; p < L; p++)
-		k->n += x[p] != 0;
-	if (k->n && (!(k->at = c0_alloc(k->n, sizeof *k->at)) || !(k->v = c0_alloc(k->n, sizeof *k->v)))) {
-		free(k->at);
-		*k = (struct kept){ 0 };
-		return C0_ENOMEM;
+	const int nq = ct->nangles;
+	for (int i = 0; i < nq; i++) {
+		const float g = (float)(1 / r->bleach_factor[tirf[i]]);
+		for (size_t k = 0; k < pl->M; k++)
+			own[i][k] = c0_result_x_at(r, tirf[i], k) * g;
 	}
-	for (size_t p = 0, j = 0; p < L; p++)
-		if (x[p] != 0) {
-			k->at[j] = p, k->v[j++] = x[p];
-			x[p] = x[p] * g;
-		}
-	return C0_OK;
-}
-
-static void unscale(float *x, struct kept *k)
-{
-	for (size_t j = 0; j < k->n; j++)
-		x[k->at[j]] = k->v[j];
-	free(k->at), free(k->v);
-	*k = (struct kept){ 0 };
+	if (h <= 0)
+		return C0_OK;
+	int st = C0_OK;
+	if (!hg) {
+		for (int i = 0; !st && i < nq; i++)
+			st = c0_pool_window_at(own[i], pl, h, pooled[i]);
+		return st;
+	}
+	float *guide = c0_alloc(pl->M ? pl->M : 1, sizeof *guide);
+	st = guide ? depth_guide(ct, &s->matirf, pl, (const float *const *)own, hg, guide) : C0_ENOMEM;
+	if (!st)
+		st = c0_pool_guided_at((const float *const *)own, nq, pl, guide, s->pool_range_nm, h, pooled);
+	free(guide);
+	return st;
 }
 
 static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *tirf, const struct c0_stage_confs *s)
 {
 	const int nq = ct->nangles, Ly = r->Ly, Lx = r->Lx;
-	const size_t L = (size_t)Ly * Lx, Nc = r->ires[0].Ny * (size_t)r->ires[0].Nx;
-	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 }, *guide = NULL;
-	struct kept kept[C0_MAX_STACKS] = { 0 };
+	const size_t Nc = r->ires[0].Ny * (size_t)r->ires[0].Nx, M = r->pl.M ? r->pl.M : 1;
+	float *own[C0_MAX_STACKS] = { 0 }, *pooled[C0_MAX_STACKS] = { 0 }, *img[C0_MAX_STACKS] = { 0 }, *base[C0_MAX_STACKS] = { 0 };
 	const double fine = c0_grid_fine_nm(&s->support.grid);
 	const int h = (int)lround((s->pool_nm / fine - 1) / 2), guided = h > 0 && s->pool_range_nm > 0;
 	c0_mem_stage("matirf");   /* the pooled intensities are its input */
 	const int hg = guided ? (int)lround((C0_DEPTH_GUIDE_FWHM * s->support.grid.fwhm_nm / fine - 1) / 2) : 0;
+	const struct c0_pixlist *pl = &r->pl;
 	int st = C0_OK;
 	for (int i = 0; !st && i < nq; i++) {
-		const int q = tirf[i];
-		const float g = (float)(1 / r->bleach_factor[q]);
-		own[i] = r->ires[q].x;
-		if ((st = scale_in_place(own[i], L, g, &kept[i])) || (h > 0 && !(pooled[i] = c0_alloc(L, sizeof(float))))) {
+		if (!(own[i] = c0_alloc(M, sizeof(float))) || (h > 0 && !(pooled[i] = c0_alloc(M, sizeof(float)))) ||
+		    (ct->baseline && !(base[i] = c0_alloc(Nc, sizeof(float)))))
 			st = C0_ENOMEM;
-			break;
-		}
-		if (ct->baseline && !(st = (base[i] = c0_alloc(Nc, sizeof(float))) ? C0_OK : C0_ENOMEM))
-			for (size_t p = 0; p < Nc; p++)
-				base[i][p] = r->corrected[q][p] * g;
-		if (!st && h > 0 && !guided)
-			st = c0_pool_window(own[i], r->mask, Ly, Lx, h, pooled[i]);
+		for (size_t p = 0; !st && ct->baseline && p < Nc; p++)
+			base[i][p] = r->corrected[tirf[i]][p] * (float)(1 / r->bleach_factor[tirf[i]]);
 	}
-	if (!st && guided) {
-		st = (guide = c0_alloc(L, sizeof(float))) ? depth_guide(ct, &s->matirf, r->mask, (const float *const *)own, Ly, Lx,
-								      hg, guide)
-							 : C0_ENOMEM;
-		if (!st)
-			st = c0_pool_guided((const float *const *)own, nq, r->mask, guide, s->pool_range_nm, Ly, Lx, h, pooled);
-	}
-	free(guide);
 	if (!st)
-		st = c0_step_matirf(r, ct, &s->matirf, h > 0 ? (const float *const *)pooled : (const float *const *)own,
-				    h > 0 ? (const float *const *)own : NULL, Ly, Lx, fine, 0);
+		st = pool_input(r, ct, tirf, s, pl, h, guided ? hg : 0, own, pooled);
+	/* the solve reads whole images, 0 off the support: untouched, their
+	 * pages stay out of memory (a few in ten at 2048 x 2048 camera pixels) */
+	for (int i = 0; !st && i < nq; i++) {
+		if (!(img[i] = c0_alloc((size_t)Ly * Lx, sizeof(float))))
+			st = C0_ENOMEM;
+		for (size_t k = 0; !st && k < pl->M; k++)
+			img[i][pl->pix[k]] = (h > 0 ? pooled : own)[i][k];
+	}
+	const struct c0_pooled pin = { pl, (const float *const *)own, (const float *const *)pooled };
+	if (!st)
+		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)img, h > 0 ? &pin : NULL, Ly, Lx, fine, 0);
+	for (int i = 0; i < nq; i++)
+		free(img[i]), img[i] = NULL;
 	if (!st)
 		c0_report_pool(cJSON_GetObjectItem(r->rep, "matirf"), h > 0 ? 2 * h + 1 : 0, guided ? s->pool_range_nm : 0,
 			       guided ? 2 * hg + 1 : 0);
 	if (!st && ct->baseline)
 		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
 				    s->support.grid.pixel_nm, 1);
-	for (int i = 0; i < nq; i++) {
-		if (own[i])
-			unscale(own[i], &kept[i]);
-		free(pooled[i]), free(base[i]);
-	}
+	for (int i = 0; i < nq; i++)
+		free(own[i]), free(pooled[i]), free(base[i]);
 	return st;
 }
 

@@ -9,6 +9,7 @@
 #include "stages/matirf.h"
 #include "stages/drift.h"
 #include "stages/bleach.h"
+#include "stages/depthpool.h"
 #include "optics/psffit.h"
 #include "io/frames.h"
 #include "io/outdir.h"
@@ -56,14 +57,26 @@ struct c0_result {
 	cJSON *timings;
 	struct c0_drift *drift;      /* after the drift step: the trajectory, and each stack's frame hook */
 	void *hooks[C0_MAX_STACKS];
-	float *render;               /* n planes Ly x Lx, after the render step */
-	double render_sd_nm;
+	double render_sd_nm;         /* after the render step (0 before): its Gaussian, */
+	float render_lo, render_hi;  /* and the range of its values */
+	float *render;               /* n planes Ly x Lx, made when the library's caller first asks (c0_result_render) */
+	/* the intensities on the support alone (x is 0 off it), from the
+	 * intensity step: the union mask's pixels pl and stack q's values xs[q]
+	 * over them; ires[q].x is then NULL until the library's caller asks for
+	 * it (c0_result_intensity). A stack whose x is not 0 off the mask keeps x. */
+	struct c0_pixlist pl;
+	float *xs[C0_MAX_STACKS];
 	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
 	/* vol and base on the whole grid, made when the library's caller first
 	 * asks for them (c0_result_volume): the run holds only their columns */
 	float *vol_dense, *base_dense;
 };
 
+/* Rows y0..y1 of stack q's intensity (fine grid) into buf ((y1 - y0) x Lx),
+ * from x or from xs; its value at pl's pixel k; its sum in raster order. */
+void c0_result_x_rows(const struct c0_result *r, int q, int y0, int y1, float *buf);
+float c0_result_x_at(const struct c0_result *r, int q, size_t k);
+double c0_result_x_sum(const struct c0_result *r, int q);
 /* A step's bookkeeping: its name for the out-of-memory message while it
  * runs (c0_mem_stage), then in the report its wall seconds (timings_s), the
  * peak resident memory so far (peak_rss_mb) and how much the step raised
@@ -115,13 +128,16 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struc
 int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
 		      struct c0_frames *f, const double *sigma2, int corrected, const int *share);
 /* MA-TIRF volume from nq images (ny x nx at pixel_nm) into r->vol, or
- * r->base with baseline; own (or NULL): the pixels' own images when img
- * are pooled (stages/depthpool.h). */
+ * r->base with baseline; pool (or NULL): the pixels' own and pooled
+ * intensities when img are pooled (stages/depthpool.h). */
+struct c0_pooled;
 int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
-		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline);
+		   const float *const *img, const struct c0_pooled *pool, int ny, int nx, double pixel_nm, int baseline);
 /* render: each intensity splatted with a Gaussian of the support's
  * localisation precision (at least half a fine pixel; stages/splat.h). */
 int c0_step_render(struct c0_result *r);
+/* Plane q of the render (Ly x Lx) into plane, after the render step. */
+int c0_render_plane(const struct c0_result *r, int q, float *plane);
 /* The standard MA-TIRF path on raw images (the matirf command): c's offset
  * and constant background subtracted (from copies; refused at or above an
  * image's mean), optional joint background estimation and deconvolution,

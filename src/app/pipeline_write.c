@@ -14,6 +14,28 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* render.tif plane by plane, each made as it is written (app/steps.c), with
+ * the display range c0_tiff_save_f32 would give all of them */
+static int write_render(const struct c0_result *r, struct c0_outdir *out)
+{
+	struct c0_tiff_wopts o = { .width = r->Lx, .height = r->Ly, .slices = r->n, .dtype = C0_F32,
+				   .pixel_size_nm = r->pixel_nm / r->srf, .software = "col0rme" };
+	if (r->render_lo <= r->render_hi)
+		o.display_min = r->render_lo, o.display_max = r->render_hi > r->render_lo ? r->render_hi : r->render_lo + 1;
+	float *plane = c0_alloc((size_t)r->Ly * r->Lx, sizeof *plane);
+	struct c0_tiff_writer *w = NULL;
+	int st = plane ? c0_tiff_create(c0_outdir_file(out, "render.tif"), &o, &w) : C0_ENOMEM;
+	for (int q = 0; !st && q < r->n; q++)
+		if (!(st = c0_render_plane(r, q, plane)))
+			st = c0_tiff_write_plane(w, plane);
+	free(plane);
+	if (st) {
+		c0_tiff_abort(w);
+		return st;
+	}
+	return c0_tiff_commit(w);
+}
+
 /* support.tif (the union of the masks) and rx.tif (one plane per support stack) */
 static int write_support(const struct c0_result *r, struct c0_outdir *out)
 {
@@ -37,23 +59,32 @@ static int write_support(const struct c0_result *r, struct c0_outdir *out)
 	return st;
 }
 
+/* intensity_qNN.tif from x, or from the support's values (app/pipeline.h)
+ * through one plane, and background_qNN.tif */
 static int write_intensity(const struct c0_result *r, struct c0_outdir *out)
 {
-	for (int i = 0; i < r->n; i++) {
-		int st;
+	float *plane = NULL;
+	int st = C0_OK;
+	for (int i = 0; !st && i < r->n; i++) {
 		const struct c0_intensity_result *s = &r->ires[i];
 		char name[64];
 		struct c0_tiff_wopts o = { .width = s->Lx, .height = s->Ly, .dtype = C0_F32,
 					   .pixel_size_nm = r->pixel_nm / r->srf, .software = "col0rme" };
+		if (!s->x && !plane && !(plane = c0_alloc((size_t)s->Ly * s->Lx, sizeof *plane))) {
+			st = C0_ENOMEM;
+			break;
+		}
+		if (!s->x)
+			c0_result_x_rows(r, i, 0, s->Ly, plane);
 		snprintf(name, sizeof name, "intensity_q%02d.tif", i + 1);
-		if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->x)))
-			return st;
+		if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->x ? s->x : plane)))
+			break;
 		o.width = s->Nx, o.height = s->Ny, o.pixel_size_nm = r->pixel_nm;
 		snprintf(name, sizeof name, "background_q%02d.tif", i + 1);
-		if ((st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->b)))
-			return st;
+		st = c0_tiff_save_f32(c0_outdir_file(out, name), &o, s->b);
 	}
-	return C0_OK;
+	free(plane);
+	return st;
 }
 
 /* mean_qNN.tif: each stack's temporal mean (camera grid), from the
@@ -181,11 +212,8 @@ int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out)
 	c0_mem_stage("writing");
 	if (r->drift)
 		st = write_drift(r, out);
-	if (!st && r->render) {
-		struct c0_tiff_wopts o = { .width = r->Lx, .height = r->Ly, .slices = r->n, .dtype = C0_F32,
-					   .pixel_size_nm = r->pixel_nm / r->srf, .software = "col0rme" };
-		st = c0_tiff_save_f32(c0_outdir_file(out, "render.tif"), &o, r->render);
-	}
+	if (!st && r->render_sd_nm > 0)
+		st = write_render(r, out);
 	if (!st && r->sres)
 		st = write_support(r, out);
 	if (!st && r->ires)

@@ -20,22 +20,28 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+/* Rows of X taken to double at a time (each row's product is its own) */
+#define C0_ERRMAP_BAND 256
+
 /* model (ny x nx) = G_y X G_x^T + b */
 static int forward(const struct c0_rundir *d, const float *x, const float *b, double *model)
 {
 	const int ny = d->ny, nx = d->nx, r = d->grid.srf, Ly = ny * r, Lx = nx * r;
 	const double sigma = c0_grid_sigma_px(&d->grid);
 	struct c0_band gy = { 0 }, gx = { 0 };
-	double *X = c0_alloc((size_t)Ly * Lx, sizeof *X), *tmp = c0_alloc((size_t)Ly * nx, sizeof *tmp);
+	double *X = c0_alloc((size_t)C0_ERRMAP_BAND * Lx, sizeof *X), *tmp = c0_alloc((size_t)Ly * nx, sizeof *tmp);
 	int st = X && tmp ? C0_OK : C0_ENOMEM;
 	if (!st)
 		st = c0_psf_factor(ny, r, sigma, &gy);
 	if (!st)
 		st = c0_psf_factor(nx, r, sigma, &gx);
 	if (!st) {
-		for (size_t i = 0; i < (size_t)Ly * Lx; i++)
-			X[i] = x[i];
-		c0_band_apply_x(&gx, Ly, X, tmp);
+		for (int y0 = 0; y0 < Ly; y0 += C0_ERRMAP_BAND) {
+			const int nr = Ly - y0 < C0_ERRMAP_BAND ? Ly - y0 : C0_ERRMAP_BAND;
+			for (size_t i = 0; i < (size_t)nr * Lx; i++)
+				X[i] = x[(size_t)y0 * Lx + i];
+			c0_band_apply_x(&gx, nr, X, tmp + (size_t)y0 * nx);
+		}
 		c0_band_apply_y(&gy, nx, tmp, model);
 		for (size_t i = 0; i < (size_t)ny * nx; i++)
 			model[i] += b[i];

@@ -7,6 +7,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 int c0_result_new(const char *command, int n, const char *const *names, const int *is_file, struct c0_result **out)
 {
@@ -62,6 +63,9 @@ void c0_result_free(struct c0_result *r)
 		if (r->corrected)
 			free(r->corrected[q]);
 	}
+	for (int q = 0; q < C0_MAX_STACKS; q++)
+		free(r->xs[q]);
+	c0_pixlist_free(&r->pl);
 	free(r->sres), free(r->ires), free(r->corrected), free(r->mask), free(r->names), free(r->json);
 	c0_drift_free(r->drift), free(r->render), free(r->mean);
 	c0_matirf_result_free(&r->vol), c0_matirf_result_free(&r->base);
@@ -94,7 +98,13 @@ const float *c0_result_intensity(const struct c0_result *r, int q, int *h, int *
 	if (!r->ires || q < 0 || q >= r->n)
 		return NULL;
 	dims(h, w, r->ires[q].Ly, r->ires[q].Lx);
-	return r->ires[q].x;
+	struct c0_intensity_result *s = &((struct c0_result *)r)->ires[q];   /* the cache is not const to its callers */
+	float *x = s->x || !r->xs[q] ? NULL : c0_alloc((size_t)r->Ly * r->Lx, sizeof *x);
+	if (x) {
+		c0_result_x_rows(r, q, 0, r->Ly, x);   /* from xs, s->x being NULL */
+		s->x = x;
+	}
+	return s->x;
 }
 
 const float *c0_result_background(const struct c0_result *r, int q, int *h, int *w)
@@ -135,10 +145,18 @@ const float *c0_result_depth(const struct c0_result *r, int *h, int *w)
 
 const float *c0_result_render(const struct c0_result *r, int q, int *h, int *w)
 {
-	if (!r->render || q < 0 || q >= r->n)
+	if (!(r->render_sd_nm > 0) || q < 0 || q >= r->n)
 		return NULL;
 	dims(h, w, r->Ly, r->Lx);
-	return r->render + (size_t)q * r->Ly * r->Lx;
+	const size_t L = (size_t)r->Ly * r->Lx;
+	struct c0_result *m = (struct c0_result *)r;   /* the cache is not const to its callers */
+	if (!m->render && (m->render = c0_alloc(L * (size_t)r->n, sizeof *m->render)))
+		for (int k = 0; k < r->n; k++)
+			if (c0_render_plane(r, k, m->render + k * L)) {
+				free(m->render), m->render = NULL;
+				break;
+			}
+	return m->render ? m->render + q * L : NULL;
 }
 
 const double *c0_result_z_nm(const struct c0_result *r, int *nz)
@@ -154,4 +172,33 @@ const char *c0_result_report_json(const struct c0_result *r)
 	if (!m->json)
 		m->json = cJSON_Print(r->rep);
 	return m->json;
+}
+
+void c0_result_x_rows(const struct c0_result *r, int q, int y0, int y1, float *buf)
+{
+	const size_t W = (size_t)r->Lx;
+	if (r->ires[q].x) {
+		memcpy(buf, r->ires[q].x + y0 * W, (size_t)(y1 - y0) * W * sizeof *buf);
+		return;
+	}
+	memset(buf, 0, (size_t)(y1 - y0) * W * sizeof *buf);
+	for (size_t k = r->pl.row[y0]; k < r->pl.row[y1]; k++)
+		buf[r->pl.pix[k] - y0 * W] = r->xs[q][k];
+}
+
+float c0_result_x_at(const struct c0_result *r, int q, size_t k)
+{
+	return r->xs[q] ? r->xs[q][k] : r->ires[q].x[r->pl.pix[k]];
+}
+
+double c0_result_x_sum(const struct c0_result *r, int q)
+{
+	double s = 0;   /* the zeros off the support add nothing */
+	if (r->xs[q])
+		for (size_t k = 0; k < r->pl.M; k++)
+			s += r->xs[q][k];
+	else
+		for (size_t i = 0; i < (size_t)r->Ly * r->Lx; i++)
+			s += r->ires[q].x[i];
+	return s;
 }

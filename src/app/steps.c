@@ -54,6 +54,38 @@ int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n)
 	return C0_OK;
 }
 
+/* Rows of the render made at a time: a band of the fine grid, not n planes
+ * of it (1.3 GB for 5 stacks at 2048 x 2048 camera pixels). */
+#define C0_RENDER_BAND 256
+
+/* rows y0..y1 of plane q of the render into out; xb: room for the rows of
+ * x within the radius of the band */
+static int render_rows(const struct c0_result *r, int q, double sigma, int y0, int y1, float *xb, float *out)
+{
+	const int rr = c0_splat_radius(sigma), t0 = y0 - rr < 0 ? 0 : y0 - rr, t1 = y1 + rr > r->Ly ? r->Ly : y1 + rr;
+	c0_result_x_rows(r, q, t0, t1, xb);
+	return c0_splat_rows(xb, t0, r->Ly, r->Lx, sigma, y0, y1, out);
+}
+
+static float *render_xbuf(const struct c0_result *r, double sigma)
+{
+	return c0_alloc((size_t)(C0_RENDER_BAND + 2 * c0_splat_radius(sigma)) * r->Lx, sizeof(float));
+}
+
+int c0_render_plane(const struct c0_result *r, int q, float *plane)
+{
+	const double sigma = r->render_sd_nm / (r->pixel_nm / r->srf);
+	float *xb = render_xbuf(r, sigma);
+	int st = xb ? C0_OK : C0_ENOMEM;
+	for (int y0 = 0; !st && y0 < r->Ly; y0 += C0_RENDER_BAND)
+		st = render_rows(r, q, sigma, y0, y0 + C0_RENDER_BAND < r->Ly ? y0 + C0_RENDER_BAND : r->Ly, xb,
+				 plane + (size_t)y0 * r->Lx);
+	free(xb);
+	return st;
+}
+
+/* The render's planes are made when written (and when the library's caller
+ * asks for them); the step fixes their Gaussian and their display range. */
 int c0_step_render(struct c0_result *r)
 {
 	const struct c0_step_clock t = c0_step_begin("render");
@@ -62,15 +94,22 @@ int c0_step_render(struct c0_result *r)
 	for (int k = 0; r->sres && k < r->nsup; k++)
 		prec = fmax(prec, r->sres[k].precision_nm);
 	const double sd = fmax(prec, 0.5 * fine);
-	const size_t L = (size_t)r->Ly * r->Lx;
-	if (!(r->render = c0_alloc(L * (size_t)r->n, sizeof *r->render)))
-		return C0_ENOMEM;
-	for (int q = 0; q < r->n; q++) {
-		int st = c0_splat(r->ires[q].x, r->Ly, r->Lx, sd / fine, r->render + q * L);
-		if (st)
-			return st;
-	}
-	r->render_sd_nm = sd;
+	float *band = c0_alloc((size_t)C0_RENDER_BAND * r->Lx, sizeof *band), *xb = render_xbuf(r, sd / fine);
+	float lo = INFINITY, hi = -INFINITY;
+	int st = band && xb ? C0_OK : C0_ENOMEM;
+	for (int q = 0; !st && q < r->n; q++)
+		for (int y0 = 0; !st && y0 < r->Ly; y0 += C0_RENDER_BAND) {
+			const int y1 = y0 + C0_RENDER_BAND < r->Ly ? y0 + C0_RENDER_BAND : r->Ly;
+			st = render_rows(r, q, sd / fine, y0, y1, xb, band);
+			for (size_t i = 0; !st && i < (size_t)(y1 - y0) * r->Lx; i++) {
+				if (band[i] < lo) lo = band[i];
+				if (band[i] > hi) hi = band[i];
+			}
+		}
+	free(band), free(xb);
+	if (st)
+		return st;
+	r->render_sd_nm = sd, r->render_lo = lo, r->render_hi = hi;
 	c0_report_render(r->rep, sd, prec, fine);
 	c0_step_end(r, &t);
 	return C0_OK;
@@ -161,6 +200,24 @@ static int intensity_solve(const struct c0_intensity_conf *ic, const double *mea
 	return st;
 }
 
+/* Stack i's intensity kept on the support's pixels alone, its fine grid
+ * freed (268 MB at 2048 x 2048 camera pixels), unless it is not 0 off the mask */
+static int intensity_compact(struct c0_result *r, int i)
+{
+	float *x = r->ires[i].x;
+	const size_t L = (size_t)r->Ly * r->Lx;
+	for (size_t p = 0; p < L; p++)
+		if (x[p] != 0 && !r->mask[p])
+			return C0_OK;
+	if (!(r->xs[i] = c0_alloc(r->pl.M ? r->pl.M : 1, sizeof *r->xs[i])))
+		return C0_ENOMEM;
+	for (size_t k = 0; k < r->pl.M; k++)
+		r->xs[i][k] = x[r->pl.pix[k]];
+	free(x);
+	r->ires[i].x = NULL;
+	return C0_OK;
+}
+
 /* One smoothness for the stacks that share[] (the MA-TIRF angles): the
  * largest of their discrepancy mu where the principle was met (a stack
  * "above" sits at the search's end, 1e8), the one the weakest stack needs;
@@ -204,6 +261,9 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 		r->ires[i] = res;
 		if (corrected)
 			free(r->corrected[i]), r->corrected[i] = cor;
+		free(r->xs[i]), r->xs[i] = NULL;
+		if ((sts[i] = intensity_compact(r, i)))
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 	}
 }
 
@@ -241,6 +301,8 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 			continue;
 		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &r->ires[i],
 					 corrected ? &r->corrected[i] : NULL);
+		if (!sts[i])
+			sts[i] = intensity_compact(r, i);
 		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
 			r->mean[(size_t)i * H * W + p] = (float)(known[i] ? known[i]->mean : own[i])[p];
 		if (sts[i])
@@ -276,9 +338,11 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	r->mean = c0_alloc((size_t)n * f[0].height * f[0].width, sizeof *r->mean);
 	if (corrected)
 		r->corrected = c0_alloc((size_t)n, sizeof *r->corrected);
-	if (!msg || !r->ires || !r->mean || (corrected && !r->corrected)) {
+	c0_pixlist_free(&r->pl);
+	int stp = c0_pixlist_from_mask(r->mask, r->Ly, r->Lx, &r->pl);
+	if (stp || !msg || !r->ires || !r->mean || (corrected && !r->corrected)) {
 		free(msg);
-		return C0_ENOMEM;
+		return stp ? stp : C0_ENOMEM;
 	}
 	intensity_all(r, ic, sc, f, sigma2, corrected, known, frames, tc, sts, msg, share, mu_own);
 	for (int i = 0; i < n; i++)
@@ -315,7 +379,7 @@ static int depth_fit_cols(const struct c0_matirf_conf *m, const struct c0_run_co
 }
 
 int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
-		   const float *const *img, const float *const *own, int ny, int nx, double pixel_nm, int baseline)
+		   const float *const *img, const struct c0_pooled *pool, int ny, int nx, double pixel_nm, int baseline)
 {
 	struct c0_matirf_result *res = baseline ? &r->base : &r->vol;
 	const char *key = baseline ? "baseline_matirf" : "matirf";
@@ -324,9 +388,9 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	int st = c0_matirf_solve(m, nq, c->angles, c->ngains ? c->gains : NULL, img, ny, nx, res);
 	if (st)
 		return st;
-	if (own) {
+	if (pool) {
 		const size_t M = res->M;
-		c0_pool_rescale(res->f, res->nz, res->pixel, M, nq, own, img);
+		c0_pool_rescale_at(res->f, res->nz, res->pixel, M, nq, pool->pl, pool->own, pool->pooled);
 		for (size_t k = 0; k < M; k++) {     /* off the columns the total stays 0 */
 			double s = 0;
 			for (int j = 0; j < res->nz; j++)
@@ -417,10 +481,7 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 			B[q] += r->ires[q].b[i];
 	if (bc.mode == C0_BLEACH_REPEAT) {   /* intensity totals on the support: the repeat's over the first's */
 		const int first = bc.norder ? bc.order[0] : 0;
-		double s0 = 0, s1 = 0;
-		for (size_t i = 0; i < (size_t)r->Ly * r->Lx; i++)
-			s0 += r->ires[first].x[i], s1 += r->ires[n - 1].x[i];
-		bc.repeat_ratio = s1 / s0;
+		bc.repeat_ratio = c0_result_x_sum(r, n - 1) / c0_result_x_sum(r, first);
 	}
 	struct c0_bleach_result br;
 	int st = c0_bleach_run(&bc, n, f, B, &br);

@@ -2,6 +2,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 
@@ -79,7 +80,7 @@ void c0_depth_single(const double *W, int nq, int nz, double z0, double dz, cons
 #pragma omp parallel for schedule(static)
 	for (size_t p = 0; p < np; p++) {
 		out[p] = 0;
-		if (!mask[p])
+		if (mask && !mask[p])
 			continue;
 		/* ||x - a w_j||^2 at the best a >= 0 is ||x||^2 - (x.w_j)^2 / ||w_j||^2 when x.w_j > 0 */
 		double best = 0;
@@ -91,5 +92,134 @@ void c0_depth_single(const double *W, int nq, int nz, double z0, double dz, cons
 			if (gain > best)
 				best = gain, out[p] = (float)(z0 + (j + 0.5) * dz);
 		}
+	}
+}
+
+int c0_pixlist_from_mask(const uint8_t *mask, int ny, int nx, struct c0_pixlist *pl)
+{
+	const size_t L = (size_t)ny * nx;
+	*pl = (struct c0_pixlist){ ny, nx, 0, NULL, NULL };
+	for (size_t p = 0; p < L; p++)
+		pl->M += mask[p] != 0;
+	if (pl->M > INT_MAX)
+		return c0_fail(C0_EINVAL, "support: %zu pixels, at most %d", pl->M, INT_MAX);
+	pl->pix = c0_alloc(pl->M ? pl->M : 1, sizeof *pl->pix);
+	pl->row = c0_alloc((size_t)ny + 1, sizeof *pl->row);
+	if (!pl->pix || !pl->row) {
+		c0_pixlist_free(pl);
+		return C0_ENOMEM;
+	}
+	size_t k = 0;
+	for (int y = 0; y < ny; y++) {
+		pl->row[y] = k;
+		for (size_t p = (size_t)y * nx; p < (size_t)(y + 1) * nx; p++)
+			if (mask[p])
+				pl->pix[k++] = (int)p;
+	}
+	pl->row[ny] = k;
+	return C0_OK;
+}
+
+void c0_pixlist_free(struct c0_pixlist *pl)
+{
+	free(pl->pix), free(pl->row);
+	*pl = (struct c0_pixlist){ 0 };
+}
+
+/* the first index in [lo, hi) whose pixel is at or past p */
+static size_t lower(const int *pix, size_t lo, size_t hi, size_t p)
+{
+	while (lo < hi) {
+		size_t mid = lo + (hi - lo) / 2;
+		if ((size_t)pix[mid] < p)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	return lo;
+}
+
+long c0_pixlist_find(const struct c0_pixlist *pl, size_t p)
+{
+	const size_t y = p / (size_t)pl->nx, hi = pl->row[y + 1], k = lower(pl->pix, pl->row[y], hi, p);
+	return k < hi && (size_t)pl->pix[k] == p ? (long)k : -1;
+}
+
+int c0_pool_window_at(const float *x, const struct c0_pixlist *pl, int h, float *out)
+{
+	const int ny = pl->ny, nx = pl->nx, R = 2 * h + 2;
+	/* rows y of the table S ((ny + 1) x (nx + 1), row 0 zero) at S[y % R] */
+	double *S = c0_alloc((size_t)R * (nx + 1), sizeof *S);
+	float *v = c0_alloc((size_t)nx, sizeof *v);
+	if (!S || !v) {
+		free(S), free(v);
+		return C0_ENOMEM;
+	}
+#define SROW(y) (S + (size_t)((y) % R) * (nx + 1))
+	int made = 0;   /* rows 0..made of S are in the band */
+	for (int y = 0; y < ny; y++) {
+		const int y0 = y - h < 0 ? 0 : y - h, y1 = y + h + 1 > ny ? ny : y + h + 1;
+		for (; made < y1; made++) {   /* row made + 1 from row made and the image's row made */
+			double *a = SROW(made), *b = SROW(made + 1);
+			for (int i = 0; i < nx; i++)
+				v[i] = 0;
+			for (size_t k = pl->row[made]; k < pl->row[made + 1]; k++)
+				v[pl->pix[k] - (size_t)made * nx] = x[k];
+			b[0] = 0;
+			for (int xx = 0; xx < nx; xx++)
+				b[xx + 1] = v[xx] + a[xx + 1] + b[xx] - a[xx];
+		}
+		const double *s0 = SROW(y0), *s1 = SROW(y1);
+		for (size_t k = pl->row[y]; k < pl->row[y + 1]; k++) {
+			const int xx = (int)(pl->pix[k] - (size_t)y * nx);
+			const int x0 = xx - h < 0 ? 0 : xx - h, x1 = xx + h + 1 > nx ? nx : xx + h + 1;
+			out[k] = (float)(s1[x1] - s0[x1] - s1[x0] + s0[x0]);
+		}
+	}
+#undef SROW
+	free(S), free(v);
+	return C0_OK;
+}
+
+int c0_pool_guided_at(const float *const *x, int nq, const struct c0_pixlist *pl, const float *guide, double range,
+		      int h, float *const *out)
+{
+	enum { QMAX = 64 };
+	if (nq > QMAX)
+		return c0_fail(C0_EINVAL, "depth pooling: %d angles (at most %d)", nq, QMAX);
+	const int ny = pl->ny, nx = pl->nx;
+#pragma omp parallel for schedule(static)
+	for (size_t k = 0; k < pl->M; k++) {
+		const int y = pl->pix[k] / nx, xx = pl->pix[k] % nx;
+		const int x0 = xx - h < 0 ? 0 : xx - h, x1 = xx + h < nx ? xx + h : nx - 1;
+		double acc[QMAX] = { 0 };
+		/* the window's pixels on the list, row by row, in raster order as c0_pool_guided */
+		for (int j = y - h < 0 ? 0 : y - h; j <= y + h && j < ny; j++) {
+			const size_t end = pl->row[j + 1];
+			for (size_t o = lower(pl->pix, pl->row[j], end, (size_t)j * nx + x0);
+			     o < end && (size_t)pl->pix[o] <= (size_t)j * nx + x1; o++)
+				if (fabs(guide[o] - guide[k]) <= range)
+					for (int q = 0; q < nq; q++)
+						acc[q] += x[q][o];
+		}
+		for (int q = 0; q < nq; q++)
+			out[q][k] = (float)acc[q];
+	}
+	return C0_OK;
+}
+
+void c0_pool_rescale_at(float *f, int nz, const int *pixel, size_t M, int nq, const struct c0_pixlist *pl,
+			const float *const *x, const float *const *pooled)
+{
+	size_t i = 0;   /* pixel[] and pl->pix both increase */
+	for (size_t k = 0; k < M; k++) {
+		while (i < pl->M && pl->pix[i] < pixel[k])
+			i++;
+		double a = 0, b = 0;
+		for (int q = 0; i < pl->M && pl->pix[i] == pixel[k] && q < nq; q++)
+			a += x[q][i], b += pooled[q][i];
+		double s = b > 0 ? a / b : 0;
+		for (int j = 0; j < nz; j++)
+			f[j * M + k] = (float)(f[j * M + k] * s);
 	}
 }

@@ -20,7 +20,8 @@ int c0_pool_guided(const float *const *x, int nq, const uint8_t *mask, const flo
 
 /* Each mask pixel's depth (nm) from its own intensities x[q] alone: the
  * centre of the bin j whose weights W[q][j] (nq x nz, optics/tirf.h) fit
- * them best with one non-negative amplitude; 0 elsewhere. */
+ * them best with one non-negative amplitude; 0 elsewhere (mask NULL: every
+ * pixel, as on a c0_pixlist's values). */
 void c0_depth_single(const double *W, int nq, int nz, double z0, double dz, const float *const *x, const uint8_t *mask,
 		     size_t np, float *out);
 
@@ -29,6 +30,36 @@ void c0_depth_single(const double *W, int nq, int nz, double z0, double dz, cons
  * sum_q x_q / sum_q pooled_q at its pixel, so the volume keeps the pixel's
  * own intensity (the depth profile, hence the depth map, is unchanged). */
 void c0_pool_rescale(float *f, int nz, const int *pixel, size_t M, int nq, const float *const *x, const float *const *pooled);
+
+/* The support's pixels by rows, what the run's pooling works on (the fine
+ * grid holds a thousand pixels for one of them at 2048 x 2048 camera
+ * pixels): pix[0..M) raster indices, increasing; those of row y at
+ * row[y]..row[y + 1]. Values over the list are arrays of M, v[k] at pix[k]. */
+struct c0_pixlist {
+	int ny, nx;
+	size_t M;
+	int *pix;
+	size_t *row;
+};
+int c0_pixlist_from_mask(const uint8_t *mask, int ny, int nx, struct c0_pixlist *pl);
+void c0_pixlist_free(struct c0_pixlist *pl);
+/* the index in pl of raster pixel p, or -1 when p is not on it */
+long c0_pixlist_find(const struct c0_pixlist *pl, size_t p);
+/* c0_pool_window on the list: x and out over pl. The summed-area table in a
+ * band of 2h + 2 rows: the same sums as the whole table, bit for bit. */
+int c0_pool_window_at(const float *x, const struct c0_pixlist *pl, int h, float *out);
+/* c0_pool_guided on the list: x[q], guide and out[q] over pl; the same sums
+ * in the same order, bit for bit. */
+int c0_pool_guided_at(const float *const *x, int nq, const struct c0_pixlist *pl, const float *guide, double range,
+		      int h, float *const *out);
+/* A run's pooled MA-TIRF input: each angle's own and pooled intensities over pl. */
+struct c0_pooled {
+	const struct c0_pixlist *pl;
+	const float *const *own, *const *pooled;
+};
+/* c0_pool_rescale with x and pooled over pl (pixel[] on pl, increasing). */
+void c0_pool_rescale_at(float *f, int nz, const int *pixel, size_t M, int nq, const struct c0_pixlist *pl,
+			const float *const *x, const float *const *pooled);
 
 /* Default window of run's depth pooling, as a fraction of the PSF FWHM:
  * wide enough to average the per-angle splitting noise (docs/parameters.md). */
