@@ -8,13 +8,14 @@ cd "$(dirname "$0")/.."
 J=$(nproc)
 export OMP_WAIT_POLICY=PASSIVE
 failed=()
-stage() {   # stage NAME COMMAND...: run, remember a failure, go on
-  local name=$1; shift
+stage() {   # stage NAME COMMAND...: run, remember a failure, go on; say how long it took
+  local name=$1 t0=$SECONDS; shift
   echo "== $name"
   if ! "$@"; then
     failed+=("$name")
     echo "== $name: FAILED"
   fi
+  echo "== $name: $((SECONDS - t0)) s"
 }
 
 stage "setup and release build" bash scripts/setup.sh

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
+#include <time.h>
 
 static int check_pass, check_fail;
 
@@ -36,6 +37,9 @@ static inline double dotf(const float *a, const float *b, size_t n)
 	return s;
 }
 
-#define RUN(t) do { int f0_ = check_fail; t(); \
-	fprintf(stderr, "%-40s %s\n", #t, check_fail == f0_ ? "ok" : "FAILED"); } while (0)
+/* each test function's line gives the process CPU seconds it took (all threads),
+ * to see where a test's time goes */
+#define RUN(t) do { int f0_ = check_fail; clock_t c0_ = clock(); t(); \
+	fprintf(stderr, "%-40s %s (%.1f s CPU)\n", #t, check_fail == f0_ ? "ok" : "FAILED", \
+		(double)(clock() - c0_) / CLOCKS_PER_SEC); } while (0)
 #define CHECK_DONE() (printf("%d passed, %d failed\n", check_pass, check_fail), check_fail ? 1 : 0)

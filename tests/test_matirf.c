@@ -16,6 +16,7 @@
 #include <string.h>
 
 static int quick;   /* C0_QUICK set (the sanitizer build): the solves capped, code paths without accuracy bars */
+enum { QUICK_MAXIT = 60 };   /* the quick cap: every step of a solve runs by then */
 static struct c0_rng rng;
 
 static void test_adjoints(void)
@@ -221,7 +222,8 @@ static void test_fused(void)
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
 	float *img[5];
 	phantom_images(&c, n, nq, depth, amp, img);
-	c.pdhg.maxit = 300, c.pdhg.tol = 1e-30;   /* no stop */
+	const int its = quick ? QUICK_MAXIT : 300;
+	c.pdhg.maxit = its, c.pdhg.tol = 1e-30;   /* no stop */
 	c.solver = C0_MATIRF_DIAG;
 	struct c0_matirf_result a, b;
 	CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &a) == C0_OK);
@@ -230,7 +232,7 @@ static void test_fused(void)
 	double mx = 0, d = 0;
 	for (size_t i = 0; i < (size_t)a.nz * a.M; i++)
 		mx = fmax(mx, fabs(b.f[i])), d = fmax(d, fabs(a.f[i] - b.f[i]));
-	CHECK_MSG(a.iters == 300 && b.iters == 300 && d <= 1e-4 * mx, "fused vs plain: max difference %g of %g", d, mx);
+	CHECK_MSG(a.iters == its && b.iters == its && d <= 1e-4 * mx, "fused vs plain: max difference %g of %g", d, mx);
 	c0_matirf_result_free(&a), c0_matirf_result_free(&b);
 	/* the exact solver's fused dual step (TV alone) against K then the dual step */
 	c.solver = C0_MATIRF_EXACT, c.fused = 1;
@@ -240,7 +242,7 @@ static void test_fused(void)
 	mx = 0, d = 0;
 	for (size_t i = 0; i < (size_t)a.nz * a.M; i++)
 		mx = fmax(mx, fabs(b.f[i])), d = fmax(d, fabs(a.f[i] - b.f[i]));
-	CHECK_MSG(a.exact && a.iters == 300 && b.iters == 300 && d <= 1e-4 * mx, "exact fused vs plain: max difference %g of %g (%d %d %d)", d, mx, a.exact, a.iters, b.iters);
+	CHECK_MSG(a.exact && a.iters == its && b.iters == its && d <= 1e-4 * mx, "exact fused vs plain: max difference %g of %g (%d %d %d)", d, mx, a.exact, a.iters, b.iters);
 	c0_matirf_result_free(&a), c0_matirf_result_free(&b);
 	/* the apg solver's fused primal step (TV's K^T on the fly) and dual step
 	 * against K^T, the primal step, K, the dual step */
@@ -251,7 +253,7 @@ static void test_fused(void)
 	mx = 0, d = 0;
 	for (size_t i = 0; i < (size_t)a.nz * a.M; i++)
 		mx = fmax(mx, fabs(b.f[i])), d = fmax(d, fabs(a.f[i] - b.f[i]));
-	CHECK_MSG(a.apg && b.apg && a.iters == 300 && b.iters == 300 && d <= 1e-4 * mx, "apg fused vs plain: max difference %g of %g", d, mx);
+	CHECK_MSG(a.apg && b.apg && a.iters == its && b.iters == its && d <= 1e-4 * mx, "apg fused vs plain: max difference %g of %g", d, mx);
 	c0_matirf_result_free(&a), c0_matirf_result_free(&b);
 	for (int q = 0; q < nq; q++)
 		free(img[q]);
@@ -263,7 +265,7 @@ static void test_nnqp(void)
 {
 	enum { N = 12 };
 	double worst = 0;
-	for (int trial = 0; trial < 40; trial++) {
+	for (int trial = 0; trial < (quick ? 6 : 40); trial++) {   /* quick: each start and sign */
 		double A[20 * N], H[N * N], Hi[N * N], g[N], x[N], y[N];
 		for (int i = 0; i < 20 * N; i++)
 			A[i] = c0_rng_normal(&rng);
@@ -321,7 +323,7 @@ static void test_solvers(void)
 		c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 		c.solver = S[k % 3];
 		if (k >= 3)
-			c.pdhg.tol = 1e-6, c.pdhg.maxit = quick ? 200 : 8000;
+			c.pdhg.tol = 1e-6, c.pdhg.maxit = quick ? QUICK_MAXIT : 8000;
 		CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &r[k]) == C0_OK);
 	}
 	double dd[7], med[7];   /* exact vs diag, exact vs apg: defaults, tight; then each default vs tight exact */
@@ -390,8 +392,10 @@ static void test_coarse(void)
 	for (int k = 0; k < 4; k++) {
 		c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 		c.solver = C0_MATIRF_APG, c.coarse = k % 2 ? 2 : 0;
+		if (quick)
+			c.pdhg.maxit = QUICK_MAXIT;
 		if (k >= 2)
-			c.pdhg.tol = 1e-5, c.pdhg.maxit = quick ? 200 : 3000;
+			c.pdhg.tol = 1e-5, c.pdhg.maxit = quick ? QUICK_MAXIT : 3000;
 		CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &r[k]) == C0_OK);
 	}
 	double med[2], *e = malloc(sizeof(double) * n * n);   /* coarse vs cold: defaults, tight */
@@ -407,7 +411,7 @@ static void test_coarse(void)
 		"  tol 1e-5: %d vs %d (+%d), objectives %.8g %.8g, depths %.3f nm apart\n",
 		r[0].iters, r[1].iters, r[1].coarse_iters, r[0].objective, r[1].objective, med[0],
 		r[2].iters, r[3].iters, r[3].coarse_iters, r[2].objective, r[3].objective, med[1]);
-	CHECK(r[0].coarse_iters == 0 && r[1].coarse_iters > 0 && r[0].converged && r[1].converged);
+	CHECK(r[0].coarse_iters == 0 && r[1].coarse_iters > 0 && (quick || (r[0].converged && r[1].converged)));
 	CHECK_MSG(quick || (r[3].objective <= r[2].objective * (1 + 2e-4) && r[2].objective <= r[3].objective * (1 + 2e-4) && med[1] < 2),
 		  "tight: objective %.8g vs %.8g, depths %.3f nm apart", r[3].objective, r[2].objective, med[1]);
 	CHECK_MSG(quick || (r[1].objective <= r[2].objective * 1.005 && med[0] < 3 && r[1].iters < 0.8 * r[0].iters),
@@ -442,7 +446,7 @@ static void test_columns(void)
 	c0_rng_init(&rng, 29, 0);
 	phantom_images(&c, n, nq, depth, amp, img);
 	rng = keep;
-	c.solver = C0_MATIRF_APG, c.coarse = 2, c.pdhg.tol = 1e-5, c.pdhg.maxit = quick ? 200 : 5000;
+	c.solver = C0_MATIRF_APG, c.coarse = 2, c.pdhg.tol = 1e-5, c.pdhg.maxit = quick ? QUICK_MAXIT : 5000;
 	struct c0_matirf_result a, b, h;
 	CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &a) == C0_OK);
 	c.halo = 1;
@@ -562,6 +566,8 @@ static void test_offset_background(void)
 			raw[q][i] = img[q][i] + (float)(bgt[i] + 100);
 	}
 	struct c0_matirf_result r0, r1, r2;
+	if (quick)
+		c.pdhg.maxit = QUICK_MAXIT;
 	CHECK(c0_matirf_solve(&c, nq, ANG, NULL, (const float *const *)img, n, n, &r0) == C0_OK);
 	/* an offset at or above an image's mean is refused, and nothing changes */
 	float before = raw[0][0];
@@ -580,8 +586,8 @@ static void test_offset_background(void)
 		r2.converged ? "converged" : "not converged");
 	/* the estimate takes some signal as background (measured +14 %, 11.6 nm
 	 * here, against 5.4 nm with the background left in: docs/parameters.md) */
-	CHECK(r2.converged && fabs(r2.background_mean - bmean) < 0.25 * bmean && be < 0.3 * bmean);
-	CHECK(e0 < 10 && e1 < 15 && e2 < 20);
+	CHECK(quick || (r2.converged && fabs(r2.background_mean - bmean) < 0.25 * bmean && be < 0.3 * bmean));
+	CHECK(quick || (e0 < 10 && e1 < 15 && e2 < 20));
 	c0_matirf_result_free(&r0), c0_matirf_result_free(&r1), c0_matirf_result_free(&r2);
 	for (int q = 0; q < nq; q++)
 		free(img[q]), free(raw[q]);
@@ -615,7 +621,7 @@ static void test_deconvolution(void)
 	phantom(n, depth, amp);
 	struct c0_matirf_conf c = C0_MATIRF_DEFAULTS;
 	if (quick)
-		c.pdhg.maxit = 200;   /* the code paths, without the accuracy bars */
+		c.pdhg.maxit = QUICK_MAXIT;   /* the code paths, without the accuracy bars */
 	float *img[5];
 	const double sigma = 1.2;
 	make_images(&c, depth, amp, n, sigma, img);
@@ -679,7 +685,7 @@ static void test_depth(void)
 	c = (struct c0_matirf_conf)C0_MATIRF_DEFAULTS;
 	c.kappa = 1e-6;
 	c.sparsity = 0;
-	c.pdhg.maxit = quick ? 200 : 5000;
+	c.pdhg.maxit = quick ? QUICK_MAXIT : 5000;
 	c.pdhg.tol = 1e-7;
 	e = depth_error(&c, 0, &res);
 	fprintf(stderr, "matirf noiseless: relative residual %.2e, median depth error %.1f nm\n", res, e);

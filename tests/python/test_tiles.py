@@ -20,7 +20,11 @@
   drift on and off, write identical files on 1, 2 and 3 ranks, report.json
   included (less its timings, paths and rank count).
 
-usage: test_tiles.py COL0RME [MPIRUN]
+usage: test_tiles.py COL0RME [MPIRUN] [full|quick]
+(quick, the sanitizer build: the same paths on a 48x48 x 150-frame stack in
+16-pixel tiles, and the one-tile thread check on it, with the same bars
+but the Jaccard index and rx's L2 distance between tiles and one tile, set for
+96x96 x 300 frames in 40-pixel tiles: 16-pixel tiles are mostly border)
 """
 import json
 import os
@@ -35,6 +39,8 @@ from checks import check, done, refused
 
 CLI = sys.argv[1]
 MPIRUN = sys.argv[2] if len(sys.argv) > 2 and sys.argv[2] else None
+QUICK = sys.argv[3:] == ["quick"]
+W, FRAMES, TILE = (48, 150, 16) if QUICK else (96, 300, 40)
 ENV = dict(os.environ)
 ENV.pop("OMP_WAIT_POLICY", None)       # the program must set it itself
 
@@ -81,7 +87,7 @@ def same_outputs(a, b):
 
 with tempfile.TemporaryDirectory() as tmp:
     sim = os.path.join(tmp, "sim")
-    p = cli("simulate", "-o", sim, "--width", "96", "--height", "96", "--frames", "300", "--angles", "62,66",
+    p = cli("simulate", "-o", sim, "--width", str(W), "--height", str(W), "--frames", str(FRAMES), "--angles", "62,66",
             "--filaments", "8")
     check(p.returncode == 0, "simulate: " + p.stderr)
     stack = os.path.join(sim, "stack_q01.tif")
@@ -90,14 +96,14 @@ with tempfile.TemporaryDirectory() as tmp:
     one, tiled, tiled1 = (os.path.join(tmp, n) for n in ("one", "tiled", "tiled1"))
     p = cli("support", *common, "-o", one, stack)
     check(p.returncode == 0, "support, one tile: " + p.stderr)
-    p = cli("support", *common, "--tile", "40", "-o", tiled, stack)
+    p = cli("support", *common, "--tile", str(TILE), "-o", tiled, stack)
     check(p.returncode == 0, "support, tiles: " + p.stderr)
-    p = cli("support", *common, "--tile", "40", "--threads", "1", "-o", tiled1, stack)
+    p = cli("support", *common, "--tile", str(TILE), "--threads", "1", "-o", tiled1, stack)
     check(p.returncode == 0, "support, tiles, 1 thread: " + p.stderr)
     r1 = json.load(open(os.path.join(one, "report.json")))
     rt = json.load(open(os.path.join(tiled, "report.json")))
     s1, st = r1["support"][0], rt["support"][0]
-    check(s1["tiles"] == 1 and st["tiles"] == 9 and st["tile_px"] == 40, "tile counts %d, %d" % (s1["tiles"], st["tiles"]))
+    check(s1["tiles"] == 1 and st["tiles"] == 9 and st["tile_px"] == TILE, "tile counts %d, %d" % (s1["tiles"], st["tiles"]))
     a = tifffile.imread(os.path.join(one, "support.tif")) > 0
     b = tifffile.imread(os.path.join(tiled, "support.tif")) > 0
     ja = (a & b).sum() / max((a | b).sum(), 1)
@@ -105,8 +111,8 @@ with tempfile.TemporaryDirectory() as tmp:
     rel = np.linalg.norm(ra - rb) / np.linalg.norm(ra)
     print("tiles vs one tile: Jaccard %.3f, rx rel. L2 %.4f, noise variance %.4g vs %.4g"
           % (ja, rel, st["noise_variance"], s1["noise_variance"]))
-    check(ja >= 0.9, "tiles vs one tile: Jaccard %.3f" % ja)
-    check(rel <= 0.05, "tiles vs one tile: rx differs by %.3f" % rel)
+    check(QUICK or ja >= 0.9, "tiles vs one tile: Jaccard %.3f" % ja)
+    check(QUICK or rel <= 0.05, "tiles vs one tile: rx differs by %.3f" % rel)
     check(abs(st["noise_variance"] / s1["noise_variance"] - 1) <= 0.05, "noise variance %g vs %g"
           % (st["noise_variance"], s1["noise_variance"]))
     check(abs(st["lambda_max"] / s1["lambda_max"] - 1) <= 0.02, "lambda_max %g vs %g" % (st["lambda_max"], s1["lambda_max"]))
@@ -132,14 +138,16 @@ with tempfile.TemporaryDirectory() as tmp:
     # one tile: the solver's own loops share the threads, and its sums run in
     # fixed blocks. On this stack, sums split by thread (a reduction clause)
     # gave different files after 1000 iterations.
+    # (quick: the same paths on the small stack)
     sim2 = os.path.join(tmp, "sim256")
-    p = cli("simulate", "-o", sim2, "--width", "256", "--height", "256", "--frames", "300", "--angles", "62",
-            "--drift-nm", "100,50")
-    check(p.returncode == 0, "simulate 256: " + p.stderr)
+    if not QUICK:
+        p = cli("simulate", "-o", sim2, "--width", "256", "--height", "256", "--frames", "300", "--angles", "62",
+                "--drift-nm", "100,50")
+        check(p.returncode == 0, "simulate 256: " + p.stderr)
     outs = [os.path.join(tmp, "one256_%d" % t) for t in (1, 2)]
     for t, o in zip((1, 2), outs):
         p = cli("support", "--fwhm", "229", "--no-drift", "--lambda", "0.01", "--frc", "0", "--iterations", "1000",
-                "--threads", str(t), "-o", o, os.path.join(sim2, "stack_q01.tif"))
+                "--threads", str(t), "-o", o, stack if QUICK else os.path.join(sim2, "stack_q01.tif"))
         check(p.returncode == 0, "support 256, %d threads: %s" % (t, p.stderr))
     check(same_files(outs[0], outs[1], ("support.tif", "rx.tif")), "one tile: 1 and 2 threads give different files")
     check("duality_gap" in st and st["duality_gap"] >= 0, "the report gives the duality gap")
@@ -155,7 +163,8 @@ with tempfile.TemporaryDirectory() as tmp:
               "one CPU in the affinity mask, one thread")
 
     # bad tile sizes: one line, nothing written
-    for t, words in (("5", ("--tile 5", "smaller than the PSF band")), ("97", ("--tile 97", "larger than"))):
+    big = str(W + 1)
+    for t, words in (("5", ("--tile 5", "smaller than the PSF band")), (big, ("--tile " + big, "larger than"))):
         o = os.path.join(tmp, "bad" + t)
         p = cli("support", *common, "--tile", t, "-o", o, stack)
         check(refused(p, *words), "--tile %s: %r" % (t, p.stderr))
