@@ -5,6 +5,7 @@
 #include "stages/depthpool.h"
 #include "stages/depthfit.h"
 #include "stages/splat.h"
+#include "stages/lambda.h"
 #include "optics/psf.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -110,6 +111,11 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		if (!o)
 			return C0_ENOMEM;
 		cJSON_AddItemToArray(arr, o);
+		const double fw = r->sres[k].cv.fwhm_data_nm;
+		if (fw > 0 && fabs(fw / cc.grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN)
+			c0_result_warn(r, "%s: the covariance's lags say a Gaussian PSF of FWHM %.0f nm, not the given %g nm "
+				       "(the automatic lambda and the support assume the given one; docs/parameters.md, lambda "
+				       "under model mismatch)", r->names[i], fw, cc.grid.fwhm_nm);
 	}
 	c0_report_support_params(r->rep, &cc);
 	r->pixel_nm = cc.grid.pixel_nm, r->srf = cc.grid.srf;

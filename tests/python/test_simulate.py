@@ -121,5 +121,22 @@ with tempfile.TemporaryDirectory() as tmp:
                        - tifffile.imread(os.path.join(x, "truth_background_q01.tif"))).sum()
     ratio = light(d) / light(a)
     check(0.9 < ratio < 1.0, "airy: %.3f of the Gaussian's light" % ratio)
+    # the support's PSF check: the Airy disk reads as a narrower Gaussian and
+    # warns, the simulator's Gaussian reads at its FWHM and does not
+    for psf in ("gauss", "airy"):
+        d = os.path.join(tmp, "check_" + psf)
+        r = subprocess.run([CLI, "simulate", "-o", d, "--width", "48", "--height", "48", "--frames", "200", "--angles", "65",
+                            "--seed", "5", "--psf", psf], capture_output=True, text=True)
+        o = os.path.join(tmp, "check_out_" + psf)
+        r2 = subprocess.run([CLI, "support", "--fwhm", "229", "-o", o, os.path.join(d, "stack_q01.tif")],
+                            capture_output=True, text=True)
+        check(r.returncode == 0 and r2.returncode == 0, "psf check %s: %s %s" % (psf, r.stderr, r2.stderr))
+        rep = json.load(open(os.path.join(o, "report.json")))
+        fw = rep["support"][0]["lambda_auto"]["fwhm_data_nm"]
+        warned = any("covariance's lags" in w for w in rep.get("warnings", []))
+        if psf == "gauss":
+            check(abs(fw / 229 - 1) < 0.03 and not warned, "Gaussian 229 nm read as %.1f nm, warned %s" % (fw, warned))
+        else:
+            check(fw < 0.95 * 229 and warned and "covariance's lags" in r2.stderr, "Airy 229 nm read as %.1f nm, warned %s" % (fw, warned))
 
 done()
