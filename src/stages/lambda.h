@@ -68,7 +68,7 @@ void c0_lambda_max(const double *C, double norm, double s0, const double *n, siz
  * ratio fits no width. */
 int c0_lambda_psf_fwhm(const struct c0_cov *cov, const struct c0_cov *more, double pixel_nm, double *fwhm_nm);
 /* The run's warning when the data's FWHM and the given one differ by more
- * than this share (the simulator's Gaussian stacks read within 1 %, its Airy
+ * than this share (the simulator's Gaussian stacks read within 2 %, its Airy
  * disk of the same FWHM 7 % narrower; docs/parameters.md) */
 #define C0_LAMBDA_PSF_WARN 0.05
 
