@@ -242,7 +242,7 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	       struct c0_result *r, const void *arg)
 {
 	(void)arg;
-	const struct c0_stage_confs s = *sc;
+	struct c0_stage_confs s = *sc;
 	int only[C0_MAX_STACKS] = { 0 }, tirf[C0_MAX_STACKS];
 	struct c0_run_conf ct;
 	int st = run_check(c, &s, n, only, tirf, &ct);
@@ -259,6 +259,8 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 		st = c0_step_drift(r, f, n);
 	if (!st)
 		st = c0_step_support(r, &s.support, f);
+	if (!st && r->fwhm_nm > 0 && r->fwhm_nm != s.support.grid.fwhm_nm)
+		s.support.grid.fwhm_nm = s.intensity.grid.fwhm_nm = r->fwhm_nm;   /* the data's (fwhm_rule) */
 	if (c0_comm_rank() != 0)
 		return st;      /* MPI: the other ranks share the support step; rank 0 has the result */
 	if (!st)

@@ -58,6 +58,7 @@ struct c0_result {
 	void *hooks[C0_MAX_STACKS];
 	float *render;               /* n planes Ly x Lx, after the render step */
 	double render_sd_nm;
+	double fwhm_stated_nm, fwhm_data_nm, fwhm_nm; /* the PSF width given, the covariance's (0: none), used (support step) */
 	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
 	/* vol and base on the whole grid, made when the library's caller first
 	 * asks for them (c0_result_volume): the run holds only their columns */

@@ -168,6 +168,25 @@ static int second_step(struct c0_support_conf *cc, const struct c0_cov *cov, str
 	return st;
 }
 
+/* With fwhm_data: the PSF width the halves' covariance says (before any
+ * operator is built), used where it differs from the stated one by more
+ * than the estimator's measured error allows (docs/parameters.md, lambda
+ * under model mismatch). The covariance's lag stays the stated width's. */
+static double data_width(struct c0_support_conf *cc, const struct c0_cov half[2])
+{
+	double fw;
+	if (c0_lambda_psf_fwhm(&half[0], &half[1], cc->grid.pixel_nm, &fw)) {
+		c0_clear_error();
+		return 0;
+	}
+	if (fabs(fw / cc->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN) {
+		if (cc->lag == 0)
+			cc->lag = c0_support_lag(cc);
+		cc->grid.fwhm_nm = fw;
+	}
+	return fw;
+}
+
 /* One tile and one process: the covariance with its two interleaved halves
  * (automatic lambda, FRC) in one pass of whole frames. */
 static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
@@ -188,15 +207,19 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 		norm = isfinite(cov.r[i]) ? fmax(norm, cov.r[i]) : INFINITY;
 	if (!st)
 		st = check_norm(in->name, norm);
+	const double fwd = !st && halves && c->fwhm_data ? data_width(&cc, half) : 0;
+	res->fwhm_nm = cc.grid.fwhm_nm;
 	struct c0_progress ps;
 	c0_progress_begin(&ps, "support", 1);
-	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
+	if (!st && automatic && !(st = c0_lambda_auto(&cc, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel, res->lambda_auto = 1;
 	if (!st && automatic && c->penalty == C0_PENALTY_L1 && c->lambda_cv &&
-	    !(st = c0_lambda_cv(c, &half[0], &half[1], &res->cv)))
+	    !(st = c0_lambda_cv(&cc, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel;
 	else if (!st && automatic && c->penalty == C0_PENALTY_L1)
 		st = second_step(&cc, &cov, res);
+	if (fwd > 0)
+		res->cv.fwhm_data_nm = fwd;   /* the lambda rules clear their result */
 	if (!st)
 		st = c0_support_solve(&cc, &cov, res);
 	if (!st && c->frc)
@@ -444,6 +467,7 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	share_close(&k.s);
 	if (!st)
 		st = stack_gather(&k, res);
+	res->fwhm_nm = c->grid.fwhm_nm;   /* the data's width is measured on one tile only */
 	free(k.lm), free(k.hist), free(k.s2), free(k.stats), free(k.obj);
 	c0_tiling_free(&k.s.tl);
 	res->t_solve = c0_now() - t1;
