@@ -43,14 +43,33 @@ static void lag_sums(const struct c0_cov *cov, double s[2])
 	}
 }
 
+void c0_lambda_psf_row_sums(const struct c0_cov *cov, int y, double s[2])
+{
+	const size_t n = (size_t)cov->W * cov->H;
+	for (int l = 0; cov->d >= 2 && l < cov->nlag; l++) {
+		const int ay = abs(cov->dy[l]), ax = abs(cov->dx[l]);
+		if (!((ay == 0) ^ (ax == 0)) || ay + ax > 2)
+			continue;
+		for (int x = 0; x < cov->W; x++)
+			s[ay + ax - 1] += cov->r[(size_t)l * n + (size_t)y * cov->W + x];
+	}
+}
+
 int c0_lambda_psf_fwhm(const struct c0_cov *cov, const struct c0_cov *more, double pixel_nm, double *fwhm_nm)
 {
-	*fwhm_nm = NAN;
 	double s[2] = { 0, 0 };   /* lag 1 and lag 2, x and y summed */
 	lag_sums(cov, s);
 	if (more)
 		lag_sums(more, s);
-	if (cov->d < 2 || !(s[0] > 0) || !(s[1] > 0))
+	if (cov->d < 2)
+		s[0] = s[1] = 0;
+	return c0_lambda_psf_fwhm_sums(s, pixel_nm, fwhm_nm);
+}
+
+int c0_lambda_psf_fwhm_sums(const double s[2], double pixel_nm, double *fwhm_nm)
+{
+	*fwhm_nm = NAN;
+	if (!(s[0] > 0) || !(s[1] > 0))
 		return c0_fail(C0_EINVAL, "the covariance gives no PSF width (lags 1 and 2: %g, %g)", s[0], s[1]);
 	const double r = s[1] / s[0];
 	/* h(2)/h(1) grows with sigma: bisect on log sigma over 0.2 .. 12 pixels */
