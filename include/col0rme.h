@@ -35,6 +35,7 @@ enum c0_status {
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_support_solver { C0_SUPPORT_FISTA, C0_SUPPORT_PRUNED };    /* "fista", "pruned" */
 enum c0_lambda_rule { C0_LAMBDA_PEAKS, C0_LAMBDA_CV };    /* "peaks", "cv" */
+enum c0_fwhm_rule { C0_FWHM_STATED, C0_FWHM_DATA };     /* "stated", "data" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */
 enum c0_matirf_solver { C0_MATIRF_EXACT, C0_MATIRF_DIAG, C0_MATIRF_AUTO, C0_MATIRF_APG }; /* "exact", "diag", "auto", "apg" */
@@ -125,6 +126,8 @@ struct c0_run_conf {
 	const char *gain_map;
 	/* the automatic support lambda's rule (l1) */
 	enum c0_lambda_rule lambda_rule;
+	/* the PSF width the solves use: the stated one, or the covariance's where it differs by more than 5 % */
+	enum c0_fwhm_rule fwhm_rule;
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
@@ -132,7 +135,7 @@ struct c0_run_conf {
 	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = -1, .sparsity = 3e-2, \
 	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1, \
-	.depth_pool_range_nm = -1 }
+	.depth_pool_range_nm = -1, .fwhm_rule = C0_FWHM_DATA }
 
 void c0_run_conf_init(struct c0_run_conf *c);
 /* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),

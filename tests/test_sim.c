@@ -1,5 +1,6 @@
 /* Simulator physics: blinking statistics, TIRF closed forms, and the
  * temporal variance of rendered stacks against the model's prediction. */
+#define _XOPEN_SOURCE 700   /* j0, j1 */
 #include "check.h"
 #include "sim/sim.h"
 #include "optics/tirf.h"
@@ -184,6 +185,56 @@ static void test_variance_image(void)
 	c0_sim_scene_free(s);
 }
 
+/* The Airy kernels (airy.c): each against the Airy disk integrated over
+ * the same pixels by brute force (32 x 32 samples a pixel, j1 each time),
+ * their light against the encircled energy, the half maximum at FWHM / 2. */
+static double airy_pixel(double k, double cx, double cy, int i, int j)
+{
+	double s = 0;
+	for (int a = 0; a < 32; a++)
+		for (int b = 0; b < 32; b++) {
+			double v = k * hypot(i + (b + 0.5) / 32 - cx, j + (a + 0.5) / 32 - cy);
+			s += v < 1e-9 ? 1 : pow(2 * j1(v) / v, 2);
+		}
+	return s / 1024 * k * k / (4 * M_PI);
+}
+
+static void test_airy_psf(void)
+{
+	const double fwhm = 2.29, k = 2 * 1.616339948 / fwhm;
+	const int half = c0_sim_airy_half(fwhm), K = 2 * half + 2, nb = C0_AIRY_BANK;
+	double *bank;
+	CHECK(c0_sim_airy_bank(fwhm, K, &bank) == C0_OK);
+	const int qs[3] = { 0, 17 * nb + 5, nb * nb - 1 };
+	double worst = 0;
+	for (int m = 0; m < 3; m++) {
+		const double *w = bank + (size_t)qs[m] * K * K;
+		const double cx = half + (qs[m] % nb + 0.5) / nb, cy = half + (qs[m] / nb + 0.5) / nb;
+		double sum = 0, mx = 0, sx = 0;
+		for (int i = 0; i < K * K; i++)
+			sum += w[i], mx = fmax(mx, w[i]), sx += w[i] * (i % K + 0.5);
+		/* the square window holds more than the circle of radius half */
+		const double v = k * half, inside = 1 - pow(j0(v), 2) - pow(j1(v), 2);
+		CHECK_MSG(sum >= inside - 2e-3 && sum < 1, "kernel %d holds %g of the light (circle: %g)", qs[m], sum, inside);
+		CHECK_CLOSE(sx / sum, cx, 0.03);   /* centred (the cut tail's asymmetry aside) */
+		for (int j = half - 2; j <= half + 3; j++)
+			for (int i = half - 2; i <= half + 3; i++)
+				worst = fmax(worst, fabs(w[j * K + i] - airy_pixel(k, cx, cy, i, j)) / mx);
+	}
+	CHECK_MSG(worst < 2e-3, "kernels off the brute-force integral by %g of the peak", worst);
+	free(bank);
+	/* the constant that sets k: half the peak at FWHM / 2 */
+	const double vh = 1.616339948;
+	CHECK_CLOSE(pow(2 * j1(vh) / vh, 2), 0.5, 1e-8);
+	struct c0_sim_conf c;
+	c0_sim_defaults(&c);
+	int psf = -1;
+	CHECK(c0_sim_psf_parse("airy", &psf) == C0_OK && psf == C0_SIM_PSF_AIRY);
+	CHECK(c0_sim_psf_parse("bessel", &psf) == C0_EINVAL && strstr(c0_errmsg(), "psf bessel"));
+	c.psf = C0_SIM_PSF_AIRY, c.drift_nm[0] = 50;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "psf airy"));
+}
+
 static void test_bad_params(void)
 {
 	struct c0_sim_conf c;
@@ -215,5 +266,6 @@ int main(void)
 	RUN(test_tirf_closed_forms);
 	RUN(test_variance_image);
 	RUN(test_bad_params);
+	RUN(test_airy_psf);
 	return CHECK_DONE();
 }

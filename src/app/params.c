@@ -28,6 +28,8 @@ static const struct c0_param table[] = {
 	    "automatic: for l1 a first solve at max(2e-2 of the correlation's 90th percentile, 4 noise sds), then max(0.28 of the median emitter peak, 4 noise sds) (see the guide)"),
 	ENUM(lambda_rule, "peaks|cv", "lambda-rule",
 	     "automatic l1 lambda: the rule from a first solve's peaks, or cross-validation of the interleaved frame halves (a warm-started path from 4x the rule's first step; the largest lambda within one standard error of the least prediction error, over sqrt 2 for all frames; measured worse on the simulated grid, see docs/parameters.md)", "peaks"),
+	ENUM(fwhm_rule, "stated|data", "fwhm-rule",
+	     "PSF width of the support, intensity and depth solves: the stated one (--fwhm, --psf, --emission/--na), or the one the stacks' covariance says (lag 2 over lag 1) where it differs from the stated one by more than 5 % (measured within 2 % on Gaussian PSFs; an Airy disk reads 8 % narrower; see docs/parameters.md). Measured on the first support stack before its solve", "data"),
 	ENUM(support_solver, "fista|pruned", "support-solver",
 	     "l1 support solver, both FISTA on a working set re-made every 100 iterations (momentum kept): with the whole grid's step, or with the set's own step (converges, see the guide)", "fista"),
 	NUM(iterations, C0_P_INT, "iterations", "N", "maximum FISTA iterations (per reweighting for cel0; -1: the default)", "2000, or 10000 with pruned"),

@@ -66,6 +66,7 @@ struct c0_result {
 	 * it (c0_result_intensity). A stack whose x is not 0 off the mask keeps x. */
 	struct c0_pixlist pl;
 	float *xs[C0_MAX_STACKS];
+	double fwhm_stated_nm, fwhm_data_nm, fwhm_nm; /* the PSF width given, the covariance's (0: none), used (support step) */
 	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
 	/* vol and base on the whole grid, made when the library's caller first
 	 * asks for them (c0_result_volume): the run holds only their columns */

@@ -98,7 +98,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 					       .cel0_outer = c->reweightings,
 					       .solver = c->support_solver,
 					       .frc = c->frc, .tile = c->tile, .guard = c->pixel_guard,
-					       .lambda_cv = c->lambda_rule == C0_LAMBDA_CV };
+					       .lambda_cv = c->lambda_rule == C0_LAMBDA_CV,
+					       .fwhm_data = c->fwhm_rule == C0_FWHM_DATA };
 	s->intensity = (struct c0_intensity_conf){ .grid = grid,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
@@ -115,6 +116,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 			       (int)c->bleach, (int)c->acquisition);
 	if ((unsigned)c->lambda_rule > C0_LAMBDA_CV)
 		return c0_fail(C0_EINVAL, "lambda_rule %d: out of range", (int)c->lambda_rule);
+	if ((unsigned)c->fwhm_rule > C0_FWHM_DATA)
+		return c0_fail(C0_EINVAL, "fwhm_rule %d: out of range", (int)c->fwhm_rule);
 	if ((unsigned)c->penalty > C0_PENALTY_CEL0 || (unsigned)c->support_solver > C0_SUPPORT_PRUNED ||
 	    (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN || (unsigned)c->matirf_solver > C0_MATIRF_APG)
 		return c0_fail(C0_EINVAL, "penalty %d / support_solver %d / background %d / reg %d / matirf_solver %d: out of range",

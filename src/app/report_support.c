@@ -60,6 +60,8 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 	/* tiles: sigma_C from a subset of the tiles' interiors (stages/support_tiles.c) */
 	cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 	cJSON_AddNumberToObject(l, "seconds", v->seconds);
+	if (v->fwhm_data_nm > 0)   /* the PSF check (stages/lambda_psf.c); on tiles with fwhm_rule data */
+		cJSON_AddNumberToObject(l, "fwhm_data_nm", v->fwhm_data_nm);
 	cJSON *cu = cJSON_AddObjectToObject(l, "curve");
 	cJSON_AddStringToObject(cu, "what", "share of the fine pixels above lambda (l1 scale, CEL0's threshold "
 				"t): of the correlation image (signal) and of the halves' noise image "

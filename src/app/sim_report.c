@@ -34,6 +34,8 @@ static void report_parameters(const struct c0_sim_conf *c, cJSON *rep)
 	cJSON_AddNumberToObject(p, "frames", c->frames);
 	cJSON_AddNumberToObject(p, "pixel_size_nm", c->pixel_nm);
 	cJSON_AddNumberToObject(p, "fwhm_nm", c->fwhm_nm);
+	if (c->psf != C0_SIM_PSF_GAUSS)   /* the Gaussian's sim.json as it always was */
+		cJSON_AddStringToObject(p, "psf", c0_sim_psf_name(c->psf));
 	cJSON_AddNumberToObject(p, "srf", c->srf);
 	c0_report_add_array(p, "angles_deg", c->angles, c->nangles);
 	cJSON_AddNumberToObject(p, "n_glass", c->tirf.n_glass);

@@ -5,6 +5,7 @@
 #include "stages/depthpool.h"
 #include "stages/depthfit.h"
 #include "stages/splat.h"
+#include "stages/lambda.h"
 #include "optics/psf.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -132,6 +133,28 @@ static int support_union(struct c0_result *r)
 	return C0_OK;
 }
 
+/* The PSF width check after support stack k: the first stack's decides the
+ * run's width (fwhm_data), which the later stacks and the stages
+ * downstream use (r->fwhm_nm), their covariances keeping the stated lag. */
+static void psf_width(struct c0_result *r, int k, struct c0_support_conf *cc)
+{
+	const double fw = r->sres[k].cv.fwhm_data_nm, stated = k ? r->fwhm_stated_nm : cc->grid.fwhm_nm;
+	if (k == 0)
+		r->fwhm_stated_nm = stated, r->fwhm_data_nm = fw, r->fwhm_nm = r->sres[0].fwhm_nm;
+	if (k == 0 && r->fwhm_nm != stated) {
+		c0_result_warn(r, "%s: the covariance's lags say a Gaussian PSF of FWHM %.0f nm, not the given %g nm: "
+			       "the solves use %.0f nm (fwhm_rule stated keeps the given one; docs/parameters.md, lambda under "
+			       "model mismatch)", r->names[r->sup[0]], fw, stated, fw);
+		if (cc->lag == 0)
+			cc->lag = c0_support_lag(cc);
+		cc->grid.fwhm_nm = r->fwhm_nm, cc->fwhm_data = 0;
+	} else if (fw > 0 && fabs(fw / stated - 1) > C0_LAMBDA_PSF_WARN && !cc->fwhm_data && r->fwhm_nm == stated)
+		c0_result_warn(r, "%s: the covariance's lags say a Gaussian PSF of FWHM %.0f nm, not the given %g nm "
+			       "(the automatic lambda and the support assume the given one; docs/parameters.md, lambda "
+			       "under model mismatch)", r->names[r->sup[k]], fw, stated);
+	cc->fwhm_data = 0;   /* later stacks: the first's decision */
+}
+
 int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struct c0_frames *f)
 {
 	struct c0_support_conf cc = *c0;
@@ -149,8 +172,15 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		if (!o)
 			return C0_ENOMEM;
 		cJSON_AddItemToArray(arr, o);
+		psf_width(r, k, &cc);
 	}
 	c0_report_support_params(r->rep, &cc);
+	cJSON *w = cJSON_AddObjectToObject(r->rep, "psf_width");   /* fwhm_rule (docs/parameters.md) */
+	cJSON_AddStringToObject(w, "rule", c0->fwhm_data ? "data" : "stated");
+	cJSON_AddNumberToObject(w, "stated_nm", r->fwhm_stated_nm);
+	if (r->fwhm_data_nm > 0)
+		cJSON_AddNumberToObject(w, "data_nm", r->fwhm_data_nm);
+	cJSON_AddNumberToObject(w, "used_nm", r->fwhm_nm);
 	r->pixel_nm = cc.grid.pixel_nm, r->srf = cc.grid.srf;
 	int st = support_union(r);
 	if (!st)

@@ -21,7 +21,8 @@ static const struct c0_cli_name NAMES[] = {
 	{ "density_per_um", "--density" }, { "persistence_nm", "--persistence" }, { "emitters_csv", "--emitters" },
 	{ "drift_nm", "--drift-nm" }, { "hot_pixels", "--hot-pixels" }, { "srf", "--srf" },
 	{ "camera", "--camera" }, { "em_gain", "--em-gain" }, { "offset_sd", "--offset-sd" }, { "gain_cv", "--gain-cv" },
-	{ "read_e", "--read-e" }, { "read_spread", "--read-spread" }, { "dark_frames", "--dark-frames" }, { NULL, NULL },
+	{ "read_e", "--read-e" }, { "read_spread", "--read-spread" }, { "dark_frames", "--dark-frames" }, { "psf", "--psf" },
+	{ NULL, NULL },
 };
 
 static int fail(void)
@@ -34,7 +35,7 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 {
 	struct c0_sim_conf c = *conf;
 	int verbose = 0, nangles = c.nangles, nz = 2, ndrift = 0;
-	const char *order = "sequential", *camera = "ccd";
+	const char *order = "sequential", *camera = "ccd", *psf = "gauss";
 	long long seed = (long long)c.seed;
 	double zr[2] = { c.z_min_nm, c.z_max_nm }, hot[2] = { c.hot_fraction, c.hot_sd };
 	int nhot = 0;
@@ -46,6 +47,9 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 		{ "frames", 0, C0_OPT_INT, &c.frames, "T", "frames per angle", NULL, 0, NULL },
 		{ "pixel-size", 0, C0_OPT_DOUBLE, &c.pixel_nm, "NM", "camera pixel size in the sample", NULL, 0, NULL },
 		{ "fwhm", 0, C0_OPT_DOUBLE, &c.fwhm_nm, "NM", "PSF full width at half maximum", NULL, 0, NULL },
+		{ "psf", 0, C0_OPT_STRING, &psf, "gauss|airy",
+		  "PSF the frames are rendered with: gauss (the model col0rme assumes) or airy (the in-focus Bessel disk "
+		  "(2 J1(v)/v)^2 of the same --fwhm: its rings and heavy tail, as real PSFs have; not with --drift-nm)", NULL, 0, NULL },
 		{ "srf", 0, C0_OPT_INT, &c.srf, "R", "ground-truth grid refinement factor", NULL, 0, NULL },
 		{ "angles", 0, C0_OPT_DOUBLES, c.angles, "DEG,...", "incidence angles in the glass, one acquisition each",
 		  "5 equally spaced in NA, critical+0.3 to 70", C0_MAX_ANGLES, &nangles },
@@ -113,7 +117,7 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 	if (c0_sim_add_repeat(&c))
 		return fail();
 	c.hot_fraction = hot[0], c.hot_sd = hot[1];
-	if (c0_sim_camera_parse(camera, &c.camera))
+	if (c0_sim_camera_parse(camera, &c.camera) || c0_sim_psf_parse(psf, &c.psf))
 		return fail();
 	if (c.camera == C0_CAM_SCMOS && !nhot)   /* an sCMOS has its noisy pixels */
 		c.hot_fraction = 0.01;

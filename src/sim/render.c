@@ -21,6 +21,8 @@ struct c0_sim_scene {
 	float *on;           /* nem x frames */
 	double *bg;          /* H x W photons */
 	double *ddx, *ddy;   /* drift per frame (pixels), NULL without */
+	double *bank;        /* airy: the kernels (airy.c), NULL for the Gaussian */
+	int *kid;            /* airy: each emitter's kernel */
 	double sig;
 	const struct c0_emitter *em;
 };
@@ -54,6 +56,7 @@ void c0_sim_scene_free(struct c0_sim_scene *s)
 		return;
 	free(s->x0), free(s->y0), free(s->wx), free(s->wy), free(s->amp), free(s->on), free(s->bg);
 	free(s->ddx), free(s->ddy);
+	free(s->bank), free(s->kid);
 	free(s);
 }
 
@@ -82,7 +85,9 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 	if (!s)
 		return C0_ENOMEM;
 	s->c = c, s->nem = nem;
-	s->K = 2 * (int)ceil(C0_PSF_CUTOFF * sig) + 2;
+	const int airy = c->psf == C0_SIM_PSF_AIRY;
+	const int half = airy ? c0_sim_airy_half(c->fwhm_nm / c->pixel_nm) : (int)ceil(C0_PSF_CUTOFF * sig);
+	s->K = 2 * half + 2;
 	size_t K = (size_t)s->K;
 	s->x0 = c0_alloc((size_t)nem, sizeof(int));
 	s->y0 = c0_alloc((size_t)nem, sizeof(int));
@@ -101,14 +106,24 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 	}
 	/* one process per emitter over the whole acquisition, unless each angle restarts */
 	const int qs = c->order == C0_ORDER_RESTART ? q : 0;
-	const int half = (int)ceil(C0_PSF_CUTOFF * sig);
+	if (airy && (!(s->kid = c0_alloc((size_t)nem, sizeof(int))) ||
+		     c0_sim_airy_bank(c->fwhm_nm / c->pixel_nm, s->K, &s->bank))) {
+		c0_sim_scene_free(s);
+		free(slot);
+		return C0_ENOMEM;
+	}
 #pragma omp parallel for schedule(dynamic, 64)
 	for (int e = 0; e < nem; e++) {
 		double ex = em[e].x / c->pixel_nm, ey = em[e].y / c->pixel_nm;
 		s->x0[e] = (int)floor(ex) - half;
 		s->y0[e] = (int)floor(ey) - half;
-		c0_psf_pixel_weights(ex, sig, s->x0[e], s->K, s->wx + e * K);
-		c0_psf_pixel_weights(ey, sig, s->y0[e], s->K, s->wy + e * K);
+		if (airy) {   /* the kernel of the nearest sub-pixel position */
+			int ix = (int)((ex - floor(ex)) * C0_AIRY_BANK), iy = (int)((ey - floor(ey)) * C0_AIRY_BANK);
+			s->kid[e] = (iy < C0_AIRY_BANK ? iy : C0_AIRY_BANK - 1) * C0_AIRY_BANK + (ix < C0_AIRY_BANK ? ix : C0_AIRY_BANK - 1);
+		} else {
+			c0_psf_pixel_weights(ex, sig, s->x0[e], s->K, s->wx + e * K);
+			c0_psf_pixel_weights(ey, sig, s->y0[e], s->K, s->wy + e * K);
+		}
 		s->amp[e] = em[e].brightness * rel * exp(-p * em[e].z);
 		c0_sim_blink_slots(c, STREAM(1, qs, e), slot, c->frames, s->on + (size_t)e * c->frames);
 	}
@@ -137,6 +152,21 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 const float *c0_sim_scene_onfrac(const struct c0_sim_scene *s) { return s->on; }
 const double *c0_sim_scene_background(const struct c0_sim_scene *s) { return s->bg; }
 
+/* a K x K kernel at window corner (x0, y0), clipped to the frame */
+static void render_2d(const double *w, int K, int x0, int y0, int W, int H, double a, double *ph)
+{
+	for (int j = 0; j < K; j++) {
+		int y = y0 + j;
+		if (y < 0 || y >= H)
+			continue;
+		for (int k = 0; k < K; k++) {
+			int x = x0 + k;
+			if (x >= 0 && x < W)
+				ph[y * W + x] += a * w[j * K + k];
+		}
+	}
+}
+
 void c0_sim_render(const struct c0_sim_scene *s, int t, double *ph)
 {
 	const struct c0_sim_conf *c = s->c;
@@ -150,6 +180,10 @@ void c0_sim_render(const struct c0_sim_scene *s, int t, double *ph)
 			continue;
 		const double *wx = s->wx + (size_t)e * K, *wy = s->wy + (size_t)e * K;
 		int x0 = s->x0[e], y0 = s->y0[e];
+		if (s->bank) {
+			render_2d(s->bank + (size_t)s->kid[e] * K * K, K, x0, y0, W, H, a, ph);
+			continue;
+		}
 		if (s->ddx) {   /* drifted: this frame's own pixel weights */
 			double ex = s->em[e].x / c->pixel_nm + s->ddx[t], ey = s->em[e].y / c->pixel_nm + s->ddy[t];
 			x0 = (int)floor(ex) - (K - 2) / 2, y0 = (int)floor(ey) - (K - 2) / 2;

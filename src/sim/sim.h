@@ -84,6 +84,9 @@ struct c0_sim_conf {
 	/* 0; 1: one more stack at the end at the first angle (its fade measures
 	 * the bleaching over the acquisition: run's bleach repeat) */
 	int repeat_first;
+	/* the PSF the stacks are rendered with (enum c0_sim_psf_kind): gauss (the
+	 * methods' model) or airy (same fwhm_nm; airy.c) */
+	int psf;
 };
 
 /* Cameras (camera.c). ccd: ADU = gain Poisson + offset + read noise (above).
@@ -116,6 +119,17 @@ void c0_sim_expose(const struct c0_sim_conf *c, const struct c0_sim_cam *m, int 
  * dark.tif (dark_frames, uint16); nothing for the other cameras. */
 struct c0_outdir;
 int c0_sim_write_camera(const struct c0_sim_conf *c, const struct c0_sim_cam *m, struct c0_outdir *out);
+
+/* PSFs (airy.c). The Airy disk's kernels: C0_AIRY_BANK^2 sub-pixel
+ * positions, each K x K camera pixels (K = 2 c0_sim_airy_half + 2), the
+ * emitter at (half + (i + 1/2)/C0_AIRY_BANK, half + (j + 1/2)/C0_AIRY_BANK)
+ * of kernel j C0_AIRY_BANK + i; each sums to the share of the light inside. */
+enum c0_sim_psf_kind { C0_SIM_PSF_GAUSS, C0_SIM_PSF_AIRY };
+#define C0_AIRY_BANK 32
+int c0_sim_psf_parse(const char *name, int *psf);
+const char *c0_sim_psf_name(int psf);
+int c0_sim_airy_half(double fwhm_px);
+int c0_sim_airy_bank(double fwhm_px, int K, double **bank);
 
 void c0_sim_defaults(struct c0_sim_conf *c);
 /* With repeat_first: appends the first angle to the angles (once; refused

@@ -108,6 +108,13 @@ int c0_sim_check(const struct c0_sim_conf *c)
 			       c->hot_sd);
 	if ((st = c0_sim_camera_check(c)))
 		return st;
+	if (c->psf != C0_SIM_PSF_GAUSS && c->psf != C0_SIM_PSF_AIRY)
+		return c0_fail(C0_EINVAL, "psf: unknown PSF %d", c->psf);
+	if (c->psf == C0_SIM_PSF_AIRY && c->fwhm_nm > 8 * c->pixel_nm)
+		return c0_fail(C0_EINVAL, "psf airy: fwhm_nm %g is %.3g pixels; the Airy PSF is simulated up to 8", c->fwhm_nm,
+			       c->fwhm_nm / c->pixel_nm);
+	if (c->psf == C0_SIM_PSF_AIRY && (c->drift_nm[0] != 0 || c->drift_nm[1] != 0))
+		return c0_fail(C0_EINVAL, "psf airy: drift_nm is simulated with the gauss PSF only");
 	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
 		return c0_fail(C0_EINVAL, "z_min_nm %g / z_max_nm %g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
 	/* every real parameter finite: infinity passes the >= 0 tests above */

@@ -223,6 +223,9 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	choose(c, sig, sq, lmax, lmax0, median(d, L), out);
 	curve(h, hn, lmax, out);
 	free(h);
+	/* a check of the stated PSF, not a part of the rule: none when the band is too short */
+	double fw;
+	out->fwhm_data_nm = c0_lambda_psf_fwhm(a, b, c->grid.pixel_nm, &fw) ? (c0_clear_error(), 0) : fw;
 out:
 	free(R), free(ca), free(cb), free(d);
 	c0_covop_free(&op);

@@ -51,12 +51,30 @@ struct c0_lambda_result {
 	double cv_se[C0_LAMBDA_CV_MAX];   /* standard error of err - least (same units), up to the chosen */
 	int cv_iters;                 /* iterations per point and half */
 	double cv_seconds;
+	/* c0_lambda_psf_fwhm of the halves, or on tiles with fwhm_data of the band (nm; 0: not measured) */
+	double fwhm_data_nm;
 };
 
 /* lambda_max on the l1 and the l0 scale (lm[0], lm[1]) of the gradient at
  * x = 0, g = C / norm - s0 n (C = A^T R, n the column norms, s0 the noise
  * variance at x = 0): the smallest lambda for which x = 0 is optimal. */
 void c0_lambda_max(const double *C, double norm, double s0, const double *n, size_t L, double lm[2]);
+
+/* The FWHM (nm) of the Gaussian PSF whose pixel-integrated autocorrelation
+ * has the covariance's ratio of lag 2 to lag 1 (summed over the image, x
+ * and y): the width the data say, whatever the structure (lambda_psf.c).
+ * more (or NULL): another covariance of the same field (the other half of
+ * the frames) whose sums add. Refused when the band has no lag 2 or the
+ * ratio fits no width. */
+int c0_lambda_psf_fwhm(const struct c0_cov *cov, const struct c0_cov *more, double pixel_nm, double *fwhm_nm);
+/* The same from the sums of lags 1 and 2 (x and y): s[0], s[1]; and row y's
+ * share of them in cov (added to s), for sums over tiles and processes. */
+int c0_lambda_psf_fwhm_sums(const double s[2], double pixel_nm, double *fwhm_nm);
+void c0_lambda_psf_row_sums(const struct c0_cov *cov, int y, double s[2]);
+/* The run's warning when the data's FWHM and the given one differ by more
+ * than this share (the simulator's Gaussian stacks read within 2 %, its Airy
+ * disk of the same FWHM 7 % narrower; docs/parameters.md) */
+#define C0_LAMBDA_PSF_WARN 0.05
 
 struct c0_support_conf;
 /* Uses c's optics, lag and penalty. */

@@ -168,6 +168,25 @@ static int second_step(struct c0_support_conf *cc, const struct c0_cov *cov, str
 	return st;
 }
 
+/* With fwhm_data: the PSF width the halves' covariance says (before any
+ * operator is built), used where it differs from the stated one by more
+ * than the estimator's measured error allows (docs/parameters.md, lambda
+ * under model mismatch). The covariance's lag stays the stated width's. */
+static double data_width(struct c0_support_conf *cc, const struct c0_cov half[2])
+{
+	double fw;
+	if (c0_lambda_psf_fwhm(&half[0], &half[1], cc->grid.pixel_nm, &fw)) {
+		c0_clear_error();
+		return 0;
+	}
+	if (fabs(fw / cc->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN) {
+		if (cc->lag == 0)
+			cc->lag = c0_support_lag(cc);
+		cc->grid.fwhm_nm = fw;
+	}
+	return fw;
+}
+
 /* One tile and one process: the covariance with its two interleaved halves
  * (automatic lambda, FRC) in one pass of whole frames. */
 static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
@@ -188,15 +207,19 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 		norm = isfinite(cov.r[i]) ? fmax(norm, cov.r[i]) : INFINITY;
 	if (!st)
 		st = check_norm(in->name, norm);
+	const double fwd = !st && halves && c->fwhm_data ? data_width(&cc, half) : 0;
+	res->fwhm_nm = cc.grid.fwhm_nm;
 	struct c0_progress ps;
 	c0_progress_begin(&ps, "support", 1);
-	if (!st && automatic && !(st = c0_lambda_auto(c, &half[0], &half[1], &res->cv)))
+	if (!st && automatic && !(st = c0_lambda_auto(&cc, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel, res->lambda_auto = 1;
 	if (!st && automatic && c->penalty == C0_PENALTY_L1 && c->lambda_cv &&
-	    !(st = c0_lambda_cv(c, &half[0], &half[1], &res->cv)))
+	    !(st = c0_lambda_cv(&cc, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel;
 	else if (!st && automatic && c->penalty == C0_PENALTY_L1)
 		st = second_step(&cc, &cov, res);
+	if (fwd > 0)
+		res->cv.fwhm_data_nm = fwd;   /* the lambda rules clear their result */
 	if (!st)
 		st = c0_support_solve(&cc, &cov, res);
 	if (!st && c->frc)
@@ -233,6 +256,8 @@ int c0_support_grid(const struct c0_support_conf *c, const struct c0_frames *in,
  * solves, and rank 0's gathering. */
 struct stack {
 	const struct c0_support_conf *c;
+	struct c0_support_conf cc;  /* c with the data's PSF width (stack_width) */
+	double fwd;                 /* that width (nm; 0: not measured) */
 	struct c0_frames *in;
 	struct c0_support_share s;
 	int automatic, halves;     /* lambda from the data; the halves' bands needed */
@@ -301,6 +326,48 @@ static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
 	}
 	k->norm = norm;
 	return st;
+}
+
+/* With fwhm_data: the PSF width from the lag 1 and 2 sums of the image's
+ * rows, each process its interior rows, each row from a 3-row window of
+ * the band (the sums are then the same whatever the tiles and processes),
+ * used as stack_whole's data_width does. Collective. */
+static int stack_width(struct stack *k)
+{
+	const struct c0_support_share *s = &k->s;
+	const int W = k->in->width, H = k->in->height;
+	if (!k->c->fwhm_data)
+		return C0_OK;
+	double *rs = c0_alloc(2 * (size_t)H, sizeof *rs), sum[2] = { 0, 0 }, fw;
+	int st = rs ? C0_OK : C0_ENOMEM;
+	for (int y = s->ia; !st && y < s->ib; y++) {
+		struct c0_cov w = { 0 };
+		st = c0_cov_acc_window(s->acc, y - s->ya, 0, s->yb - y < 3 ? s->yb - y : 3, W, &w);
+		if (!st)
+			c0_lambda_psf_row_sums(&w, 0, rs + 2 * y);
+		c0_cov_free(&w);
+	}
+	if ((st = c0_comm_status(st))) {
+		free(rs);
+		return st;
+	}
+	c0_comm_sum(rs, 2 * H);   /* one process adds to each row: exact */
+	for (int y = 0; y < H; y++)
+		sum[0] += rs[2 * y], sum[1] += rs[2 * y + 1];
+	free(rs);
+	if (c0_lambda_psf_fwhm_sums(sum, k->c->grid.pixel_nm, &fw)) {
+		c0_clear_error();
+		return C0_OK;
+	}
+	k->fwd = fw;
+	if (fabs(fw / k->c->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN) {
+		k->cc = *k->c;
+		if (k->cc.lag == 0)
+			k->cc.lag = c0_support_lag(k->c);
+		k->cc.grid.fwhm_nm = fw;
+		k->c = &k->cc;
+	}
+	return C0_OK;
 }
 
 /* lambda relative to the image's lambda_max: the largest of the tiles';
@@ -438,12 +505,17 @@ int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, stru
 	double t1 = c0_now();
 	st = stack_scale(&k, st, res);
 	if (!st)
+		st = stack_width(&k);
+	if (!st)
 		st = stack_lambda(&k, res);
 	if (!st)
 		st = stack_solve(&k, res);
 	share_close(&k.s);
 	if (!st)
 		st = stack_gather(&k, res);
+	res->fwhm_nm = k.c->grid.fwhm_nm;
+	if (k.fwd > 0)
+		res->cv.fwhm_data_nm = k.fwd;
 	free(k.lm), free(k.hist), free(k.s2), free(k.stats), free(k.obj);
 	c0_tiling_free(&k.s.tl);
 	res->t_solve = c0_now() - t1;

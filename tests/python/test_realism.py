@@ -266,10 +266,12 @@ def test_psf(tmp):
     p = cli("run", "--psf", bead, "--angles", "62,66", "-o", out, *stacks)
     check(p.returncode == 0, "run --psf: %s" % p.stderr)
     if p.returncode == 0:
-        rep = json.load(open(os.path.join(out, "report.json")))["parameters"]
-        f = rep["fwhm_nm"]
+        full = json.load(open(os.path.join(out, "report.json")))
+        rep = full["parameters"]
+        f = full["psf_width"]["stated_nm"]   # the fit; the stacks' 229 nm is used (fwhm_rule data)
         print("PSF image of FWHM 292 nm at 106 nm: fitted %.1f nm" % f, file=sys.stderr)
         check(abs(f - 292) <= 0.03 * 292, "fitted FWHM %.1f within 3%% of 292 nm" % f)
+        check(full["psf_width"]["used_nm"] < 0.95 * f, "the stacks' narrower width used (%s)" % full["psf_width"])
         check(abs(rep["psf_image"]["pixel_size_nm"] - 106) < 1e-3 and abs(rep["psf_image"]["centre_x_px"] - 10.3) < 0.1,
               "the fit reports its pixel size and centre (%s)" % rep["psf_image"])
     out2 = os.path.join(tmp, "psf_bad")

@@ -87,7 +87,8 @@ with tempfile.TemporaryDirectory() as tmp:
                          (["--filaments", "0"], "empty structure"), (["--pixel-size", "0"], "--pixel-size"),
                          (["--frames", "abc"], "--frames"), (["--frames", "0"], "--frames 0"),
                          (["--gaps", "1", "--bleach-order", "interleaved"], "--gaps:"),
-                         (["--z-range", "300,100"], "--z-range")]:
+                         (["--z-range", "300,100"], "--z-range"), (["--psf", "bessel"], "--psf bessel"),
+                         (["--psf", "airy", "--drift-nm", "50,0"], "--psf airy")]:
         d = os.path.join(tmp, "bad")
         r = subprocess.run([CLI, "simulate", "-o", d, *args], capture_output=True, text=True)
         lines = r.stderr.strip().splitlines()
@@ -104,5 +105,38 @@ with tempfile.TemporaryDirectory() as tmp:
     r = subprocess.run([CLI, "simulate", "-o", d, "--width", "20", "--height", "20", "--frames", "5",
                         "--emitters", csvp], capture_output=True, text=True)
     check(r.returncode == 0 and json.load(open(os.path.join(d, "sim.json")))["estimates"]["emitters"] == 2, "csv input: %s" % r.stderr)
+
+    # --psf airy: the same scene through another PSF of the same FWHM (its
+    # tail beyond 6 FWHM, ~3 % of the light, dropped); the Gaussian's sim.json
+    # without the key, as before
+    d = os.path.join(tmp, "airy")
+    r = sim(d, "--seed", "5", "--psf", "airy", threads=2)
+    check(r.returncode == 0, "airy: %s" % r.stderr)
+    fd = files(d)
+    check(all(fd[f] == fa[f] for f in fa if not f.startswith("stack_")), "airy: the same truth as the Gaussian's")
+    check(fd["stack_q01.tif"] != fa["stack_q01.tif"], "airy: other frames")
+    check(json.load(open(os.path.join(d, "sim.json")))["parameters"]["psf"] == "airy"
+          and "psf" not in P, "sim.json names the Airy PSF only")
+    light = lambda x: (tifffile.imread(os.path.join(x, "stack_q01.tif")).astype(float).mean(0)
+                       - tifffile.imread(os.path.join(x, "truth_background_q01.tif"))).sum()
+    ratio = light(d) / light(a)
+    check(0.9 < ratio < 1.0, "airy: %.3f of the Gaussian's light" % ratio)
+    # the support's PSF check: the Airy disk reads as a narrower Gaussian and
+    # warns, the simulator's Gaussian reads at its FWHM and does not
+    for psf in ("gauss", "airy"):
+        d = os.path.join(tmp, "check_" + psf)
+        r = subprocess.run([CLI, "simulate", "-o", d, "--width", "48", "--height", "48", "--frames", "200", "--angles", "65",
+                            "--seed", "5", "--psf", psf], capture_output=True, text=True)
+        o = os.path.join(tmp, "check_out_" + psf)
+        r2 = subprocess.run([CLI, "support", "--fwhm", "229", "-o", o, os.path.join(d, "stack_q01.tif")],
+                            capture_output=True, text=True)
+        check(r.returncode == 0 and r2.returncode == 0, "psf check %s: %s %s" % (psf, r.stderr, r2.stderr))
+        rep = json.load(open(os.path.join(o, "report.json")))
+        fw = rep["support"][0]["lambda_auto"]["fwhm_data_nm"]
+        warned = any("covariance's lags" in w for w in rep.get("warnings", []))
+        if psf == "gauss":
+            check(abs(fw / 229 - 1) < 0.03 and not warned, "Gaussian 229 nm read as %.1f nm, warned %s" % (fw, warned))
+        else:
+            check(fw < 0.95 * 229 and warned and "covariance's lags" in r2.stderr, "Airy 229 nm read as %.1f nm, warned %s" % (fw, warned))
 
 done()
