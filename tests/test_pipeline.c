@@ -7,11 +7,13 @@
 #include "col0rme.h"
 #include "app/pipeline.h"
 #include "app/params.h"
+#include "app/report_html.h"
 #include "cli/confopts.h"
 #include "stages/depthpool.h"
 #include "sim/sim.h"
 #include "io/tiff.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -256,10 +258,44 @@ static void test_param_defaults(void)
 			CHECK_MSG(strcmp(t[i].name, t[j].name), "%s twice", t[i].name);
 }
 
+/* the report's quantile (a quickselect) against the obvious sort, on values
+ * with many ties (a fine grid is mostly zeros), NaNs left out */
+static int cmp_f(const void *a, const void *b)
+{
+	const float x = *(const float *)a, y = *(const float *)b;
+	return (x > y) - (x < y);
+}
+
+static void test_quantile(void)
+{
+	enum { N = 5003 };
+	static float v[N], s[N];
+	unsigned u = 12345;
+	for (int t = 0; t < 3; t++) {
+		size_t m = 0;
+		for (int i = 0; i < N; i++) {
+			u = u * 1103515245u + 12345u;
+			const unsigned r = (u >> 8) % 1000;
+			v[i] = t == 0 ? (float)r : t == 1 ? (r < 900 ? 0.f : (float)r / 7) : (r < 10 ? NAN : (float)(r % 5));
+			if (!isnan(v[i]))
+				s[m++] = v[i];
+		}
+		qsort(s, m, sizeof *s, cmp_f);
+		const double qs[] = { 0, 0.005, 0.5, 0.9, 0.995, 0.999, 1 };
+		for (size_t k = 0; k < sizeof qs / sizeof *qs; k++) {
+			const size_t at = (size_t)fmin((double)m - 1, floor(qs[k] * (double)m));
+			CHECK_MSG(c0_quantile(v, N, qs[k]) == s[at], "case %d, q %g: %g vs sorted %g", t, qs[k],
+				  c0_quantile(v, N, qs[k]), s[at]);
+		}
+	}
+	CHECK(c0_quantile(v, 0, 0.5) == 0);
+}
+
 int main(void)
 {
 	RUN(test_conf);
 	RUN(test_param_defaults);
 	RUN(test_files_and_arrays);
+	RUN(test_quantile);
 	return CHECK_DONE();
 }
