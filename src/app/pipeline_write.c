@@ -14,19 +14,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* render.tif plane by plane, each made as it is written (app/steps.c), with
- * the display range c0_tiff_save_f32 would give all of them */
-static int write_render(const struct c0_result *r, struct c0_outdir *out)
+/* A stack of n planes written one at a time, each made by make(arg, k,
+ * plane): one plane in memory. lo..hi: the values' range, the display range
+ * c0_tiff_save_f32 would set (none when lo > hi). */
+typedef int (*plane_fn)(const void *arg, int k, float *plane);
+
+static int save_planes(const char *path, struct c0_tiff_wopts o, float lo, float hi, plane_fn make, const void *arg)
 {
-	struct c0_tiff_wopts o = { .width = r->Lx, .height = r->Ly, .slices = r->n, .dtype = C0_F32,
-				   .pixel_size_nm = r->pixel_nm / r->srf, .software = "col0rme" };
-	if (r->render_lo <= r->render_hi)
-		o.display_min = r->render_lo, o.display_max = r->render_hi > r->render_lo ? r->render_hi : r->render_lo + 1;
-	float *plane = c0_alloc((size_t)r->Ly * r->Lx, sizeof *plane);
+	if (lo <= hi)
+		o.display_min = lo, o.display_max = hi > lo ? hi : lo + 1;
+	float *plane = c0_alloc((size_t)o.height * o.width, sizeof *plane);
 	struct c0_tiff_writer *w = NULL;
-	int st = plane ? c0_tiff_create(c0_outdir_file(out, "render.tif"), &o, &w) : C0_ENOMEM;
-	for (int q = 0; !st && q < r->n; q++)
-		if (!(st = c0_render_plane(r, q, plane)))
+	int st = plane ? c0_tiff_create(path, &o, &w) : C0_ENOMEM;
+	for (int k = 0; !st && k < o.slices; k++)
+		if (!(st = make(arg, k, plane)))
 			st = c0_tiff_write_plane(w, plane);
 	free(plane);
 	if (st) {
@@ -34,6 +35,19 @@ static int write_render(const struct c0_result *r, struct c0_outdir *out)
 		return st;
 	}
 	return c0_tiff_commit(w);
+}
+
+static int render_plane(const void *r, int q, float *plane)
+{
+	return c0_render_plane(r, q, plane);
+}
+
+/* render.tif plane by plane, each made as it is written (app/steps.c) */
+static int write_render(const struct c0_result *r, struct c0_outdir *out)
+{
+	struct c0_tiff_wopts o = { .width = r->Lx, .height = r->Ly, .slices = r->n, .dtype = C0_F32,
+				   .pixel_size_nm = r->pixel_nm / r->srf, .software = "col0rme" };
+	return save_planes(c0_outdir_file(out, "render.tif"), o, r->render_lo, r->render_hi, render_plane, r);
 }
 
 /* support.tif (the union of the masks) and rx.tif (one plane per support stack) */
@@ -131,6 +145,12 @@ static void volume_deflate(const struct c0_matirf_result *v, struct c0_tiff_wopt
  * plane in memory, never the whole grid times the depth bins. The display
  * range is the values' (0 among them when some pixel is off the columns),
  * as c0_tiff_save_f32 would set it. */
+static int volume_plane(const void *v, int j, float *plane)
+{
+	c0_matirf_plane(v, j, plane);
+	return C0_OK;
+}
+
 static int save_volume(const char *path, struct c0_tiff_wopts o, const struct c0_matirf_result *v)
 {
 	const size_t np = (size_t)v->ny * v->nx, n = (size_t)v->M * v->nz;
@@ -140,21 +160,7 @@ static int save_volume(const char *path, struct c0_tiff_wopts o, const struct c0
 		if (v->f[i] < lo) lo = v->f[i];
 		if (v->f[i] > hi) hi = v->f[i];
 	}
-	if (lo <= hi)
-		o.display_min = lo, o.display_max = hi > lo ? hi : lo + 1;
-	float *plane = c0_alloc(np, sizeof *plane);
-	struct c0_tiff_writer *w = NULL;
-	int st = plane ? c0_tiff_create(path, &o, &w) : C0_ENOMEM;
-	for (int j = 0; !st && j < v->nz; j++) {
-		c0_matirf_plane(v, j, plane);
-		st = c0_tiff_write_plane(w, plane);
-	}
-	free(plane);
-	if (st) {
-		c0_tiff_abort(w);
-		return st;
-	}
-	return c0_tiff_commit(w);
+	return save_planes(path, o, lo, hi, volume_plane, v);
 }
 
 /* PREFIXvolume.tif, PREFIXdepth.tif (each column's fitted depth; the baseline's: its mean) and PREFIXdepth.png */

@@ -20,3 +20,19 @@ typedef double c0_v4 __attribute__((vector_size(32)));
  * and a sum that moves the iterates or a stopping test would then make the
  * results depend on the thread count). */
 #define C0_SUM_BLOCK 16384
+
+#include <stddef.h>
+
+/* The first index in [lo, hi) of the increasing a whose value is at or past v
+ * (hi when none): a raster index's place among sorted pixel indices. */
+static inline size_t c0_lower_bound(const int *a, size_t lo, size_t hi, size_t v)
+{
+	while (lo < hi) {
+		const size_t mid = lo + (hi - lo) / 2;
+		if ((size_t)a[mid] < v)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	return lo;
+}

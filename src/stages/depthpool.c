@@ -1,6 +1,7 @@
 #include "stages/depthpool.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/c0math.h"
 
 #include <limits.h>
 #include <math.h>
@@ -126,22 +127,9 @@ void c0_pixlist_free(struct c0_pixlist *pl)
 	*pl = (struct c0_pixlist){ 0 };
 }
 
-/* the first index in [lo, hi) whose pixel is at or past p */
-static size_t lower(const int *pix, size_t lo, size_t hi, size_t p)
-{
-	while (lo < hi) {
-		size_t mid = lo + (hi - lo) / 2;
-		if ((size_t)pix[mid] < p)
-			lo = mid + 1;
-		else
-			hi = mid;
-	}
-	return lo;
-}
-
 long c0_pixlist_find(const struct c0_pixlist *pl, size_t p)
 {
-	const size_t y = p / (size_t)pl->nx, hi = pl->row[y + 1], k = lower(pl->pix, pl->row[y], hi, p);
+	const size_t y = p / (size_t)pl->nx, hi = pl->row[y + 1], k = c0_lower_bound(pl->pix, pl->row[y], hi, p);
 	return k < hi && (size_t)pl->pix[k] == p ? (long)k : -1;
 }
 
@@ -196,7 +184,7 @@ int c0_pool_guided_at(const float *const *x, int nq, const struct c0_pixlist *pl
 		/* the window's pixels on the list, row by row, in raster order as c0_pool_guided */
 		for (int j = y - h < 0 ? 0 : y - h; j <= y + h && j < ny; j++) {
 			const size_t end = pl->row[j + 1];
-			for (size_t o = lower(pl->pix, pl->row[j], end, (size_t)j * nx + x0);
+			for (size_t o = c0_lower_bound(pl->pix, pl->row[j], end, (size_t)j * nx + x0);
 			     o < end && (size_t)pl->pix[o] <= (size_t)j * nx + x1; o++)
 				if (fabs(guide[o] - guide[k]) <= range)
 					for (int q = 0; q < nq; q++)

@@ -1,21 +1,15 @@
 #include "stages/matirf_ctx.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/c0math.h"
 
 #include <stdlib.h>
 
 /* the column of raster index p among the coarse level's (increasing), -1 when none */
 static long find_col(const int *pixel, size_t M, size_t p)
 {
-	size_t lo = 0, hi = M;
-	while (lo < hi) {
-		size_t mid = lo + (hi - lo) / 2;
-		if ((size_t)pixel[mid] < p)
-			lo = mid + 1;
-		else
-			hi = mid;
-	}
-	return lo < M && (size_t)pixel[lo] == p ? (long)lo : -1;
+	const size_t k = c0_lower_bound(pixel, 0, M, p);
+	return k < M && (size_t)pixel[k] == p ? (long)k : -1;
 }
 
 /* The warm start from a coarser grid: the images binned 2x2 (mean), the same
