@@ -168,10 +168,21 @@ static int second_step(struct c0_support_conf *cc, const struct c0_cov *cov, str
 	return st;
 }
 
-/* With fwhm_data: the PSF width the halves' covariance says (before any
- * operator is built), used where it differs from the stated one by more
- * than the estimator's measured error allows (docs/parameters.md, lambda
- * under model mismatch). The covariance's lag stays the stated width's. */
+/* With fwhm_data: the PSF width the data say (before any operator is
+ * built) replaces the stated one where they differ by more than the
+ * estimator's measured error allows (docs/parameters.md, lambda under model
+ * mismatch); 1 when it did. The covariance's lag stays the stated width's. */
+static int adopt_width(struct c0_support_conf *cc, double fw)
+{
+	if (!(fabs(fw / cc->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN))
+		return 0;
+	if (cc->lag == 0)
+		cc->lag = c0_support_lag(cc);
+	cc->grid.fwhm_nm = fw;
+	return 1;
+}
+
+/* the halves' covariance's width (0: none), adopted or not */
 static double data_width(struct c0_support_conf *cc, const struct c0_cov half[2])
 {
 	double fw;
@@ -179,11 +190,7 @@ static double data_width(struct c0_support_conf *cc, const struct c0_cov half[2]
 		c0_clear_error();
 		return 0;
 	}
-	if (fabs(fw / cc->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN) {
-		if (cc->lag == 0)
-			cc->lag = c0_support_lag(cc);
-		cc->grid.fwhm_nm = fw;
-	}
+	adopt_width(cc, fw);
 	return fw;
 }
 
@@ -331,7 +338,7 @@ static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
 /* With fwhm_data: the PSF width from the lag 1 and 2 sums of the image's
  * rows, each process its interior rows, each row from a 3-row window of
  * the band (the sums are then the same whatever the tiles and processes),
- * used as stack_whole's data_width does. Collective. */
+ * used as stack_whole's data_width does (adopt_width). Collective. */
 static int stack_width(struct stack *k)
 {
 	const struct c0_support_share *s = &k->s;
@@ -360,13 +367,9 @@ static int stack_width(struct stack *k)
 		return C0_OK;
 	}
 	k->fwd = fw;
-	if (fabs(fw / k->c->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN) {
-		k->cc = *k->c;
-		if (k->cc.lag == 0)
-			k->cc.lag = c0_support_lag(k->c);
-		k->cc.grid.fwhm_nm = fw;
+	k->cc = *k->c;
+	if (adopt_width(&k->cc, fw))
 		k->c = &k->cc;
-	}
 	return C0_OK;
 }
 
