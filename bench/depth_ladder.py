@@ -3,7 +3,8 @@
 one input at a time swapped for the simulator's truth (docs/parameters.md,
 "Sparse blinking: what limits the depth").
 
-    /usr/bin/python3 bench/depth_ladder.py SIMDIR RUNDIR [INTENSITY_DIR [--true-support]] [--windows]
+    /usr/bin/python3 bench/depth_ladder.py SIMDIR RUNDIR [INTENSITY_DIR [--true-support]] [--windows] [--gls]
+    /usr/bin/python3 bench/depth_ladder.py SIMDIR [SIMDIR...]     # the truth's rows alone, no run
 
 SIMDIR: `col0rme simulate` output; RUNDIR: `col0rme run --angles` output on its
 stacks. The readout: each stack's intensity over its bleaching factor, summed
@@ -20,26 +21,34 @@ model intensities (the emitters' mean on-fraction: no blinking noise), and
 with INTENSITY_DIR the intensities of a `col0rme intensity` run (e.g. on the
 true support, then --true-support, or on stacks with the true background
 taken out). --windows:
-the run's intensities with other windows and ranges."""
+the run's intensities with other windows and ranges. With SIMDIRs alone: the
+true realised intensities on the true support (what the simulated blinking and
+bleaching leave to any readout), one line a simulation. --gls: also the
+readout whose last fit weights the angles by a noise covariance estimated from
+the data (docs/parameters.md, "Why 8 angles read worse than 5")."""
 import json
+import os
 import sys
 
 import numpy as np
 import tifffile as tf
 
 
-def load(sim, run):
-    S, R = json.load(open(sim + "/sim.json")), json.load(open(run + "/report.json"))
-    nq = len(R["matirf"]["angles_deg"])
+def load(sim, run=None):
+    S = json.load(open(sim + "/sim.json"))
+    R = json.load(open(run + "/report.json")) if run else None
+    nq = len(R["matirf"]["angles_deg"]) if run else len(S["estimates"]["angles"])
     A = S["estimates"]["angles"][:nq]
     d = {"nq": nq, "p": 1 / np.array([a["penetration_depth_nm"] for a in A]),
          "i0": np.array([a["i0_relative"] for a in A]),
          "tb": np.array(S["estimates"]["bleaching"]["stack_factors"][:nq]),
-         "eb": np.array(R["bleaching"]["factors"][:nq]),
-         "zt": tf.imread(sim + "/truth_depth.tif"), "ts": tf.imread(sim + "/truth_support.tif") > 0,
-         "es": tf.imread(run + "/support.tif") > 0, "zrun": tf.imread(run + "/depth.tif")}
+         "zt": tf.imread(sim + "/truth_depth.tif"), "ts": tf.imread(sim + "/truth_support.tif") > 0}
     rd = lambda pat: np.array([tf.imread(pat % (q + 1)) for q in range(nq)]).astype(float)
-    d["xt"], d["xe"] = rd(sim + "/truth_intensity_q%02d.tif"), rd(run + "/intensity_q%02d.tif")
+    d["xt"] = rd(sim + "/truth_intensity_q%02d.tif")
+    if run:
+        d["eb"] = np.array(R["bleaching"]["factors"][:nq])
+        d["es"], d["zrun"] = tf.imread(run + "/support.tif") > 0, tf.imread(run + "/depth.tif")
+        d["xe"] = rd(run + "/intensity_q%02d.tif")
     fp = S["parameters"]["pixel_size_nm"] / S["parameters"]["srf"]
     em = np.genfromtxt(sim + "/emitters.csv", delimiter=",", names=True)
     pon = S["parameters"]["tau_on_ms"] / (S["parameters"]["tau_on_ms"] + S["parameters"]["tau_off_ms"])
@@ -76,7 +85,43 @@ def guided(x, mask, guide, rng, h):
     return out
 
 
-def depth(d, x, mask, f, h=3, hg=2, rng=50.0):
+def gls(W, z, x, mask, f):
+    """single() whose fit weights the angles by C = D Sigma D: D the first fit's
+    projections, Sigma = s I + b B the relative noise (s: independent per angle,
+    blinking and camera; B_qr = 1/f_earlier - 1: each emitter's own bleaching,
+    carried to every later stack of a sequential acquisition), s and b fitted to
+    the first fit's relative residuals (their expectation P Sigma P^T, P the
+    projector of the fit's two parameters), no constant from a simulator"""
+    xm = x[:, mask]
+    s = W.T @ xm
+    g = np.where(s > 0, s * s / (W * W).sum(0)[:, None], 0)
+    ok = g.max(0) > 0
+    w0, K = W[:, g.argmax(0)][:, ok], len(f)
+    y = xm[:, ok]
+    r = y / ((w0 * y).sum(0) / (w0 * w0).sum(0) * w0) - 1
+    B = 1 / f[np.minimum.outer(np.arange(K), np.arange(K))] - 1
+    A = np.array([np.ones(K), np.log(W[:, 1] / W[:, 0]) / (z[1] - z[0])]).T      # d log w / dz = -p
+    S, M1, M2 = np.zeros((K, K)), np.zeros((K, K)), np.zeros((K, K))
+    for k in range(y.shape[1]):
+        D = w0[:, k] ** 2
+        P = np.eye(K) - A @ np.linalg.solve(A.T @ (D[:, None] * A), (A * D[:, None]).T)
+        S += np.outer(r[:, k], r[:, k]); M1 += P @ P.T; M2 += P @ B @ P.T
+    (sb, be), *_ = np.linalg.lstsq(np.array([M1.ravel(), M2.ravel()]).T, S.ravel(), rcond=None)
+    Si = np.linalg.inv(max(sb, 1e-12) * np.eye(K) + max(be, 0) * B)
+    Siy = Si @ (y / w0)
+    zo = np.zeros(y.shape[1])
+    for c in np.array_split(np.arange(y.shape[1]), max(1, y.shape[1] // 1000)):
+        wt = W[:, :, None] / w0[:, None, c]
+        num = np.einsum("kzn,kn->zn", wt, Siy[:, c])
+        gg = np.where(num > 0, num * num / np.einsum("kzn,kl,lzn->zn", wt, Si, wt), 0)
+        zo[c] = np.where(gg.max(0) > 0, z[gg.argmax(0)], 0)
+    out, v = np.zeros(mask.shape), np.zeros(mask.sum())
+    v[ok] = zo
+    out[mask] = v
+    return out
+
+
+def depth(d, x, mask, f, h=3, hg=2, rng=50.0, fit=None):
     p, i0 = d["p"][:, None], d["i0"][:, None]
     zb, zc = np.arange(10, 400, 20.0), np.arange(0, 400.01, 1.0)
     Wb = i0 * np.exp(-p * (zb[None] - 10)) * -np.expm1(-p * 20) / (p * 20)   # 20 nm bins, as the run's guess
@@ -86,7 +131,7 @@ def depth(d, x, mask, f, h=3, hg=2, rng=50.0):
         return single(Wc, zc, x, mask)
     g = single(Wb, zb, np.array([box(v, mask, hg) for v in x]), mask)
     xp = guided(x, mask, g, rng, h) if rng > 0 else np.array([box(v, mask, h) for v in x])
-    return single(Wc, zc, xp, mask)
+    return gls(Wc, zc, xp, mask, f) if fit == "gls" else single(Wc, zc, xp, mask)
 
 
 def row(d, z, label):
@@ -101,14 +146,27 @@ def row(d, z, label):
 
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    if len(args) == 1 or not os.path.exists(args[1] + "/report.json"):
+        for sim in args:      # the truth alone
+            d = load(sim)
+            print("%s: true realised intensities, true support:" % sim, end=" ")
+            row(d, depth(d, d["xt"], d["ts"], d["tb"]), "readout")
+            if "--gls" in sys.argv:
+                print("%s: the same, GLS:" % sim, end=" ")
+                row(d, depth(d, d["xt"], d["ts"], d["tb"], fit="gls"), "readout")
+        return
     d = load(args[0], args[1])
     print("| input | median (nm) | signed (nm) | coverage | signed, true z 0-100 | 100-200 | 200-300 | 300-400 |")
     print("|---|---|---|---|---|---|---|---|")
     row(d, d["zrun"], "the run (depth.tif)")
     row(d, depth(d, d["xe"], d["es"], d["eb"]), "readout redone, the run's inputs")
+    if "--gls" in sys.argv:
+        row(d, depth(d, d["xe"], d["es"], d["eb"], fit="gls"), "readout redone, the run's inputs, GLS fit")
     row(d, depth(d, d["xe"], d["es"], d["tb"]), "true bleaching factors")
     row(d, depth(d, d["xt"], d["es"], d["tb"]), "true realised intensities, the run's support")
     row(d, depth(d, d["xt"], d["ts"], d["tb"]), "true realised intensities, true support")
+    if "--gls" in sys.argv:
+        row(d, depth(d, d["xt"], d["ts"], d["tb"], fit="gls"), "true realised intensities, true support, GLS fit")
     row(d, depth(d, d["xm"], d["ts"], d["tb"]), "model intensities (no blinking noise), true support")
     if len(args) > 2:
         xi = np.array([tf.imread(args[2] + "/intensity_q%02d.tif" % (q + 1)) for q in range(d["nq"])]).astype(float)
