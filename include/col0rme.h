@@ -128,6 +128,9 @@ struct c0_run_conf {
 	enum c0_lambda_rule lambda_rule;
 	/* the PSF width the solves use: the stated one, or the covariance's where it differs by more than 5 % */
 	enum c0_fwhm_rule fwhm_rule;
+	/* without an offset map: the MA-TIRF stacks' common fixed pattern (an sCMOS camera's dark levels)
+	 * estimated from their intensity fits and taken out of their means where it shows (1, the default) */
+	int common_pattern;
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
@@ -135,7 +138,7 @@ struct c0_run_conf {
 	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = -1, .sparsity = 3e-2, \
 	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1, \
-	.depth_pool_range_nm = -1, .fwhm_rule = C0_FWHM_DATA }
+	.depth_pool_range_nm = -1, .fwhm_rule = C0_FWHM_DATA, .common_pattern = 1 }
 
 void c0_run_conf_init(struct c0_run_conf *c);
 /* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),

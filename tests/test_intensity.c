@@ -7,6 +7,7 @@
 #include "ops/psi_omega.h"
 #include "ops/covop.h"
 #include "stages/intensity.h"
+#include "stages/pattern.h"
 #include "sim/sim.h"
 #include "eval/metrics.h"
 #include "core/rng.h"
@@ -269,11 +270,95 @@ static void test_simulated(void)
 	free(em), free(ph), free(ybar), free(adu), free(xt), free(m), free(naive);
 }
 
+/* The stacks' common pattern (stages/pattern.h): the residuals through
+ * Psi_Omega, the shared variance against a slow pairwise loop over the far
+ * pixels, a pattern found, and none where the stacks share nothing or where
+ * the support's misfit outweighs it. */
+static void test_pattern(void)
+{
+	enum { H = 48, W = 48, R = 4, NQ = 5 };
+	const size_t N = (size_t)H * W, L = N * R * R;
+	const struct c0_grid g = { 100, 229, R };
+	uint8_t *mask = calloc(L, 1);
+	for (int y = 15 * R; y < 35 * R; y++)   /* a filament down camera column 24 */
+		mask[(size_t)y * W * R + 24 * R + 1] = 1;
+	int nm = 0;
+	for (size_t i = 0; i < L; i++)
+		nm += mask[i];
+	double *o = malloc(N * sizeof *o), *yb[NQ], *res[NQ];
+	float *x[NQ], *b[NQ], *pat = malloc(N * sizeof *pat);
+	struct c0_psi_omega P;
+	CHECK(c0_psi_omega_init(&P, H, W, R, c0_grid_sigma_px(&g), mask, 1) == 0 && P.n == nm);
+	for (size_t i = 0; i < N; i++)
+		o[i] = 2 * c0_rng_normal(&rng);
+	double *xv = malloc((size_t)nm * sizeof *xv);
+	for (int q = 0; q < NQ; q++) {
+		yb[q] = malloc(N * sizeof **yb), res[q] = malloc(N * sizeof **res);
+		x[q] = malloc((size_t)nm * sizeof **x), b[q] = malloc(N * sizeof **b);
+		for (int k = 0; k < nm; k++)
+			xv[k] = x[q][k] = (float)(50 * (q + 1) * c0_rng_uniform(&rng));
+		c0_psi_omega_forward(&P, xv, yb[q]);
+		for (size_t i = 0; i < N; i++) {
+			b[q][i] = (float)(100 + 0.1 * (double)(i % W));
+			yb[q][i] += b[q][i] + o[i] + 0.5 * c0_rng_normal(&rng);
+		}
+	}
+	CHECK(c0_pattern_residuals(&g, NQ, (const double *const *)yb, (const float *const *)x, (const float *const *)b, H, W, mask, res) == 0);
+	double dev = 0;   /* residual = o + noise (x, b and Psi as made) */
+	for (size_t i = 0; i < N; i++)
+		dev += (res[0][i] - o[i]) * (res[0][i] - o[i]) / N;
+	CHECK_MSG(sqrt(dev) < 0.6, "residual - pattern rms %.3f (noise 0.5)", sqrt(dev));
+	/* the slow shared variance: camera pixels farther than ceil(2 FWHM / pixel) = 5 from column 24, rows 15..34 */
+	double mean[NQ] = { 0 }, slow = 0;
+	int nf = 0;
+	uint8_t *far = calloc(N, 1);
+	for (int y = 0; y < H; y++)
+		for (int xx = 0; xx < W; xx++)
+			if (abs(xx - 24) > 5 || y < 15 - 5 || y > 34 + 5)
+				far[y * W + xx] = 1, nf++;
+	for (size_t i = 0; i < N; i++)
+		for (int q = 0; far[i] && q < NQ; q++)
+			mean[q] += res[q][i] / nf;
+	for (size_t i = 0; i < N; i++)
+		for (int a = 0; far[i] && a < NQ; a++)
+			for (int c = a + 1; c < NQ; c++)
+				slow += (res[a][i] - mean[a]) * (res[c][i] - mean[c]) / nf / (NQ * (NQ - 1) / 2);
+	struct c0_pattern_stats st;
+	CHECK(c0_pattern_estimate(&g, NQ, (const double *const *)res, H, W, mask, pat, &st) == 0);
+	CHECK_MSG(st.far_pixels == nf && fabs(st.common_var - slow) < 1e-9 * slow, "far %d / %d, shared variance %.6f / slow %.6f",
+		  st.far_pixels, nf, st.common_var, slow);
+	double sxy = 0, sxx = 0, syy = 0;
+	for (size_t i = 0; i < N; i++)
+		sxy += pat[i] * o[i], sxx += (double)pat[i] * pat[i], syy += o[i] * o[i];
+	CHECK_MSG(st.applied && st.k_on > 0.9 && fabs(st.common_var - 4) < 0.5 && sxy / sqrt(sxx * syy) > 0.97,
+		  "pattern found: applied %d, k %.3f, c %.3f, correlation %.3f", st.applied, st.k_on, st.common_var, sxy / sqrt(sxx * syy));
+	/* the support's misfit, different at each stack, outweighs the pattern there: left alone */
+	for (int q = 0; q < NQ; q++)
+		for (int y = 15; y < 35; y++)
+			res[q][y * W + 24] += (q + 1) * 10 * c0_rng_uniform(&rng);
+	CHECK(c0_pattern_estimate(&g, NQ, (const double *const *)res, H, W, mask, pat, &st) == 0);
+	double mx = 0;
+	for (size_t i = 0; i < N; i++)
+		mx = fmax(mx, fabs(pat[i]));
+	CHECK_MSG(!st.applied && st.k_on < 0.5 && mx == 0, "misfit: applied %d, k %.3f, |pat| %g", st.applied, st.k_on, mx);
+	/* nothing shared (each stack its own noise): left alone */
+	for (int q = 0; q < NQ; q++)
+		for (size_t i = 0; i < N; i++)
+			res[q][i] = 0.5 * c0_rng_normal(&rng);
+	CHECK(c0_pattern_estimate(&g, NQ, (const double *const *)res, H, W, mask, pat, &st) == 0);
+	CHECK_MSG(!st.applied && fabs(st.common_var) < 0.02, "no pattern: applied %d, c %.4f", st.applied, st.common_var);
+	for (int q = 0; q < NQ; q++)
+		free(yb[q]), free(res[q]), free(x[q]), free(b[q]);
+	c0_psi_omega_free(&P);
+	free(mask), free(o), free(pat), free(xv), free(far);
+}
+
 int main(void)
 {
 	c0_rng_init(&rng, 5, 0);
 	RUN(test_operators);
 	RUN(test_discrepancy);
 	RUN(test_simulated);
+	RUN(test_pattern);
 	return CHECK_DONE();
 }

@@ -93,6 +93,7 @@ static const struct c0_param table[] = {
 	NUM(offset_map, C0_P_STRING, "offset-map", "FILE.tif", "per-pixel dark level (ADU, one plane of the stacks' size): subtracted from every frame", "none"),
 	NUM(variance_map, C0_P_STRING, "variance-map", "FILE.tif", "per-pixel read-noise variance (ADU^2): taken out of each pixel's variance in the covariance", "none"),
 	NUM(gain_map, C0_P_STRING, "gain-map", "FILE.tif", "per-pixel gain (ADU per photon): frames are evened to the map's mean gain", "none"),
+	ROW(common_pattern, C0_P_ENUM, 0, 0, "off|on", "common-pattern", "on|off", "without --offset-map: estimate the pixels' fixed pattern the angles' intensity fits share (sCMOS dark levels) and take it out of their means where it shows", "on"),
 };
 enum { NPARAMS = sizeof table / sizeof *table };
 

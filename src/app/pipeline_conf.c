@@ -104,7 +104,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
 						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE,
-						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE };
+						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE,
+						   .common_pattern = c->common_pattern };
 	c0_run_conf_matirf(c, &s->matirf);
 	if (c->kappa == -1)   /* run's MA-TIRF step does not deconvolve (docs/parameters.md): the plain default */
 		s->matirf.kappa = ((struct c0_matirf_conf)C0_MATIRF_DEFAULTS).kappa;

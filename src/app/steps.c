@@ -6,6 +6,7 @@
 #include "stages/depthfit.h"
 #include "stages/splat.h"
 #include "stages/lambda.h"
+#include "stages/pattern.h"
 #include "optics/psf.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -258,9 +259,8 @@ static int intensity_compact(struct c0_result *r, int i)
  * was 0.4-4 nm larger (docs/parameters.md, "Sparse blinking"). The others are
  * solved again at that mu; the discrepancy figures of their own solve stay
  * in the report beside their own mu (mu_own). */
-static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, double *const *own,
-		     const struct c0_support_result *const *known, const int64_t *frames, const double *s2, int corrected,
-		     double *mu_own, int *sts, char (*msg)[256])
+static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, const double *const *mean,
+		     const int64_t *frames, const double *s2, int corrected, double *mu_own, int *sts, char (*msg)[256])
 {
 	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
 	double mu = 0;
@@ -279,8 +279,7 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 			continue;
 		struct c0_intensity_result first = r->ires[i], res;
 		float *cor = NULL;
-		sts[i] = intensity_solve(&c, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &res,
-					 corrected ? &cor : NULL);
+		sts[i] = intensity_solve(&c, mean[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &res, corrected ? &cor : NULL);
 		if (sts[i]) {
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 			continue;
@@ -297,18 +296,107 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 	}
 }
 
+/* Stack i's first solve (its own mu) on mean, its intensity compacted */
+static void solve_one(struct c0_result *r, const struct c0_intensity_conf *ic, int i, const double *mean, int H, int W,
+		      const int64_t *frames, const double *s2, int corrected, int *sts, char (*msg)[256])
+{
+	sts[i] = intensity_solve(ic, mean, H, W, frames[i], r->mask, s2[i], r->cal_noise, &r->ires[i],
+				 corrected ? &r->corrected[i] : NULL);
+	if (!sts[i])
+		sts[i] = intensity_compact(r, i);
+	if (sts[i])
+		snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+}
+
+/* Stack i's intensity on the mask's pixels (raster order): xs[i], or its
+ * fine grid's values there copied into *tmp */
+static const float *mask_values(struct c0_result *r, int i, float **tmp)
+{
+	*tmp = NULL;
+	if (r->xs[i])
+		return r->xs[i];
+	if (!(*tmp = c0_alloc(r->pl.M ? r->pl.M : 1, sizeof **tmp)))
+		return NULL;
+	for (size_t k = 0; k < r->pl.M; k++)
+		(*tmp)[k] = r->ires[i].x[r->pl.pix[k]];
+	return *tmp;
+}
+
+/* The pattern the share[] stacks have in common (stages/pattern.h) from
+ * their first solves' residuals; fixed[i]: the means less it, for the
+ * stacks to solve again (NULL for all where the rule does not apply). */
+static int common_pattern(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, const double *const *mean,
+			  double **fixed, struct c0_pattern_stats *ps)
+{
+	const int H = r->ires[0].Ny, W = r->ires[0].Nx;
+	const size_t N = (size_t)H * W;
+	int idx[C0_MAX_STACKS], m = 0, st = C0_OK;
+	for (int i = 0; i < r->n; i++)
+		if (share[i])
+			idx[m++] = i;
+	const double *yb[C0_MAX_STACKS];
+	const float *xv[C0_MAX_STACKS], *bv[C0_MAX_STACKS];
+	double *res[C0_MAX_STACKS] = { 0 };
+	float *tmp[C0_MAX_STACKS] = { 0 }, *pat = c0_alloc(N, sizeof *pat);
+	if (!pat)
+		st = C0_ENOMEM;
+	for (int j = 0; !st && j < m; j++) {
+		yb[j] = mean[idx[j]], bv[j] = r->ires[idx[j]].b;
+		if (!(xv[j] = mask_values(r, idx[j], &tmp[j])) || !(res[j] = c0_alloc(N, sizeof *res[j])))
+			st = C0_ENOMEM;
+	}
+	if (!st)
+		st = c0_pattern_residuals(&ic->grid, m, yb, xv, bv, H, W, r->mask, res);
+	if (!st)
+		st = c0_pattern_estimate(&ic->grid, m, (const double *const *)res, H, W, r->mask, pat, ps);
+	for (int j = 0; !st && ps->applied && j < m; j++) {
+		if (!(fixed[idx[j]] = c0_alloc(N, sizeof *fixed[idx[j]])))
+			st = C0_ENOMEM;
+		for (size_t p = 0; !st && p < N; p++)
+			fixed[idx[j]][p] = yb[j][p] - pat[p];
+	}
+	for (int j = 0; j < m; j++)
+		free(res[j]), free(tmp[j]);
+	free(pat);
+	return st;
+}
+
+/* The share[] stacks solved again on their means less the common pattern */
+static void solve_again(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, double *const *fixed,
+			const int64_t *frames, const double *s2, int corrected, double *mu_own, int *sts, char (*msg)[256])
+{
+	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
+	int bad = 0;
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile)
+	for (int i = 0; i < n; i++) {
+		if (!fixed[i])
+			continue;
+		c0_intensity_result_free(&r->ires[i]);
+		free(r->xs[i]), r->xs[i] = NULL;
+		if (corrected)
+			free(r->corrected[i]), r->corrected[i] = NULL;
+		solve_one(r, ic, i, fixed[i], H, W, frames, s2, corrected, sts, msg);
+	}
+	for (int i = 0; i < n; i++)
+		bad |= sts[i];
+	if (!bad)
+		share_mu(r, ic, share, (const double *const *)fixed, frames, s2, corrected, mu_own, sts, msg);
+}
+
 /* Every stack's mean and noise variance side by side (each reads its own
  * file), then the solves: side by side when each is one tile, else one
  * stack after the other with its tiles side by side (5 stacks on 2 threads
  * would leave one thread idle for the last). msg: per-stack error texts
- * (error messages are per thread). */
+ * (error messages are per thread). With share and no offset map, the
+ * shared stacks' common pattern (ps) is taken out where it shows. */
 static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
 			  struct c0_frames *f, const double *sigma2, int corrected,
 			  const struct c0_support_result *const *known, int64_t *frames, double *tc, int *sts, char (*msg)[256],
-			  const int *share, double *mu_own)
+			  const int *share, double *mu_own, struct c0_pattern_stats *ps)
 {
 	const int n = r->n;
-	double *own[C0_MAX_STACKS] = { 0 }, s2[C0_MAX_STACKS];
+	double *own[C0_MAX_STACKS] = { 0 }, s2[C0_MAX_STACKS], *fixed[C0_MAX_STACKS] = { 0 };
+	const double *mean[C0_MAX_STACKS];
 	const int H = f[0].height, W = f[0].width, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
 	struct c0_progress pr;
 	int done = 0;
@@ -324,27 +412,33 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 	}
 	int bad = 0;
 	for (int i = 0; i < n; i++)
-		bad |= sts[i];
+		bad |= sts[i], mean[i] = known[i] ? known[i]->mean : own[i];
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile && !bad)
 	for (int i = 0; i < n; i++) {
 		if (bad)
 			continue;
-		sts[i] = intensity_solve(ic, known[i] ? known[i]->mean : own[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &r->ires[i],
-					 corrected ? &r->corrected[i] : NULL);
-		if (!sts[i])
-			sts[i] = intensity_compact(r, i);
+		solve_one(r, ic, i, mean[i], H, W, frames, s2, corrected, sts, msg);
 		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
-			r->mean[(size_t)i * H * W + p] = (float)(known[i] ? known[i]->mean : own[i])[p];
-		if (sts[i])
-			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+			r->mean[(size_t)i * H * W + p] = (float)mean[i][p];
 #pragma omp critical(c0_intensity_progress)
 		c0_progress_update(&pr, ++done);
 	}
 	c0_progress_end(&pr);
-	if (share && !bad)
-		share_mu(r, ic, share, own, known, frames, s2, corrected, mu_own, sts, msg);
 	for (int i = 0; i < n; i++)
-		free(own[i]);
+		bad |= sts[i];
+	if (share && !bad)
+		share_mu(r, ic, share, mean, frames, s2, corrected, mu_own, sts, msg);
+	for (int i = 0; i < n; i++)
+		bad |= sts[i];
+	if (share && !bad && ic->common_pattern && !r->cal_offset) {
+		int st = common_pattern(r, ic, share, mean, fixed, ps);
+		if (st)
+			sts[0] = st, snprintf(msg[0], sizeof msg[0], "%s", c0_errmsg());
+		else if (ps->applied)
+			solve_again(r, ic, share, fixed, frames, s2, corrected, mu_own, sts, msg);
+	}
+	for (int i = 0; i < n; i++)
+		free(own[i]), free(fixed[i]);
 }
 
 int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
@@ -374,7 +468,8 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		free(msg);
 		return stp ? stp : C0_ENOMEM;
 	}
-	intensity_all(r, ic, sc, f, sigma2, corrected, known, frames, tc, sts, msg, share, mu_own);
+	struct c0_pattern_stats ps = { 0 };   /* stacks 0: not evaluated */
+	intensity_all(r, ic, sc, f, sigma2, corrected, known, frames, tc, sts, msg, share, mu_own, &ps);
 	for (int i = 0; i < n; i++)
 		if (sts[i]) {
 			int st = c0_fail(sts[i], "%s", msg[i]);
@@ -390,6 +485,16 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		else if (share[i])
 			share = NULL;
 	c0_report_intensity(r->rep, r, ic, frames, tc, share ? mu_own : NULL);
+	if (ps.stacks >= 2) {
+		cJSON *o = cJSON_AddObjectToObject(r->rep, "common_pattern");
+		cJSON_AddBoolToObject(o, "applied", ps.applied);
+		cJSON_AddNumberToObject(o, "stacks", ps.stacks);
+		cJSON_AddNumberToObject(o, "shared_variance_adu2", ps.common_var);
+		cJSON_AddNumberToObject(o, "far_pixels", ps.far_pixels);
+		cJSON_AddNumberToObject(o, "shrink_support", ps.k_on);
+		cJSON_AddNumberToObject(o, "shrink_near", ps.k_near);
+		cJSON_AddNumberToObject(o, "shrink_far", ps.k_far);
+	}
 	c0_step_end(r, &t);
 	return C0_OK;
 }

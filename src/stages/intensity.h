@@ -31,8 +31,10 @@ struct c0_intensity_conf {
 	const float *weight;       /* NULL, or Ny x Nx: the data term is 1/2 sum_i w_i (Psi x + b - ybar)_i^2
 				    * (w about 1 where a pixel's noise is the typical one: the principle's
 				    * target stays; the camera's noisy pixels weigh less) */
+	int common_pattern;        /* 0; 1: the whole method takes the MA-TIRF stacks' common fixed pattern
+				    * out of their means when no offset map is given (stages/pattern.h) */
 };
-#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL }
+#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL, 0 }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {
