@@ -4,10 +4,13 @@
  * the streaming passes (a c0_frame_fn, see stages/support.h).
  *
  * The blocks are first chained (each against the one before), then refined
- * against the mean of all blocks moved back. The blocks' shifts are linearly interpolated between block centres (and
- * extrapolated from the nearest two beyond them) to every frame. An axis
- * whose shifts all stay within 6 sds of the estimates' own noise is left
- * uncorrected (undoing noise only adds jitter). */
+ * against the other blocks of their stack moved back; each stack is then
+ * joined to the one before by continuity (no correlation across angles,
+ * whose images differ). The blocks' shifts are linearly interpolated
+ * between block centres (and extrapolated from the nearest two beyond them)
+ * to every frame. An axis whose shifts all stay within 6 sds of the
+ * estimates' own noise (the joins' included) is left uncorrected (undoing
+ * noise only adds jitter). */
 #pragma once
 #include <stddef.h>
 #include <stdint.h>
