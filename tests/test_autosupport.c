@@ -232,6 +232,20 @@ static int sim_sparse;  /* 1: the panel's sparse member (15 emitters per um on 3
 			 * 2: its dense one (150 on 8) */
 static double sim_brightness;   /* 0: the simulator's */
 
+/* the simulation of s into dir/sub */
+static void write_sim(const struct c0_sim_conf *s, const char *sub)
+{
+	char p[512];
+	snprintf(p, sizeof p, "%s/%s", dir, sub);
+	struct c0_outdir out;
+	struct c0_sim_result r;
+	CHECK(c0_outdir_open(&out, p, 1) == C0_OK);
+	int st = c0_simulate(s, &out, &r);
+	CHECK(st == C0_OK);
+	CHECK(c0_outdir_finish(&out, st) == C0_OK);
+	c0_sim_result_free(&r);
+}
+
 static void simulate(const char *sub, int size, int frames, double drift_x, double drift_y)
 {
 	struct c0_sim_conf s;
@@ -244,15 +258,7 @@ static void simulate(const char *sub, int size, int frames, double drift_x, doub
 	if (sim_brightness > 0)
 		s.brightness = sim_brightness;
 	s.width = s.height = size, s.frames = frames, s.drift_nm[0] = drift_x, s.drift_nm[1] = drift_y;
-	char p[512];
-	snprintf(p, sizeof p, "%s/%s", dir, sub);
-	struct c0_outdir out;
-	struct c0_sim_result r;
-	CHECK(c0_outdir_open(&out, p, 1) == C0_OK);
-	int st = c0_simulate(&s, &out, &r);
-	CHECK(st == C0_OK);
-	CHECK(c0_outdir_finish(&out, st) == C0_OK);
-	c0_sim_result_free(&r);
+	write_sim(&s, sub);
 }
 
 static int tile_px;                    /* 0: one tile */
@@ -591,15 +597,8 @@ static void test_drift_angles(void)
 	s.seed = 3, s.nangles = 3, s.angles[0] = 62, s.angles[1] = 66, s.angles[2] = 70;
 	s.width = s.height = 48, s.frames = 300;
 	s.drift_nm[0] = 150, s.drift_nm[1] = 75;
+	write_sim(&s, "angles");
 	char p[512];
-	snprintf(p, sizeof p, "%s/angles", dir);
-	struct c0_outdir out;
-	struct c0_sim_result r;
-	CHECK(c0_outdir_open(&out, p, 1) == C0_OK);
-	int st = c0_simulate(&s, &out, &r);
-	CHECK(st == C0_OK);
-	CHECK(c0_outdir_finish(&out, st) == C0_OK);
-	c0_sim_result_free(&r);
 	struct c0_frames f[3];
 	for (int q = 0; q < 3; q++) {
 		snprintf(p, sizeof p, "%s/angles/stack_q%02d.tif", dir, q + 1);

@@ -233,6 +233,15 @@ static int intensity_solve(const struct c0_intensity_conf *ic, const double *mea
 
 /* Stack i's intensity kept on the support's pixels alone, its fine grid
  * freed (268 MB at 2048 x 2048 camera pixels), unless it is not 0 off the mask */
+/* x's values at the pixel list's pixels, newly allocated (NULL: no memory) */
+static float *pixlist_values(const struct c0_pixlist *pl, const float *x)
+{
+	float *v = c0_alloc(pl->M ? pl->M : 1, sizeof *v);
+	for (size_t k = 0; v && k < pl->M; k++)
+		v[k] = x[pl->pix[k]];
+	return v;
+}
+
 static int intensity_compact(struct c0_result *r, int i)
 {
 	float *x = r->ires[i].x;
@@ -240,10 +249,8 @@ static int intensity_compact(struct c0_result *r, int i)
 	for (size_t p = 0; p < L; p++)
 		if (x[p] != 0 && !r->mask[p])
 			return C0_OK;
-	if (!(r->xs[i] = c0_alloc(r->pl.M ? r->pl.M : 1, sizeof *r->xs[i])))
+	if (!(r->xs[i] = pixlist_values(&r->pl, x)))
 		return C0_ENOMEM;
-	for (size_t k = 0; k < r->pl.M; k++)
-		r->xs[i][k] = x[r->pl.pix[k]];
 	free(x);
 	r->ires[i].x = NULL;
 	return C0_OK;
@@ -315,11 +322,7 @@ static const float *mask_values(struct c0_result *r, int i, float **tmp)
 	*tmp = NULL;
 	if (r->xs[i])
 		return r->xs[i];
-	if (!(*tmp = c0_alloc(r->pl.M ? r->pl.M : 1, sizeof **tmp)))
-		return NULL;
-	for (size_t k = 0; k < r->pl.M; k++)
-		(*tmp)[k] = r->ires[i].x[r->pl.pix[k]];
-	return *tmp;
+	return *tmp = pixlist_values(&r->pl, r->ires[i].x);
 }
 
 /* The pattern the share[] stacks have in common (stages/pattern.h) from
