@@ -11,7 +11,9 @@ int c0_drift_csv(const struct c0_drift *d, double pixel_nm, char **buf, size_t *
 {
 	struct c0_drift_info in;
 	c0_drift_get_info(d, &in);
-	const int64_t G = in.frames;
+	int64_t G = 0;
+	for (int q = 0; q < in.stacks; q++)
+		G += in.stack_frames[q];
 	size_t cap = (size_t)G * 48 + 64, k = 0;
 	char *b = c0_alloc(cap, 1);
 	if (!b)
@@ -39,7 +41,8 @@ int c0_drift_plot(const struct c0_drift *d, double pixel_nm, uint8_t **rgb, int 
 	const int W = 480, H = 240, m = 10;
 	struct c0_drift_info in;
 	c0_drift_get_info(d, &in);
-	const int64_t G = in.frames, *nt = in.stack_frames;
+	const double G = in.frames;   /* the clock's length: the plot's x axis */
+	const int64_t *nt = in.stack_frames;
 	uint8_t *p = c0_alloc((size_t)W * H * 3, 1);
 	if (!p)
 		return C0_ENOMEM;
@@ -53,25 +56,22 @@ int c0_drift_plot(const struct c0_drift *d, double pixel_nm, uint8_t **rgb, int 
 		}
 	const uint8_t grey[3] = { 190, 190, 190 }, black[3] = { 0, 0, 0 }, red[3] = { 220, 30, 30 }, blue[3] = { 30, 60, 220 };
 #define ROW(v) (H / 2 - (int)lround((v) / lim * (H / 2 - m)))
-#define COL(g) (m + (int)lround((double)(g) / (double)(G > 1 ? G - 1 : 1) * (W - 2 * m)))
+#define COL(g) (m + (int)lround((g) / (G > 1 ? G - 1 : 1) * (W - 2 * m)))
 	for (double v = -floor(lim / 10) * 10; v <= lim; v += 10)
 		for (int x = 0; x < m; x++)
 			put(p, W, H, x, ROW(v), grey);
 	for (int x = m; x < W - m; x++)
 		put(p, W, H, x, H / 2, grey);
-	for (int64_t q = 1, g0 = 0; q < in.stacks; q++) {   /* g0: stack q's first frame over all */
-		g0 += nt[q - 1];
-		for (int y = 0; y < H; y += 4)
-			put(p, W, H, COL(g0), y, grey);
-	}
+	for (int q = 0; q < in.stacks; q++)   /* where a stack began (not interleaved stacks) */
+		for (int y = 0; in.start[q] >= 1 && y < H; y += 4)
+			put(p, W, H, COL(in.start[q]), y, grey);
 	for (int y = m; y < H - m; y++)
 		put(p, W, H, m - 1, y, black);
-	int64_t g = 0;   /* frame over all stacks */
 	for (int q = 0; q < in.stacks; q++)
-		for (int64_t t = 0; t < nt[q]; t++, g++) {
+		for (int64_t t = 0; t < nt[q]; t++) {
 			double dx, dy;
 			c0_drift_at(d, q, t, &dx, &dy);
-			int x = COL(g);
+			int x = COL(in.start[q] + (double)t);
 			for (int k = -1; k <= 1; k++)
 				put(p, W, H, x, ROW(dx * pixel_nm) + k, red), put(p, W, H, x, ROW(dy * pixel_nm) + k, blue);
 		}

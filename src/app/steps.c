@@ -40,10 +40,22 @@ void c0_step_end(struct c0_result *r, const struct c0_step_clock *k)
 	add_number(r->rep, "rss_rise_mb", k->key, round(peak - k->peak0));
 }
 
-int c0_step_drift(struct c0_result *r, struct c0_frames *f, int n)
+/* The drift follows the acquisition's clock (order, gaps, interleaving) of
+ * a multi-angle run; a single stack's or the support's stacks run one
+ * after another as given. */
+int c0_step_drift(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f, int n)
 {
 	const struct c0_step_clock t = c0_step_begin("drift");
-	const struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
+	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
+	if (c->nangles > 0 && n <= C0_DRIFT_MAX) {
+		struct c0_bleach_conf bc;
+		int64_t T[C0_DRIFT_MAX];
+		for (int q = 0; q < n; q++)
+			T[q] = f[q].count;
+		c0_run_conf_bleach(c, &bc);
+		c0_bleach_clock(&bc, n, T, dc.start);
+		dc.nstart = n, dc.interleaved = bc.interleaved;
+	}
 	int st = c0_drift_estimate(&dc, f, n, &r->drift);
 	if (st)
 		return st;

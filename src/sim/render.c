@@ -226,26 +226,34 @@ void c0_sim_camera(const struct c0_sim_conf *c, int q, int t, double read_noise,
 	}
 }
 
+/* frame t of angle q on the drift's time line: the acquisition's slots
+ * (interleaved: in turn; sequential: with the gaps), except that stacks on
+ * fresh populations (restart) still follow one another in time */
+static int64_t drift_slot(const struct c0_sim_conf *c, int q, int t)
+{
+	return c->order == C0_ORDER_RESTART ? (int64_t)q * c->frames + t : c0_sim_slot(c, q, t);
+}
+
 void c0_sim_drift(const struct c0_sim_conf *c, int q, double *dx, double *dy)
 {
-	const double G = (double)c->nangles * c->frames;
-	const int64_t g0 = (int64_t)q * c->frames;
+	const int64_t last = drift_slot(c, c->nangles - 1, c->frames - 1);   /* the acquisition's last frame */
+	const double G = (double)last + 1;
 	if (!c->drift_walk) {
 		for (int t = 0; t < c->frames; t++) {
-			double u = G > 1 ? (double)(g0 + t) / (G - 1) : 0;
+			double u = G > 1 ? (double)drift_slot(c, q, t) / (G - 1) : 0;
 			dx[t] = c->drift_nm[0] * u, dy[t] = c->drift_nm[1] * u;
 		}
 		return;
 	}
-	/* the walk from the first frame of the acquisition, one stream */
+	/* the walk from the first frame of the acquisition, one stream, a step a slot */
 	struct c0_rng r;
 	c0_rng_init(&r, c->seed, STREAM(4, 0, 0));
 	const double sx = fabs(c->drift_nm[0]) / sqrt(G), sy = fabs(c->drift_nm[1]) / sqrt(G);
 	double x = 0, y = 0;
-	for (int64_t g = 0; g < g0 + c->frames; g++) {
+	for (int64_t g = 0, t = 0; t < c->frames; g++) {
 		if (g > 0)
 			x += sx * c0_rng_normal(&r), y += sy * c0_rng_normal(&r);
-		if (g >= g0)
-			dx[g - g0] = x, dy[g - g0] = y;
+		if (g == drift_slot(c, q, (int)t))
+			dx[t] = x, dy[t] = y, t++;
 	}
 }

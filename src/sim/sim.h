@@ -198,6 +198,7 @@ const float *c0_sim_scene_onfrac(const struct c0_sim_scene *s);   /* nem x frame
 const double *c0_sim_scene_background(const struct c0_sim_scene *s); /* photons, H x W */
 void c0_sim_render(const struct c0_sim_scene *s, int t, double *photons);
 /* Drift of the sample at frame t of angle q (nm), for every frame of that
- * angle: dx[t], dy[t] (t < frames). */
+ * angle: dx[t], dy[t] (t < frames). Time runs over the acquisition's slots:
+ * interleaved stacks drift together, gaps between stacks drift too. */
 void c0_sim_drift(const struct c0_sim_conf *c, int q, double *dx, double *dy);
 void c0_sim_camera(const struct c0_sim_conf *c, int q, int t, double read_noise, const double *photons, float *adu);

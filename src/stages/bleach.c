@@ -86,17 +86,24 @@ int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double 
 	return C0_OK;
 }
 
-void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res)
+void c0_bleach_clock(const struct c0_bleach_conf *c, int n, const int64_t *T, double *start)
 {
 	double u = 0;
 	for (int i = 0; i < n; i++) {
 		const int q = c->norder ? c->order[i] : i;
 		if (c->interleaved)
-			res->start[q] = (double)i / n;
+			start[q] = (double)i / n;
 		else {
-			res->start[q] = u;
+			start[q] = u;
 			u += (double)T[q] + (i < n - 1 && c->ngaps ? c->gap_frames[c->ngaps == 1 ? 0 : i] : 0);
 		}
+	}
+}
+
+void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res)
+{
+	c0_bleach_clock(c, n, T, res->start);
+	for (int q = 0; q < n; q++) {
 		/* mean of e^{-k (start + t)}, t = 0..T-1, in closed form */
 		const double k = res->k, Tq = (double)T[q];
 		res->factor[q] = k != 0 ? exp(-k * res->start[q]) * expm1(-k * Tq) / expm1(-k) / Tq : 1;

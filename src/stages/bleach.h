@@ -55,6 +55,9 @@ int c0_bleach_check(const struct c0_bleach_conf *c, int n);
 /* k from the frame sums S[q] (T[q] values each) and the background's sum
  * per frame B[q] (n stacks). */
 int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res);
+/* The acquisition's clock: stack q's first frame at start[q] (in frames;
+ * frame t at start[q] + t), from the order, the gaps and the interleaving. */
+void c0_bleach_clock(const struct c0_bleach_conf *c, int n, const int64_t *T, double *start);
 /* res->start and res->factor for rate k (res->k) and the frame counts. */
 void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
 /* Mode repeat: k from c->repeat_ratio and the time between the midpoints of

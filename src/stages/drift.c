@@ -14,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAXQ 64
+#define MAXQ C0_DRIFT_MAX
 #define REFINE 8      /* at most this many rounds of refinement against the mean of all blocks */
 #define REFINE_TOL 0.01   /* ... until no block moves by more than this (pixels) in a round */
 #define SIGNIF 6   /* an axis is corrected when its drift exceeds this many noise sds */
@@ -25,8 +25,10 @@ struct hook {
 };
 
 struct c0_drift {
-	int nq, nb, block, H, W;
-	int64_t frames[MAXQ], start[MAXQ];   /* per stack: frames, global index of its first frame */
+	int nq, nb, block, H, W, interleaved;
+	int64_t frames[MAXQ];                /* per stack */
+	double start[MAXQ];                  /* per stack: its first frame on the acquisition's clock */
+	int rec[MAXQ], k0[MAXQ + 1];         /* stacks in recording order; the i-th's blocks k0[i]..k0[i+1]-1 */
 	double *bt, *bx, *by;
 	float **bm;                          /* block means, while estimating */
 	double noise_px[2];                  /* sd of a block's shift estimate, per axis */
@@ -307,20 +309,40 @@ static void join_stacks(struct c0_drift *d, const int *k0, double *jv)
 	}
 }
 
+/* Interleaved stacks share one clock: their blocks k were recorded
+ * together, so the trajectory is the stacks' mean, each stack at its own
+ * mean level (its blocks are only known relative to each other; a
+ * correlation across angles would read their different images as a
+ * shift). The block means are no longer needed (same counts: checked). */
+static void average_stacks(struct c0_drift *d)
+{
+	const int nq = d->nq, nb = d->k0[1];
+	for (int k = 0; k < d->nb; k++)
+		free(d->bm[k]), d->bm[k] = NULL;
+	double lx[MAXQ], ly[MAXQ];
+	for (int i = 0; i < nq; i++) {
+		lx[i] = ly[i] = 0;
+		for (int k = d->k0[i]; k < d->k0[i + 1]; k++)
+			lx[i] += d->bx[k] / nb, ly[i] += d->by[k] / nb;
+	}
+	for (int k = 0; k < nb; k++) {
+		double t = 0, x = 0, y = 0;
+		for (int i = 0; i < nq; i++) {
+			const int j = d->k0[i] + k;
+			t += d->bt[j] / nq, x += (d->bx[j] - lx[i]) / nq, y += (d->by[j] - ly[i]) / nq;
+		}
+		d->bt[k] = t, d->bx[k] = x, d->by[k] = y;   /* k <= j: read before written */
+	}
+	d->nb = nb;
+}
+
 static int refine(struct c0_drift *d)
 {
 	/* each stack against the mean of its own blocks: an angle changes the
 	 * image (depth-dependent excitation), which a correlation across angles
 	 * would read as a shift. The stacks' blocks are apart: side by side. */
-	int k0[MAXQ + 1];
+	const int *k0 = d->k0;
 	struct c0_first_fail fail = { 0 };
-	k0[0] = 0;
-	for (int q = 0; q < d->nq; q++) {
-		int k1 = k0[q];
-		while (k1 < d->nb && d->bt[k1] < (double)(d->start[q] + d->frames[q]))
-			k1++;
-		k0[q + 1] = k1;
-	}
 	const size_t n = (size_t)d->H * d->W;
 #pragma omp parallel if (d->nq > 1)
 	{
@@ -340,10 +362,13 @@ static int refine(struct c0_drift *d)
 	}
 	if (fail.code)
 		return c0_first_fail_raise(&fail);
+	if (d->interleaved)
+		average_stacks(d);
 	double *jv = c0_alloc((size_t)d->nb, sizeof *jv);
 	if (!jv)
 		return C0_ENOMEM;
-	join_stacks(d, k0, jv);
+	if (!d->interleaved)
+		join_stacks(d, k0, jv);
 	for (int k = d->nb - 1; k >= 0; k--)
 		d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
 	/* an axis whose shifts stay within SIGNIF noise sds of zero has no
@@ -474,6 +499,12 @@ static void stack_blocks_free(struct stack_blocks *o)
 	free(o->bm), free(o->sx), free(o->sy);
 }
 
+/* a stack's block count: c->block frames each, fewer when the stack has < 2 */
+static int64_t blocks(const struct c0_drift_conf *c, int64_t T)
+{
+	return T / (T >= 2 * c->block ? c->block : T / 2);
+}
+
 /* the stacks' sizes: the same field, each long enough for two blocks */
 static int check_stacks(const struct c0_drift_conf *c, const struct c0_frames *f, int n)
 {
@@ -490,8 +521,29 @@ static int check_stacks(const struct c0_drift_conf *c, const struct c0_frames *f
 		else if ((T >= 2 * c->block ? c->block : T / 2) < 5)
 			st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to estimate drift (needs >= 10; switch "
 				     "drift correction off)", f[q].name, (long long)T);
+		else if (c->interleaved && blocks(c, T) != blocks(c, f[0].count))
+			st = c0_fail(C0_EINVAL, "%s: %lld frames, %s %lld: interleaved stacks (frame t of each recorded in turn) "
+				     "need about as many frames each", f[q].name, (long long)T, f[0].name, (long long)f[0].count);
+		else if (c->nstart && !isfinite(c->start[q]))
+			st = c0_fail(C0_EINVAL, "drift: stack %d's start on the acquisition clock is not a number", q + 1);
 	}
+	if (!st && c->nstart && c->nstart != n)
+		st = c0_fail(C0_EINVAL, "drift: %d start times for %d stacks", c->nstart, n);
 	return st;
+}
+
+/* The stacks' clock (c->start, else one after another as given) and their
+ * recording order (by start; ties in the given order). */
+static void clock(const struct c0_drift_conf *c, const struct c0_frames *f, struct c0_drift *d)
+{
+	double u = 0;
+	for (int q = 0; q < d->nq; q++) {
+		d->start[q] = c->nstart ? c->start[q] : u, u += (double)f[q].count;
+		int i = q;
+		for (; i > 0 && d->start[d->rec[i - 1]] > d->start[q]; i--)
+			d->rec[i] = d->rec[i - 1];
+		d->rec[i] = q;
+	}
 }
 
 /* the stacks' block means and chained shifts, the stacks side by side: each
@@ -522,22 +574,23 @@ static int chain(struct c0_drift *d, const struct c0_frames *f, int n, struct st
 	    !(d->by = c0_alloc((size_t)nball, sizeof *d->by)) || !(d->bm = c0_alloc((size_t)nball, sizeof *d->bm)))
 		return C0_ENOMEM;
 	int prev0 = 0;
-	int64_t g = 0;
-	for (int q = 0; q < n; q++) {
-		const int this0 = d->nb;   /* this stack's first block */
+	for (int r = 0; r < n; r++) {
+		const int q = d->rec[r], this0 = d->nb;   /* this stack's first block */
 		const int64_t T = f[q].count, B = sb[q].B;
+		const double g = d->start[q];
+		d->k0[r] = this0;
 		for (int64_t k = 0; k < sb[q].nb; k++) {
 			int64_t t1 = k * B, t2 = k == sb[q].nb - 1 ? T : t1 + B;
 			double bx = 0, by = 0;
-			if (d->nb > 0 && k > 0) {
+			if (d->nb > this0) {
 				bx = sb[q].sx[k], by = sb[q].sy[k];
 				bx += d->bx[d->nb - 1], by += d->by[d->nb - 1];
-			} else if (d->nb > 0) {
+			} else if (d->nb > 0 && !d->interleaved) {
 				/* a new stack (another angle): continue the trajectory at
 				 * the previous stack's mean rate (first to last block)
 				 * rather than correlate across angles */
 				const int j = d->nb - 1, i = prev0;
-				double u = j > i ? ((double)g + 0.5 * (double)(t2 - 1) - d->bt[j]) / (d->bt[j] - d->bt[i]) : 0;
+				double u = j > i ? (g + 0.5 * (double)(t2 - 1) - d->bt[j]) / (d->bt[j] - d->bt[i]) : 0;
 				bx = d->bx[j] + u * (d->bx[j] - d->bx[i]);
 				by = d->by[j] + u * (d->by[j] - d->by[i]);
 			}
@@ -546,16 +599,16 @@ static int chain(struct c0_drift *d, const struct c0_frames *f, int n, struct st
 					       "of the field; correct it beforehand or switch drift correction off",
 					       f[q].name, (long long)t1 + 1, (long long)t2, bx, by);
 			d->bm[d->nb] = sb[q].bm[k], sb[q].bm[k] = NULL;
-			d->bt[d->nb] = (double)g + 0.5 * (double)(t1 + t2 - 1);
+			d->bt[d->nb] = g + 0.5 * (double)(t1 + t2 - 1);
 			d->bx[d->nb] = bx, d->by[d->nb] = by;
 			d->max_px = fmax(d->max_px, hypot(bx, by));
 			d->nb++;
 		}
 		prev0 = this0;
-		d->frames[q] = T, d->start[q] = g;
+		d->frames[q] = T;
 		d->hooks[q].d = d, d->hooks[q].q = q;
-		g += T;
 	}
+	d->k0[n] = d->nb;
 	return C0_OK;
 }
 
@@ -572,7 +625,8 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 		free(d), free(sb);
 		return C0_ENOMEM;
 	}
-	d->nq = n, d->H = f[0].height, d->W = f[0].width;
+	d->nq = n, d->H = f[0].height, d->W = f[0].width, d->interleaved = c->interleaved;
+	clock(c, f, d);
 	st = read_stacks(c, f, n, sb);
 	d->block = (int)sb[0].B;
 	if (!st)
@@ -599,7 +653,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 
 void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double *dy)
 {
-	const double tg = (double)(d->start[q] + t);
+	const double tg = d->start[q] + (double)t;
 	if (d->nb < 2) {
 		*dx = d->nb ? d->bx[0] : 0, *dy = d->nb ? d->by[0] : 0;
 		return;
@@ -627,8 +681,10 @@ int c0_drift_frame_fn(void *ctx, int64_t t, float *frame, int H, int W)
 void c0_drift_get_info(const struct c0_drift *d, struct c0_drift_info *o)
 {
 	o->stacks = d->nq, o->blocks = d->nb, o->block = d->block;
-	o->frames = d->start[d->nq - 1] + d->frames[d->nq - 1];
-	o->stack_frames = d->frames;
+	o->frames = 0;
+	for (int q = 0; q < d->nq; q++)
+		o->frames = fmax(o->frames, d->start[q] + (double)d->frames[q]);
+	o->stack_frames = d->frames, o->start = d->start;
 	o->bt = d->bt, o->bx = d->bx, o->by = d->by;
 	o->max_px = d->max_px, o->seconds = d->seconds;
 	o->noise_px[0] = d->noise_px[0], o->noise_px[1] = d->noise_px[1];

@@ -1,31 +1,38 @@
 /* Lateral drift of a run: estimated from block means of the frames by
- * cross-correlation with the first block of the first stack (sub-pixel peak),
- * continued across the stacks in their order, and undone frame by frame in
- * the streaming passes (a c0_frame_fn, see stages/support.h).
+ * cross-correlation (sub-pixel peak) and undone frame by frame in the
+ * streaming passes (a c0_frame_fn, see stages/support.h).
  *
- * The blocks are first chained (each against the one before), then refined
- * against the other blocks of their stack moved back; each stack is then
- * joined to the one before by continuity (no correlation across angles,
- * whose images differ). The blocks' shifts are linearly interpolated
- * between block centres (and extrapolated from the nearest two beyond them)
- * to every frame. An axis whose shifts all stay within 6 sds of the
- * estimates' own noise (the joins' included) is left uncorrected (undoing
- * noise only adds jitter). */
+ * Each stack's blocks are first chained (each against the one before),
+ * then refined against the other blocks of their stack moved back; there
+ * is no correlation across angles, whose images differ. Stacks recorded one
+ * after another are then joined, in recording order, each to the one before
+ * by continuity; stacks recorded frame by frame in turn (interleaved) share
+ * one clock, and the trajectory is their mean, each at its own level. The
+ * blocks' shifts are linearly interpolated between block centres (and
+ * extrapolated from the nearest two beyond them) to every frame. An axis
+ * whose shifts all stay within 6 sds of the estimates' own noise (the joins'
+ * included) is left uncorrected (undoing noise only adds jitter). */
 #pragma once
 #include <stddef.h>
 #include <stdint.h>
 
+#define C0_DRIFT_MAX 64
+
 struct c0_drift_conf {
 	int block;          /* 50 frames per block mean (fewer when a stack has < 2 blocks) */
+	int interleaved;    /* 0: stacks recorded one after another; 1: frame t of every stack in turn (same frame counts) */
+	double start[C0_DRIFT_MAX];   /* stack q's first frame on the acquisition's clock, in frames (stages/bleach.h's */
+	int nstart;                   /* c0_bleach_clock: order and gaps); nstart 0: one after another as given */
 };
-#define C0_DRIFT_DEFAULTS { 50 }
+#define C0_DRIFT_DEFAULTS { 50, 0, { 0 }, 0 }
 
 struct c0_drift;
 
 struct c0_frames;
-/* One streaming pass over each stack (n of them, same size, in acquisition
- * order). Errors: a stack too short to hold two blocks of >= 5 frames; a
- * shift beyond a quarter of the field (the correlation cannot be trusted there). */
+/* One streaming pass over each stack (n of them, same size). Errors: a
+ * stack too short to hold two blocks of >= 5 frames; interleaved stacks of
+ * different block counts; a shift beyond a quarter of the field (the
+ * correlation cannot be trusted there). */
 int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct c0_drift **out);
 void c0_drift_free(struct c0_drift *d);
 /* The frame hook for stack q: pass c0_drift_frame_fn with this context. */
@@ -36,9 +43,10 @@ void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double 
 
 struct c0_drift_info {
 	int stacks, blocks, block;  /* blocks over all stacks */
-	int64_t frames;             /* over all stacks */
+	double frames;              /* the acquisition clock's length (frames) */
 	const int64_t *stack_frames;
-	const double *bt, *bx, *by; /* block centre (frame index over all stacks), shift (px) */
+	const double *start;        /* stack q's first frame on the clock */
+	const double *bt, *bx, *by; /* block centre (on the clock), shift (px) */
 	double max_px, seconds;
 	double noise_px[2];         /* sd of one block's shift (x, y), from second differences */
 	int corrected[2];           /* 0: the axis' drift stayed within 6 noise sds, left uncorrected */
