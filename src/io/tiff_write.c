@@ -200,6 +200,11 @@ int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
 	uint32_t rps = 0;
 	if (!(w->written == 0 || TIFFReadDirectory(t)) || !TIFFGetField(t, TIFFTAG_ROWSPERSTRIP, &rps) || !rps)
 		return write_error(w, errno);
+	/* the fastest level (a codec setting, not kept in the file: set on each
+	 * directory read back): a mostly-zero volume at 1024^2 x 20 bins 9.1 ->
+	 * 4.8 s, 2.85 -> 3.31 MB */
+	if (o->deflate && !TIFFSetField(t, TIFFTAG_ZIPQUALITY, 1))
+		return write_error(w, errno);
 	convert_plane(o, plane, w->buf);
 	size_t row = (size_t)o->width * (bps / 8);
 	errno = 0;
