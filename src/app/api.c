@@ -35,7 +35,7 @@ static int support(const struct c0_run_conf *c, const struct c0_stage_confs *sc,
 	for (int i = 0; i < n; i++)
 		r->sup[i] = i;
 	r->pixel_nm = sc->support.grid.pixel_nm, r->srf = sc->support.grid.srf;
-	int st = c->drift ? c0_step_drift(r, c, f, n) : C0_OK;
+	int st = c->drift ? c0_step_drift(r, c, &sc->support.grid, f, n) : C0_OK;
 	return st ? st : c0_step_support(r, &sc->support, f);
 }
 

@@ -257,7 +257,7 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 		st = support_stacks(c, only, n, r);
 	r->pixel_nm = s.support.grid.pixel_nm, r->srf = s.support.grid.srf;
 	if (!st && c->drift)
-		st = c0_step_drift(r, c, f, n);
+		st = c0_step_drift(r, c, &s.support.grid, f, n);
 	if (!st)
 		st = c0_step_support(r, &s.support, f);
 	if (!st && r->fwhm_nm > 0 && r->fwhm_nm != s.support.grid.fwhm_nm)

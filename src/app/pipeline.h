@@ -115,9 +115,9 @@ typedef int (*c0_pipe_body)(const struct c0_run_conf *c, const struct c0_stage_c
 int c0_pipe_run(const char *command, const struct c0_run_conf *c, const struct c0_stack *stacks, int n,
 		c0_pipe_body body, const void *arg, struct c0_result **out);
 
-/* Drift over all n stacks of f on c's acquisition clock (stages/drift.h); the later steps
- * undo it frame by frame. */
-int c0_step_drift(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f, int n);
+/* Drift over all n stacks of f on c's acquisition clock, correlations
+ * filtered by g's PSF (stages/drift.h); the later steps undo it frame by frame. */
+int c0_step_drift(struct c0_result *r, const struct c0_run_conf *c, const struct c0_grid *g, struct c0_frames *f, int n);
 /* Support of stacks r->sup[0..nsup) (indices into f); sets the union mask. */
 int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struct c0_frames *f);
 /* Intensity and background of every stack on r->mask: the support step's

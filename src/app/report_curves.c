@@ -154,7 +154,7 @@ void c0_fig_drift(struct c0_html *h, const struct c0_rundir *d)
 		return;
 	}
 	open_section(h, "drift", "Drift", "The lateral drift of the sample against the frames of the whole acquisition "
-		     "(block means cross-correlated; drift.csv has every frame). It was undone frame by frame before the "
+		     "(PSF-filtered block means cross-correlated; drift.csv has every frame). It was undone frame by frame before the "
 		     "covariance and the means; an axis within 6 noise sds of zero is left uncorrected.");
 	double lo = -10, hi = 10;
 	range(x, n, &lo, &hi), range(y, n, &lo, &hi);

@@ -11,7 +11,7 @@ int c0_report_drift(cJSON *rep, const struct c0_drift *d, double px)
 	struct c0_drift_info in;
 	c0_drift_get_info(d, &in);
 	cJSON *j = cJSON_AddObjectToObject(rep, "drift");
-	cJSON_AddStringToObject(j, "method", "block means cross-correlated (chained, then against the mean of all blocks), "
+	cJSON_AddStringToObject(j, "method", "block means filtered by the PSF and cross-correlated (chained, then against the mean of all blocks), "
 				"sub-pixel peak; frames shifted back by a mirrored Fourier shift");
 	cJSON_AddNumberToObject(j, "block_frames", in.block);
 	cJSON_AddNumberToObject(j, "blocks", in.blocks);

@@ -43,10 +43,11 @@ void c0_step_end(struct c0_result *r, const struct c0_step_clock *k)
 /* The drift follows the acquisition's clock (order, gaps, interleaving) of
  * a multi-angle run; a single stack's or the support's stacks run one
  * after another as given. */
-int c0_step_drift(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f, int n)
+int c0_step_drift(struct c0_result *r, const struct c0_run_conf *c, const struct c0_grid *g, struct c0_frames *f, int n)
 {
 	const struct c0_step_clock t = c0_step_begin("drift");
 	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS;
+	dc.psf_sigma_px = c0_grid_sigma_px(g);
 	if (c->nangles > 0 && n <= C0_DRIFT_MAX) {
 		struct c0_bleach_conf bc;
 		int64_t T[C0_DRIFT_MAX];

@@ -26,6 +26,7 @@ struct hook {
 
 struct c0_drift {
 	int nq, nb, block, H, W, interleaved;
+	double sigma;                        /* the PSF's sd (pixels): the correlations' filter */
 	int64_t frames[MAXQ];                /* per stack */
 	double start[MAXQ];                  /* per stack: its first frame on the acquisition's clock */
 	int rec[MAXQ], k0[MAXQ + 1];         /* stacks in recording order; the i-th's blocks k0[i]..k0[i+1]-1 */
@@ -59,9 +60,10 @@ struct xcorr {
 	int H, W, PH, PW, LY, LX;
 	size_t ns;               /* spectrum length */
 	double *win, *re;
+	double *lp;              /* the PSF's transfer function on the spectrum (NULL: none) */
 	fftw_complex *ref, *sp, *xs;   /* reference, image and cross spectra */
 	fftw_plan f, b;
-	int borrowed;            /* win and ref are another xcorr's */
+	int borrowed;            /* win, lp and ref are another xcorr's */
 };
 
 static void xcorr_free(struct xcorr *x)
@@ -69,7 +71,7 @@ static void xcorr_free(struct xcorr *x)
 	if (x->f) fftw_destroy_plan(x->f);
 	if (x->b) fftw_destroy_plan(x->b);
 	if (!x->borrowed)
-		free(x->win), fftw_free(x->ref);
+		free(x->win), free(x->lp), fftw_free(x->ref);
 	fftw_free(x->re), fftw_free(x->sp), fftw_free(x->xs);
 }
 
@@ -94,7 +96,7 @@ static int xcorr_buffers(struct xcorr *x, const struct xcorr *share)
 	x->sp = fftw_malloc(x->ns * sizeof(fftw_complex));
 	x->xs = fftw_malloc(x->ns * sizeof(fftw_complex));
 	if (share)
-		x->win = share->win, x->ref = share->ref, x->borrowed = 1;
+		x->win = share->win, x->lp = share->lp, x->ref = share->ref, x->borrowed = 1;
 	else {
 		x->win = c0_alloc((size_t)x->H * x->W, sizeof *x->win);
 		x->ref = fftw_malloc(x->ns * sizeof(fftw_complex));
@@ -111,7 +113,30 @@ static int xcorr_buffers(struct xcorr *x, const struct xcorr *share)
 	return C0_OK;
 }
 
-static int xcorr_init(struct xcorr *x, int H, int W)
+/* The PSF's transfer function (a Gaussian of sd sigma pixels) on the
+ * r2c spectrum: the image and the reference both filtered, the matched
+ * filter for an image of PSF-blurred spots in white noise. The camera's
+ * fixed pattern is white too, and does not move with the sample: unfiltered,
+ * its own peak at lag 0 pulled the shift towards 0. */
+static int xcorr_lowpass(struct xcorr *x, double sigma)
+{
+	if (!(sigma > 0))
+		return C0_OK;
+	const int nx = x->PW / 2 + 1;
+	if (!(x->lp = c0_alloc(x->ns, sizeof *x->lp)))
+		return C0_ENOMEM;
+	const double c = -2 * 3.14159265358979323846 * 3.14159265358979323846 * sigma * sigma;
+	for (int y = 0; y < x->PH; y++) {
+		const double fy = (double)(y <= x->PH / 2 ? y : y - x->PH) / x->PH;
+		for (int i = 0; i < nx; i++) {
+			const double fx = (double)i / x->PW;
+			x->lp[(size_t)y * nx + i] = exp(c * (fx * fx + fy * fy));
+		}
+	}
+	return C0_OK;
+}
+
+static int xcorr_init(struct xcorr *x, int H, int W, double sigma)
 {
 	memset(x, 0, sizeof *x);
 	/* lags to a quarter of the field, and one more for the sub-pixel fit */
@@ -125,7 +150,7 @@ static int xcorr_init(struct xcorr *x, int H, int W)
 		for (int i = 0; i < W; i++)   /* Hann */
 			x->win[(size_t)y * W + i] = (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (y + 0.5) / H)) *
 						    (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (i + 0.5) / W));
-	return C0_OK;
+	return xcorr_lowpass(x, sigma);
 }
 
 /* another thread's set-up against the same reference */
@@ -151,6 +176,8 @@ static void spectrum(struct xcorr *x, const double *img)
 			x->re[(size_t)y * x->PW + i] = (img[k] - m) * x->win[k];
 		}
 	fftw_execute(x->f);
+	for (size_t i = 0; x->lp && i < x->ns; i++)
+		x->sp[i] *= x->lp[i];
 }
 
 /* sub-pixel peak offset from three samples: Gaussian (log-parabola) when all
@@ -349,7 +376,7 @@ static int refine(struct c0_drift *d)
 		struct xcorr x;
 		double *ref = c0_alloc(n, sizeof *ref);
 		float *tmp = c0_alloc(n, sizeof *tmp);
-		int st = xcorr_init(&x, d->H, d->W);
+		int st = xcorr_init(&x, d->H, d->W, d->sigma);
 		if (!st && (!ref || !tmp))
 			st = C0_ENOMEM;
 #pragma omp for schedule(dynamic, 1)
@@ -435,7 +462,7 @@ static int add_frames(struct stack_blocks *o, struct xcorr *x, double *sum, cons
 	return C0_OK;
 }
 
-static int stack_pass(struct c0_frames *r, int64_t B, struct stack_blocks *o)
+static int stack_pass(struct c0_frames *r, int64_t B, double sigma, struct stack_blocks *o)
 {
 	const int H = r->height, W = r->width;
 	const size_t n = (size_t)H * W;
@@ -444,7 +471,7 @@ static int stack_pass(struct c0_frames *r, int64_t B, struct stack_blocks *o)
 	nf = nf < 1 ? 1 : nf > T ? T : nf;
 	const int64_t nbatch = (T + nf - 1) / nf;
 	struct xcorr x;
-	int st = xcorr_init(&x, H, W), rst = C0_OK;
+	int st = xcorr_init(&x, H, W, sigma), rst = C0_OK;
 	double *sum = c0_alloc(n, sizeof *sum);
 	float *buf = c0_alloc(2 * (size_t)nf * n, sizeof *buf);
 	o->B = B, o->nb = nb;
@@ -554,7 +581,7 @@ static int read_stacks(const struct c0_drift_conf *c, struct c0_frames *f, int n
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int q = 0; q < n; q++) {
 		const int64_t T = f[q].count;
-		if (stack_pass(&f[q], T >= 2 * c->block ? c->block : T / 2, &sb[q]))
+		if (stack_pass(&f[q], T >= 2 * c->block ? c->block : T / 2, c->psf_sigma_px, &sb[q]))
 #pragma omp critical(c0_drift_fail)
 			if (fail < 0 || q < fail)
 				fail = q;
@@ -625,7 +652,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 		free(d), free(sb);
 		return C0_ENOMEM;
 	}
-	d->nq = n, d->H = f[0].height, d->W = f[0].width, d->interleaved = c->interleaved;
+	d->nq = n, d->H = f[0].height, d->W = f[0].width, d->interleaved = c->interleaved, d->sigma = c->psf_sigma_px;
 	clock(c, f, d);
 	st = read_stacks(c, f, n, sb);
 	d->block = (int)sb[0].B;

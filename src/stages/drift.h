@@ -2,7 +2,9 @@
  * cross-correlation (sub-pixel peak) and undone frame by frame in the
  * streaming passes (a c0_frame_fn, see stages/support.h).
  *
- * Each stack's blocks are first chained (each against the one before),
+ * The block means are filtered by the PSF before they are correlated
+ * (psf_sigma_px: a camera's fixed pattern, which does not move, then
+ * weighs less). Each stack's blocks are first chained (each against the one before),
  * then refined against the other blocks of their stack moved back; there
  * is no correlation across angles, whose images differ. Stacks recorded one
  * after another are then joined, in recording order, each to the one before
@@ -23,8 +25,9 @@ struct c0_drift_conf {
 	int interleaved;    /* 0: stacks recorded one after another; 1: frame t of every stack in turn (same frame counts) */
 	double start[C0_DRIFT_MAX];   /* stack q's first frame on the acquisition's clock, in frames (stages/bleach.h's */
 	int nstart;                   /* c0_bleach_clock: order and gaps); nstart 0: one after another as given */
+	double psf_sigma_px;          /* 0: the block means correlated as they are; > 0: both filtered by this PSF */
 };
-#define C0_DRIFT_DEFAULTS { 50, 0, { 0 }, 0 }
+#define C0_DRIFT_DEFAULTS { 50, 0, { 0 }, 0, 0 }
 
 struct c0_drift;
 
