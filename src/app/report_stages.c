@@ -134,6 +134,26 @@ cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c
 	return j;
 }
 
+void c0_report_depth_readout(cJSON *j, int mean, double seconds)
+{
+	cJSON_AddStringToObject(j, "depth_readout", mean ? "intensity-weighted mean of each column" : "single-depth fit of each column's projections");
+	cJSON_AddNumberToObject(j, "depth_readout_s", seconds);
+}
+
+void c0_report_pattern(cJSON *rep, const struct c0_pattern_stats *ps)
+{
+	if (ps->stacks < 2)
+		return;   /* not evaluated */
+	cJSON *o = cJSON_AddObjectToObject(rep, "common_pattern");
+	cJSON_AddBoolToObject(o, "applied", ps->applied);
+	cJSON_AddNumberToObject(o, "stacks", ps->stacks);
+	cJSON_AddNumberToObject(o, "shared_variance_adu2", ps->common_var);
+	cJSON_AddNumberToObject(o, "far_pixels", ps->far_pixels);
+	cJSON_AddNumberToObject(o, "shrink_support", ps->k_on);
+	cJSON_AddNumberToObject(o, "shrink_near", ps->k_near);
+	cJSON_AddNumberToObject(o, "shrink_far", ps->k_far);
+}
+
 void c0_report_matirf_raw(cJSON *j, const struct c0_run_conf *c, const struct c0_matirf_result *res)
 {
 	cJSON_AddNumberToObject(j, "offset", c->offset);

@@ -3,6 +3,7 @@
 #pragma once
 #include "app/pipeline.h"
 #include "stages/bleach.h"
+#include "stages/pattern.h"
 
 /* "drift": the trajectory's blocks and noise, in nm at pixel_nm. */
 int c0_report_drift(cJSON *rep, const struct c0_drift *d, double pixel_nm);
@@ -20,6 +21,11 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 /* The MA-TIRF section key ("matirf" or "baseline_matirf") of res, and the run's "z_nm". */
 cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
 			const struct c0_matirf_result *res);
+/* The MA-TIRF section j's depth readout: the columns' intensity-weighted
+ * mean (the camera-grid baseline) or their single-depth fit, and its seconds. */
+void c0_report_depth_readout(cJSON *j, int mean, double seconds);
+/* "common_pattern" (stages/pattern.h), when it was evaluated (2 or more stacks). */
+void c0_report_pattern(cJSON *rep, const struct c0_pattern_stats *ps);
 /* The matirf command's additions: offset, background, PSF. */
 void c0_report_matirf_raw(cJSON *j, const struct c0_run_conf *c, const struct c0_matirf_result *res);
 /* "bleaching": the mode, order, rate and factors. */

@@ -501,16 +501,7 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 		else if (share[i])
 			share = NULL;
 	c0_report_intensity(r->rep, r, ic, frames, tc, share ? mu_own : NULL);
-	if (ps.stacks >= 2) {
-		cJSON *o = cJSON_AddObjectToObject(r->rep, "common_pattern");
-		cJSON_AddBoolToObject(o, "applied", ps.applied);
-		cJSON_AddNumberToObject(o, "stacks", ps.stacks);
-		cJSON_AddNumberToObject(o, "shared_variance_adu2", ps.common_var);
-		cJSON_AddNumberToObject(o, "far_pixels", ps.far_pixels);
-		cJSON_AddNumberToObject(o, "shrink_support", ps.k_on);
-		cJSON_AddNumberToObject(o, "shrink_near", ps.k_near);
-		cJSON_AddNumberToObject(o, "shrink_far", ps.k_far);
-	}
+	c0_report_pattern(r->rep, &ps);
 	c0_step_end(r, &t);
 	return C0_OK;
 }
@@ -559,10 +550,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	if (!baseline)
 		r->vol_pixel_nm = pixel_nm;
 	r->z0_nm = m->z0_nm, r->dz_nm = m->dz_nm;
-	c0_report_matirf(r->rep, key, c, m, res);
-	cJSON *mj = cJSON_GetObjectItem(r->rep, key);
-	cJSON_AddStringToObject(mj, "depth_readout", baseline ? "intensity-weighted mean of each column" : "single-depth fit of each column's projections");
-	cJSON_AddNumberToObject(mj, "depth_readout_s", baseline ? 0 : c0_now() - tfit);
+	c0_report_depth_readout(c0_report_matirf(r->rep, key, c, m, res), baseline, baseline ? 0 : c0_now() - tfit);
 	c0_step_end(r, &t);
 	return C0_OK;
 }
