@@ -232,11 +232,10 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
  * the noise covariances keep the stated width's lag, as the support's. */
 static void data_width(const struct c0_run_conf *c, struct c0_stage_confs *s, double fwhm)
 {
-	if (s->support.lag == 0)
-		s->support.lag = c0_support_lag(&s->support);
+	c0_support_set_width(&s->support, fwhm);
 	if (c->depth_pool_nm < 0)
 		s->pool_nm = C0_DEPTH_POOL_FWHM * fwhm;
-	s->support.grid.fwhm_nm = s->intensity.grid.fwhm_nm = fwhm;
+	s->intensity.grid.fwhm_nm = fwhm;
 }
 
 static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,

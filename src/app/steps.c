@@ -159,9 +159,8 @@ static void psf_width(struct c0_result *r, int k, struct c0_support_conf *cc)
 		c0_result_warn(r, "%s: the covariance's lags say a Gaussian PSF of FWHM %.0f nm, not the given %g nm: "
 			       "the solves use %.0f nm (fwhm_rule stated keeps the given one; docs/parameters.md, lambda under "
 			       "model mismatch)", r->names[r->sup[0]], fw, stated, fw);
-		if (cc->lag == 0)
-			cc->lag = c0_support_lag(cc);
-		cc->grid.fwhm_nm = r->fwhm_nm, cc->fwhm_data = 0;
+		c0_support_set_width(cc, r->fwhm_nm);
+		cc->fwhm_data = 0;
 	} else if (fw > 0 && fabs(fw / stated - 1) > C0_LAMBDA_PSF_WARN && !cc->fwhm_data && r->fwhm_nm == stated)
 		c0_result_warn(r, "%s: the covariance's lags say a Gaussian PSF of FWHM %.0f nm, not the given %g nm "
 			       "(the automatic lambda and the support assume the given one; docs/parameters.md, lambda "

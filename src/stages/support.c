@@ -16,6 +16,13 @@ int c0_support_lag(const struct c0_support_conf *c)
 	return c0_grid_lag(&c->grid, c->lag);
 }
 
+void c0_support_set_width(struct c0_support_conf *c, double fwhm_nm)
+{
+	if (c->lag == 0)
+		c->lag = c0_support_lag(c);
+	c->grid.fwhm_nm = fwhm_nm;
+}
+
 double c0_support_default_lambda(enum c0_penalty p)
 {
 	return p == C0_PENALTY_CEL0 ? 3e-5 : 1e-2;
@@ -176,9 +183,7 @@ static int adopt_width(struct c0_support_conf *cc, double fw)
 {
 	if (!(fabs(fw / cc->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN))
 		return 0;
-	if (cc->lag == 0)
-		cc->lag = c0_support_lag(cc);
-	cc->grid.fwhm_nm = fw;
+	c0_support_set_width(cc, fw);
 	return 1;
 }
 

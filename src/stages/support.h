@@ -89,6 +89,9 @@ struct c0_support_result {
 
 int c0_support_check(const struct c0_support_conf *c, int W, int H, int64_t frames, const char *name);
 int c0_support_lag(const struct c0_support_conf *c);
+/* Solve at the PSF width fwhm_nm from now on, the covariance keeping the
+ * lag of the width c had (the data's width replacing the stated one). */
+void c0_support_set_width(struct c0_support_conf *c, double fwhm_nm);
 /* Measured on simulated filaments (docs/parameters.md): l1 1e-2, cel0 3e-5.
  * The two differ because CEL0's lambda_max is on the l0 scale. */
 double c0_support_default_lambda(enum c0_penalty p);
