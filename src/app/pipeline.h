@@ -68,6 +68,7 @@ struct c0_result {
 	float *xs[C0_MAX_STACKS];
 	double fwhm_stated_nm, fwhm_data_nm, fwhm_nm; /* the PSF width given, the covariance's (0: none), used (support step) */
 	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */
+	float *cal_noise_q[C0_MAX_STACKS];        /* cal_noise as each stack's drift-corrected frames see it (NULL: as it is) */
 	/* vol and base on the whole grid, made when the library's caller first
 	 * asks for them (c0_result_volume): the run holds only their columns */
 	float *vol_dense, *base_dense;

@@ -57,6 +57,8 @@ void c0_result_free(struct c0_result *r)
 	for (int k = 0; r->sres && k < r->nsup; k++)
 		c0_support_result_free(&r->sres[k]);
 	free(r->cal_offset), free(r->cal_scale), free(r->cal_noise);
+	for (int q = 0; q < C0_MAX_STACKS; q++)
+		free(r->cal_noise_q[q]);
 	for (int q = 0; q < r->n; q++) {
 		if (r->ires)
 			c0_intensity_result_free(&r->ires[q]);

@@ -40,6 +40,31 @@ void c0_step_end(struct c0_result *r, const struct c0_step_clock *k)
 	add_number(r->rep, "rss_rise_mb", k->key, round(peak - k->peak0));
 }
 
+/* The camera's read-noise map moved and spread as each stack's frames are
+ * (a noisy pixel's variance follows it), where the drift is corrected */
+static int drift_noise(struct c0_result *r, const struct c0_frames *f, int n)
+{
+	struct c0_drift_info di;
+	c0_drift_get_info(r->drift, &di);
+	if (!r->cal_noise || !(di.corrected[0] || di.corrected[1]))
+		return C0_OK;
+	const size_t np = (size_t)f[0].width * f[0].height;
+	for (int q = 0; q < n; q++) {
+		if (!(r->cal_noise_q[q] = c0_alloc(np, sizeof *r->cal_noise_q[q])))
+			return C0_ENOMEM;
+		int st = c0_drift_variance(r->drift, q, r->cal_noise, r->cal_noise_q[q]);
+		if (st)
+			return st;
+	}
+	return C0_OK;
+}
+
+/* the read-noise map stack i's frames see (NULL: no map) */
+static const float *noise_of(const struct c0_result *r, int i)
+{
+	return r->cal_noise_q[i] ? r->cal_noise_q[i] : r->cal_noise;
+}
+
 /* The drift follows the acquisition's clock (order, gaps, interleaving) of
  * a multi-angle run; a single stack's or the support's stacks run one
  * after another as given. */
@@ -62,6 +87,8 @@ int c0_step_drift(struct c0_result *r, const struct c0_run_conf *c, const struct
 		return st;
 	for (int q = 0; q < n; q++)
 		r->hooks[q] = c0_drift_hook(r->drift, q);
+	if ((st = drift_noise(r, f, n)))
+		return st;
 	const double px = r->pixel_nm > 0 ? r->pixel_nm : f[0].pixel_nm;
 	if ((st = c0_report_drift(r->rep, r->drift, px)))
 		return st;
@@ -178,6 +205,8 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 	for (int k = 0; k < r->nsup; k++) {
 		int i = r->sup[k];
 		cc.frame_fn = r->drift ? c0_drift_frame_fn : NULL, cc.frame_ctx = r->hooks[i];
+		if (c0->noise_map)
+			cc.noise_map = noise_of(r, i);
 		int st = c0_support_stack(&cc, &f[i], &r->sres[k]);
 		if (st)
 			return st;
@@ -204,11 +233,14 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 /* One stack's mean and noise variance: from the support step when that ran
  * on it, else one streaming pass (the covariance on the support's tiles
  * when the noise variance has to be estimated, else just the mean). */
-static int intensity_read(const struct c0_support_conf *sc0, void *hook, struct c0_frames *f, const uint8_t *mask,
-			  double *s2, const struct c0_support_result *known, double **own, int64_t *frames, double *seconds)
+static int intensity_read(const struct c0_support_conf *sc0, void *hook, const float *noise, struct c0_frames *f,
+			  const uint8_t *mask, double *s2, const struct c0_support_result *known, double **own, int64_t *frames,
+			  double *seconds)
 {
 	struct c0_support_conf scc = *sc0;
 	scc.frame_fn = hook ? c0_drift_frame_fn : NULL, scc.frame_ctx = hook;
+	if (scc.noise_map)
+		scc.noise_map = noise;
 	*own = NULL;
 	if (known) {
 		*frames = known->frames, *s2 = known->sigma2, *seconds = 0;
@@ -298,7 +330,7 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 			continue;
 		struct c0_intensity_result first = r->ires[i], res;
 		float *cor = NULL;
-		sts[i] = intensity_solve(&c, mean[i], H, W, frames[i], r->mask, s2[i], r->cal_noise, &res, corrected ? &cor : NULL);
+		sts[i] = intensity_solve(&c, mean[i], H, W, frames[i], r->mask, s2[i], noise_of(r, i), &res, corrected ? &cor : NULL);
 		if (sts[i]) {
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 			continue;
@@ -319,7 +351,7 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 static void solve_one(struct c0_result *r, const struct c0_intensity_conf *ic, int i, const double *mean, int H, int W,
 		      const int64_t *frames, const double *s2, int corrected, int *sts, char (*msg)[256])
 {
-	sts[i] = intensity_solve(ic, mean, H, W, frames[i], r->mask, s2[i], r->cal_noise, &r->ires[i],
+	sts[i] = intensity_solve(ic, mean, H, W, frames[i], r->mask, s2[i], noise_of(r, i), &r->ires[i],
 				 corrected ? &r->corrected[i] : NULL);
 	if (!sts[i])
 		sts[i] = intensity_compact(r, i);
@@ -419,7 +451,8 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int i = 0; i < n; i++) {
 		s2[i] = sigma2 ? sigma2[i] : 0;
-		sts[i] = intensity_read(sc, r->drift ? r->hooks[i] : NULL, &f[i], r->mask, &s2[i], known[i], &own[i], &frames[i], &tc[i]);
+		sts[i] = intensity_read(sc, r->drift ? r->hooks[i] : NULL, noise_of(r, i), &f[i], r->mask, &s2[i], known[i], &own[i],
+					&frames[i], &tc[i]);
 		if (sts[i])
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 #pragma omp critical(c0_intensity_progress)

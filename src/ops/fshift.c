@@ -200,3 +200,69 @@ int c0_fshift_apply(struct c0_fshift *s, float *img, double dx, double dy)
 	fftw_free(wr), fftw_free(wc);
 	return fail ? c0_mem_fail(0) : C0_OK;
 }
+
+/* The line shift's kernel for the fraction f in [0, 1) on lines of n
+ * samples (period 2n): out(x) = sum_j in(x + j) k(j) away from the ends,
+ * from the phases above (the Nyquist bin's real part included); squared,
+ * |j| <= FS_R, and summed to 1 (the truncated tail holds ~1 % at f = 1/2). */
+enum { FS_R = 16 };
+static void kernel2(int n, double f, double *k2)
+{
+	const int N = 2 * n;
+	double s = 0;
+	for (int j = -FS_R; j <= FS_R; j++) {
+		double v = 1 + ((j & 1) ? -1 : 1) * cos(C0_PI * f);
+		for (int b = 1; b < n; b++)
+			v += 2 * cos(2 * C0_PI * b * (f - j) / N);
+		v /= N;
+		k2[j + FS_R] = v * v, s += v * v;
+	}
+	for (int j = 0; j <= 2 * FS_R; j++)
+		k2[j] /= s;
+}
+
+/* half-sample mirror, as the shift's extension */
+static int mirror(int i, int n)
+{
+	while (i < 0 || i >= n)
+		i = i < 0 ? -1 - i : 2 * n - 1 - i;
+	return i;
+}
+
+int c0_fshift_variance(int H, int W, const float *var, double dx, double dy, double w, double *out)
+{
+	const int ix = (int)floor(dx), iy = (int)floor(dy), P = W + 2 * FS_R;
+	double kx[2 * FS_R + 1], ky[2 * FS_R + 1];
+	kernel2(W, dx - ix, kx), kernel2(H, dy - iy, ky);
+	int fail = 0;
+#pragma omp parallel if (!omp_in_parallel() && H * W >= 256 * 256)
+	{
+		double *row = malloc(sizeof *row * (size_t)(P + W)), *t = row + P;   /* a row, and it mirrored beyond its ends */
+		if (!row) {
+#pragma omp atomic write
+			fail = 1;
+		}
+#pragma omp for schedule(static)
+		for (int y = 0; y < H; y++) {
+			if (!row)
+				continue;
+			for (int x = 0; x < W; x++)
+				t[x] = 0;
+			for (int j = -FS_R; j <= FS_R; j++) {
+				const float *v = var + (size_t)mirror(y + iy + j, H) * W;
+				for (int x = 0; x < W; x++)
+					t[x] += ky[j + FS_R] * v[x];
+			}
+			for (int i = 0; i < P; i++)
+				row[i] = t[mirror(i - FS_R + ix, W)];
+			for (int x = 0; x < W; x++) {
+				double s = 0;
+				for (int j = 0; j <= 2 * FS_R; j++)
+					s += kx[j] * row[x + j];
+				out[(size_t)y * W + x] += w * s;
+			}
+		}
+		free(row);
+	}
+	return fail ? c0_mem_fail(0) : C0_OK;
+}

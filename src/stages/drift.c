@@ -693,6 +693,29 @@ void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double 
 	*dy = d->by[k] + u * (d->by[k + 1] - d->by[k]);
 }
 
+int c0_drift_variance(const struct c0_drift *d, int q, const float *var, float *out)
+{
+	const size_t n = (size_t)d->H * d->W;
+	const int64_t T = d->frames[q];
+	double *acc = c0_alloc(n, sizeof *acc);
+	int st = acc ? C0_OK : C0_ENOMEM;
+	for (int64_t t = 0, u; !st && t < T; t = u) {   /* runs of frames at one shift */
+		double dx, dy, ex, ey;
+		c0_drift_at(d, q, t, &dx, &dy);
+		dx = round(8 * dx) / 8, dy = round(8 * dy) / 8;
+		for (u = t + 1; u < T; u++) {
+			c0_drift_at(d, q, u, &ex, &ey);
+			if (round(8 * ex) / 8 != dx || round(8 * ey) / 8 != dy)
+				break;
+		}
+		st = c0_fshift_variance(d->H, d->W, var, dx, dy, (double)(u - t) / (double)T, acc);
+	}
+	for (size_t i = 0; !st && i < n; i++)
+		out[i] = (float)acc[i];
+	free(acc);
+	return st;
+}
+
 void *c0_drift_hook(struct c0_drift *d, int q) { return &d->hooks[q]; }
 
 int c0_drift_frame_fn(void *ctx, int64_t t, float *frame, int H, int W)

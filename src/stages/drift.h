@@ -44,6 +44,12 @@ int c0_drift_frame_fn(void *ctx, int64_t t, float *frame, int H, int W);
 /* Shift of frame t of stack q in pixels (content position minus the first block's). */
 void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double *dy);
 
+/* var (H x W: independent pixels' variances, a camera's read noise) as
+ * stack q's corrected frames see it: moved and spread with each frame's
+ * shift (ops/fshift.h's c0_fshift_variance), averaged over the stack's
+ * frames; the shifts taken to 1/8 pixel. */
+int c0_drift_variance(const struct c0_drift *d, int q, const float *var, float *out);
+
 struct c0_drift_info {
 	int stacks, blocks, block;  /* blocks over all stacks */
 	double frames;              /* the acquisition clock's length (frames) */
