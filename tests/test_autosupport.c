@@ -371,6 +371,24 @@ static void test_drift(void)
 	}
 	double rms = sqrt(se / 500);
 	CHECK_MSG(rms <= 10, "drift trajectory RMS error %.2f nm", rms);
+	/* a noisy pixel's variance as the corrected frames see it: all of it
+	 * kept, its centre moved back by the frames' mean shift */
+	const int S = quick ? 32 : 48, c = S / 2;
+	float *var = calloc((size_t)S * S, sizeof *var), *seen = calloc((size_t)S * S, sizeof *seen);
+	double mx = 0, my = 0, sum = 0, cx = 0, cy = 0;
+	var[c * S + c] = 100;
+	CHECK(c0_drift_variance(d, 0, var, seen) == C0_OK);
+	for (int t = 0; t < 500; t++) {
+		double ex, ey;
+		c0_drift_at(d, 0, t, &ex, &ey);
+		mx += ex / 500, my += ey / 500;
+	}
+	for (int i = 0; i < S * S; i++)
+		sum += seen[i], cx += seen[i] * (i % S), cy += seen[i] * (i / S);
+	cx /= sum, cy /= sum;
+	CHECK_MSG(fabs(sum - 100) < 1 && fabs(cx - (c - mx)) < 0.1 && fabs(cy - (c - my)) < 0.1,
+		  "moved variance: total %.2f of 100, centre (%.2f, %.2f) for (%.2f, %.2f)", sum, cx, cy, c - mx, c - my);
+	free(var), free(seen);
 	if (quick) {
 		c0_drift_free(d), c0_drift_free(d0);
 		return;
