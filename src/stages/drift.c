@@ -526,10 +526,10 @@ static void stack_blocks_free(struct stack_blocks *o)
 	free(o->bm), free(o->sx), free(o->sy);
 }
 
-/* a stack's block count: c->block frames each, fewer when the stack has < 2 */
-static int64_t blocks(const struct c0_drift_conf *c, int64_t T)
+/* a stack's block length: c->block frames, fewer when the stack has < 2 */
+static int64_t block_len(const struct c0_drift_conf *c, int64_t T)
 {
-	return T / (T >= 2 * c->block ? c->block : T / 2);
+	return T >= 2 * c->block ? c->block : T / 2;
 }
 
 /* the stacks' sizes: the same field, each long enough for two blocks */
@@ -545,10 +545,10 @@ static int check_stacks(const struct c0_drift_conf *c, const struct c0_frames *f
 		if (f[q].height != f[0].height || f[q].width != f[0].width)
 			st = c0_fail(C0_EINVAL, "%s: %dx%d pixels differs from %s", f[q].name, f[q].width, f[q].height, f[0].name);
 		/* blocks: c->block frames, fewer when the stack has < 2 blocks */
-		else if ((T >= 2 * c->block ? c->block : T / 2) < 5)
+		else if (block_len(c, T) < 5)
 			st = c0_fail(C0_EINVAL, "%s: %lld frames is too short to estimate drift (needs >= 10; switch "
 				     "drift correction off)", f[q].name, (long long)T);
-		else if (c->interleaved && blocks(c, T) != blocks(c, f[0].count))
+		else if (c->interleaved && T / block_len(c, T) != f[0].count / block_len(c, f[0].count))
 			st = c0_fail(C0_EINVAL, "%s: %lld frames, %s %lld: interleaved stacks (frame t of each recorded in turn) "
 				     "need about as many frames each", f[q].name, (long long)T, f[0].name, (long long)f[0].count);
 		else if (c->nstart && !isfinite(c->start[q]))
@@ -580,8 +580,7 @@ static int read_stacks(const struct c0_drift_conf *c, struct c0_frames *f, int n
 	int fail = -1;
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int q = 0; q < n; q++) {
-		const int64_t T = f[q].count;
-		if (stack_pass(&f[q], T >= 2 * c->block ? c->block : T / 2, c->psf_sigma_px, &sb[q]))
+		if (stack_pass(&f[q], block_len(c, f[q].count), c->psf_sigma_px, &sb[q]))
 #pragma omp critical(c0_drift_fail)
 			if (fail < 0 || q < fail)
 				fail = q;
