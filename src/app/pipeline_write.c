@@ -24,8 +24,7 @@
 
 static struct c0_tiff_wopts fine_deflate(struct c0_tiff_wopts o)
 {
-	const int64_t planes = (o.channels > 0 ? o.channels : 1) * (o.slices > 0 ? o.slices : 1) * (o.frames > 0 ? o.frames : 1);
-	o.deflate |= o.width * o.height * planes * (int64_t)c0_dtype_size(o.dtype) > C0_FINE_DEFLATE_BYTES;
+	o.deflate |= c0_tiff_raw_bytes(&o) > C0_FINE_DEFLATE_BYTES;
 	return o;
 }
 

@@ -81,6 +81,10 @@ struct c0_tiff_wopts {
 
 struct c0_tiff_writer;
 
+/* The planes o declares (channels x slices x frames, each at least 1), and
+ * their uncompressed bytes. */
+int64_t c0_tiff_planes(const struct c0_tiff_wopts *o);
+int64_t c0_tiff_raw_bytes(const struct c0_tiff_wopts *o);
 /* BigTIFF is chosen by this rule: classic TIFF offsets end at 4 GiB. */
 int c0_tiff_needs_bigtiff(int64_t data_bytes);
 int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_tiff_writer **out);

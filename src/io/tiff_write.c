@@ -38,6 +38,16 @@ static int on_error(TIFF *tif, void *ud, const char *module, const char *fmt, va
 	return 1;
 }
 
+int64_t c0_tiff_planes(const struct c0_tiff_wopts *o)
+{
+	return (int64_t)(o->channels > 0 ? o->channels : 1) * (o->slices > 0 ? o->slices : 1) * (o->frames > 0 ? o->frames : 1);
+}
+
+int64_t c0_tiff_raw_bytes(const struct c0_tiff_wopts *o)
+{
+	return c0_tiff_planes(o) * o->width * o->height * (int64_t)c0_dtype_size(o->dtype);
+}
+
 int c0_tiff_needs_bigtiff(int64_t data_bytes)
 {
 	/* keep ~1 % headroom for directories and tags under the 4 GiB offset limit */
@@ -91,10 +101,10 @@ int c0_tiff_create(const char *path, const struct c0_tiff_wopts *o, struct c0_ti
 	if (w->o.channels <= 0) w->o.channels = 1;
 	if (w->o.slices <= 0) w->o.slices = 1;
 	if (w->o.frames <= 0) w->o.frames = 1;
-	w->planes = w->o.channels * w->o.slices * w->o.frames;
+	w->planes = c0_tiff_planes(o);
 	snprintf(w->path, sizeof w->path, "%s", path);
 	c0_tmp_name(path, w->tmp, sizeof w->tmp);
-	int64_t bytes = w->planes * o->width * o->height * (int64_t)c0_dtype_size(o->dtype);
+	int64_t bytes = c0_tiff_raw_bytes(o);
 	int big = o->bigtiff || c0_tiff_needs_bigtiff(o->deflate && o->max_bytes > 0 ? o->max_bytes : bytes);
 	int dl = c0_ij_format(w->desc, sizeof w->desc, w->o.channels, w->o.slices, w->o.frames, o->pixel_size_nm > 0,
 			      o->z_spacing_nm / 1000, o->frame_interval_s, o->display_min, o->display_max);
@@ -262,7 +272,7 @@ int c0_tiff_commit(struct c0_tiff_writer *w)
 int c0_tiff_save_f32(const char *path, const struct c0_tiff_wopts *opts, const float *data)
 {
 	struct c0_tiff_wopts o = *opts;
-	int64_t planes = (o.channels > 0 ? o.channels : 1) * (o.slices > 0 ? o.slices : 1) * (o.frames > 0 ? o.frames : 1);
+	int64_t planes = c0_tiff_planes(&o);
 	size_t plane = (size_t)o.width * o.height, n = plane * planes;
 	if (o.display_min == 0 && o.display_max == 0 && n) {
 		float lo = INFINITY, hi = -INFINITY;
