@@ -666,6 +666,22 @@ static double drift_rms(const struct c0_sim_conf *s, const struct c0_drift *d, d
 	return sqrt(se / 900);
 }
 
+/* the drift of the 3 stacks written under name, estimated with dc */
+static struct c0_drift *estimate_3(const char *name, const struct c0_drift_conf *dc)
+{
+	char p[512];
+	struct c0_frames f[3];
+	for (int q = 0; q < 3; q++) {
+		snprintf(p, sizeof p, "%s/%s/stack_q%02d.tif", dir, name, q + 1);
+		CHECK(c0_frames_open(&f[q], p) == C0_OK);
+	}
+	struct c0_drift *d = NULL;
+	CHECK(c0_drift_estimate(dc, f, 3, &d) == C0_OK);
+	for (int q = 0; q < 3; q++)
+		c0_frames_close(&f[q]);
+	return d;
+}
+
 /* 3 stacks of 300 frames, 48 x 48, (150, 75) nm of linear drift over the
  * acquisition on camera cam, estimated with dc (its filter: the PSF's) */
 static struct c0_drift *drift_3(struct c0_sim_conf *s, const char *name, struct c0_drift_conf *dc, int cam)
@@ -678,17 +694,7 @@ static struct c0_drift *drift_3(struct c0_sim_conf *s, const char *name, struct 
 	s->drift_nm[0] = 150, s->drift_nm[1] = 75;
 	s->order = dc->interleaved ? C0_ORDER_INTERLEAVED : C0_ORDER_SEQUENTIAL;
 	write_sim(s, name);
-	char p[512];
-	struct c0_frames f[3];
-	for (int q = 0; q < 3; q++) {
-		snprintf(p, sizeof p, "%s/%s/stack_q%02d.tif", dir, name, q + 1);
-		CHECK(c0_frames_open(&f[q], p) == C0_OK);
-	}
-	struct c0_drift *d = NULL;
-	CHECK(c0_drift_estimate(dc, f, 3, &d) == C0_OK);
-	for (int q = 0; q < 3; q++)
-		c0_frames_close(&f[q]);
-	return d;
+	return estimate_3(name, dc);
 }
 
 /* Drift across the angles: the stacks joined by continuity. Before, each
@@ -759,17 +765,8 @@ static void test_drift_scmos(void)
 		return;
 	double last[2], rms = drift_rms(&s, d, last);
 	c0_drift_free(d);
-	char p[512];
-	struct c0_frames f[3];
-	for (int q = 0; q < 3; q++) {
-		snprintf(p, sizeof p, "%s/drift_scmos/stack_q%02d.tif", dir, q + 1);
-		CHECK(c0_frames_open(&f[q], p) == C0_OK);
-	}
 	dc.psf_sigma_px = 0;
-	d = NULL;
-	CHECK(c0_drift_estimate(&dc, f, 3, &d) == C0_OK);
-	for (int q = 0; q < 3; q++)
-		c0_frames_close(&f[q]);
+	d = estimate_3("drift_scmos", &dc);
 	double raw = d ? drift_rms(&s, d, last) : NAN;
 	c0_drift_free(d);
 	fprintf(stderr, "drift, sCMOS: RMS error %.1f nm filtered, %.1f nm unfiltered\n", rms, raw);
