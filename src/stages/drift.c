@@ -1,6 +1,7 @@
 #include "stages/drift.h"
 #include "ops/fshift.h"
 #include "io/frames.h"
+#include "core/c0math.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -125,7 +126,7 @@ static int xcorr_lowpass(struct xcorr *x, double sigma)
 	const int nx = x->PW / 2 + 1;
 	if (!(x->lp = c0_alloc(x->ns, sizeof *x->lp)))
 		return C0_ENOMEM;
-	const double c = -2 * 3.14159265358979323846 * 3.14159265358979323846 * sigma * sigma;
+	const double c = -2 * C0_PI * C0_PI * sigma * sigma;
 	for (int y = 0; y < x->PH; y++) {
 		const double fy = (double)(y <= x->PH / 2 ? y : y - x->PH) / x->PH;
 		for (int i = 0; i < nx; i++) {
@@ -148,8 +149,8 @@ static int xcorr_init(struct xcorr *x, int H, int W, double sigma)
 		return st;
 	for (int y = 0; y < H; y++)
 		for (int i = 0; i < W; i++)   /* Hann */
-			x->win[(size_t)y * W + i] = (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (y + 0.5) / H)) *
-						    (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (i + 0.5) / W));
+			x->win[(size_t)y * W + i] = (0.5 - 0.5 * cos(2 * C0_PI * (y + 0.5) / H)) *
+						    (0.5 - 0.5 * cos(2 * C0_PI * (i + 0.5) / W));
 	return xcorr_lowpass(x, sigma);
 }
 
