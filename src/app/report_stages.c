@@ -152,6 +152,10 @@ void c0_report_pattern(cJSON *rep, const struct c0_pattern_stats *ps)
 	cJSON_AddNumberToObject(o, "shrink_support", ps->k_on);
 	cJSON_AddNumberToObject(o, "shrink_near", ps->k_near);
 	cJSON_AddNumberToObject(o, "shrink_far", ps->k_far);
+	if (ps->common_var_other > 0) {   /* a drift correction moved the frames */
+		cJSON_AddStringToObject(o, "frame", ps->camera_frame ? "camera" : "sample");
+		cJSON_AddNumberToObject(o, "shared_variance_other_frame_adu2", ps->common_var_other);
+	}
 }
 
 void c0_report_matirf_raw(cJSON *j, const struct c0_run_conf *c, const struct c0_matirf_result *res)

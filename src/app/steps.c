@@ -369,6 +369,76 @@ static const float *mask_values(struct c0_result *r, int i, float **tmp)
 	return *tmp = pixlist_values(&r->pl, r->ires[i].x);
 }
 
+/* 1: the frames were moved by a drift correction */
+static int drift_moved(const struct c0_result *r)
+{
+	struct c0_drift_info di;
+	if (!r->drift)
+		return 0;
+	c0_drift_get_info(r->drift, &di);
+	return di.corrected[0] || di.corrected[1];
+}
+
+/* stack i's residual (H x W) moved back to where the camera's pixels were,
+ * for the pattern, which is the camera's, to be found in one place */
+static int pattern_unmove(const struct c0_result *r, int i, double *res, int H, int W)
+{
+	const size_t N = (size_t)H * W;
+	float *v = c0_alloc(N, sizeof *v);
+	if (!v)
+		return C0_ENOMEM;
+	for (size_t p = 0; p < N; p++)
+		v[p] = (float)res[p];
+	int st = c0_drift_unmove(r->drift, i, v);
+	for (size_t p = 0; !st && p < N; p++)
+		res[p] = v[p];
+	free(v);
+	return st;
+}
+
+/* out := stack i's mean ybar less the pattern pat, moved with the drift
+ * as stack i's corrected frames see it where pat is in the camera's frame */
+static int pattern_less(const struct c0_result *r, int i, const double *ybar, const float *pat, int camera, int H, int W,
+			double *out)
+{
+	const size_t N = (size_t)H * W;
+	float *mv = camera ? c0_alloc(N, sizeof *mv) : NULL;
+	int st = camera ? (mv ? c0_drift_image(r->drift, i, pat, mv) : C0_ENOMEM) : C0_OK;
+	const float *p = mv ? mv : pat;
+	for (size_t k = 0; !st && k < N; k++)
+		out[k] = ybar[k] - p[k];
+	free(mv);
+	return st;
+}
+
+/* With the frames moved by a drift correction, the camera's pattern moves
+ * between the stacks and the sample's misfit does not: the residuals res
+ * (the sample's frame, estimated into pat and ps) are moved back to the
+ * camera's pixels and the pattern estimated again there. That one is kept
+ * when the camera's frame shares at least twice the variance the sample's
+ * does (the camera's part is then the larger; sCMOS stacks with 2-5 px of
+ * drift 2.1-6.1x, CCD and EMCCD stacks 0.9-1.2x, docs/parameters.md). res
+ * is left in the camera's frame. */
+static int camera_frame(const struct c0_result *r, const struct c0_grid *g, const int *idx, int m, double **res, int H,
+			int W, float *pat, struct c0_pattern_stats *ps)
+{
+	struct c0_pattern_stats pc;
+	float *pat_c = c0_alloc((size_t)H * W, sizeof *pat_c);
+	int st = pat_c ? C0_OK : C0_ENOMEM;
+	for (int j = 0; !st && j < m; j++)
+		st = pattern_unmove(r, idx[j], res[j], H, W);
+	if (!st)
+		st = c0_pattern_estimate(g, m, (const double *const *)res, H, W, r->mask, pat_c, &pc);
+	if (!st && pc.common_var >= 2 * ps->common_var) {
+		pc.common_var_other = ps->common_var, pc.camera_frame = 1;
+		*ps = pc;
+		memcpy(pat, pat_c, (size_t)H * W * sizeof *pat);
+	} else if (!st)
+		ps->common_var_other = pc.common_var;
+	free(pat_c);
+	return st;
+}
+
 /* The pattern the share[] stacks have in common (stages/pattern.h) from
  * their first solves' residuals; fixed[i]: the means less it, for the
  * stacks to solve again (NULL for all where the rule does not apply). */
@@ -396,11 +466,13 @@ static int common_pattern(struct c0_result *r, const struct c0_intensity_conf *i
 		st = c0_pattern_residuals(&ic->grid, m, yb, xv, bv, H, W, r->mask, res);
 	if (!st)
 		st = c0_pattern_estimate(&ic->grid, m, (const double *const *)res, H, W, r->mask, pat, ps);
+	if (!st && drift_moved(r))
+		st = camera_frame(r, &ic->grid, idx, m, res, H, W, pat, ps);
 	for (int j = 0; !st && ps->applied && j < m; j++) {
 		if (!(fixed[idx[j]] = c0_alloc(N, sizeof *fixed[idx[j]])))
 			st = C0_ENOMEM;
-		for (size_t p = 0; !st && p < N; p++)
-			fixed[idx[j]][p] = yb[j][p] - pat[p];
+		if (!st)
+			st = pattern_less(r, idx[j], yb[j], pat, ps->camera_frame, H, W, fixed[idx[j]]);
 	}
 	for (int j = 0; j < m; j++)
 		free(res[j]), free(tmp[j]);

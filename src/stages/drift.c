@@ -693,13 +693,14 @@ void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double 
 	*dy = d->by[k] + u * (d->by[k + 1] - d->by[k]);
 }
 
-int c0_drift_variance(const struct c0_drift *d, int q, const float *var, float *out)
+/* fn(dx, dy, w, ctx) for each run of stack q's frames at one shift (to 1/8
+ * pixel), w the run's share of the stack's frames */
+typedef int (*run_fn)(const struct c0_drift *d, double dx, double dy, double w, void *ctx);
+static int each_run(const struct c0_drift *d, int q, run_fn fn, void *ctx)
 {
-	const size_t n = (size_t)d->H * d->W;
 	const int64_t T = d->frames[q];
-	double *acc = c0_alloc(n, sizeof *acc);
-	int st = acc ? C0_OK : C0_ENOMEM;
-	for (int64_t t = 0, u; !st && t < T; t = u) {   /* runs of frames at one shift */
+	int st = C0_OK;
+	for (int64_t t = 0, u; !st && t < T; t = u) {
 		double dx, dy, ex, ey;
 		c0_drift_at(d, q, t, &dx, &dy);
 		dx = round(8 * dx) / 8, dy = round(8 * dy) / 8;
@@ -708,12 +709,57 @@ int c0_drift_variance(const struct c0_drift *d, int q, const float *var, float *
 			if (round(8 * ex) / 8 != dx || round(8 * ey) / 8 != dy)
 				break;
 		}
-		st = c0_fshift_variance(d->H, d->W, var, dx, dy, (double)(u - t) / (double)T, acc);
+		st = fn(d, dx, dy, (double)(u - t) / (double)T, ctx);
 	}
-	for (size_t i = 0; !st && i < n; i++)
-		out[i] = (float)acc[i];
-	free(acc);
 	return st;
+}
+
+struct moved { const float *in; double *acc; float *tmp; };
+
+static int add_variance(const struct c0_drift *d, double dx, double dy, double w, void *ctx)
+{
+	const struct moved *m = ctx;
+	return c0_fshift_variance(d->H, d->W, m->in, dx, dy, w, m->acc);
+}
+
+static int add_image(const struct c0_drift *d, double dx, double dy, double w, void *ctx)
+{
+	const struct moved *m = ctx;
+	const size_t n = (size_t)d->H * d->W;
+	memcpy(m->tmp, m->in, n * sizeof *m->tmp);
+	int st = c0_fshift_apply(d->sh, m->tmp, dx, dy);
+	for (size_t i = 0; !st && i < n; i++)
+		m->acc[i] += w * m->tmp[i];
+	return st;
+}
+
+static int moved(const struct c0_drift *d, int q, const float *in, run_fn fn, float *out)
+{
+	const size_t n = (size_t)d->H * d->W;
+	struct moved m = { in, c0_alloc(n, sizeof *m.acc), fn == add_image ? c0_alloc(n, sizeof *m.tmp) : NULL };
+	int st = m.acc && (m.tmp || fn != add_image) ? each_run(d, q, fn, &m) : C0_ENOMEM;
+	for (size_t i = 0; !st && i < n; i++)
+		out[i] = (float)m.acc[i];
+	free(m.acc), free(m.tmp);
+	return st;
+}
+
+int c0_drift_variance(const struct c0_drift *d, int q, const float *var, float *out)
+{
+	return moved(d, q, var, add_variance, out);
+}
+
+int c0_drift_image(const struct c0_drift *d, int q, const float *img, float *out)
+{
+	return moved(d, q, img, add_image, out);
+}
+
+int c0_drift_unmove(const struct c0_drift *d, int q, float *img)
+{
+	double mx = 0, my = 0, dx, dy;
+	for (int64_t t = 0; t < d->frames[q]; t++)
+		c0_drift_at(d, q, t, &dx, &dy), mx += dx, my += dy;
+	return c0_fshift_apply(d->sh, img, -mx / (double)d->frames[q], -my / (double)d->frames[q]);
 }
 
 void *c0_drift_hook(struct c0_drift *d, int q) { return &d->hooks[q]; }

@@ -49,6 +49,13 @@ void c0_drift_at(const struct c0_drift *d, int q, int64_t t, double *dx, double 
  * shift (ops/fshift.h's c0_fshift_variance), averaged over the stack's
  * frames; the shifts taken to 1/8 pixel. */
 int c0_drift_variance(const struct c0_drift *d, int q, const float *var, float *out);
+/* img (H x W: a camera's fixed pattern, its dark levels) as stack q's
+ * corrected frames see it: moved with each frame's shift and averaged over
+ * the stack's frames (shifts to 1/8 pixel, as above). */
+int c0_drift_image(const struct c0_drift *d, int q, const float *img, float *out);
+/* img, an image of stack q's corrected frames, back where the camera saw
+ * it: moved back by the stack's mean shift, in place. */
+int c0_drift_unmove(const struct c0_drift *d, int q, float *img);
 
 struct c0_drift_info {
 	int stacks, blocks, block;  /* blocks over all stacks */

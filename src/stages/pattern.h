@@ -25,6 +25,9 @@ struct c0_pattern_stats {
 	double common_var;      /* c: the stacks' shared variance far from the support, ADU^2 */
 	double k_on, k_near, k_far;  /* the shrink factors of the three classes */
 	int applied;            /* k_on >= 1/2 (pat is 0 otherwise) */
+	/* the caller's, where a drift correction moved the frames: */
+	int camera_frame;       /* 1: estimated in the camera's frame, 0: the sample's */
+	double common_var_other;/* the shared variance in the other frame, ADU^2 (0: not evaluated) */
 };
 
 /* Residual ybar - (Psi_Omega x + b) on the camera grid (H x W), for n
