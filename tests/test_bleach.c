@@ -2,9 +2,12 @@
  * closed-form factors against the explicit mean, and bad options. */
 #include "check.h"
 #include "stages/bleach.h"
+#include "io/frames.h"
 #include "core/err.h"
 #include "core/rng.h"
 
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -54,6 +57,89 @@ static void test_fit(void)
 	CHECK(c0_bleach_fit(n, (const double *const *)S, T, Bbig, &res) == C0_EINVAL);
 	for (int q = 0; q < n; q++)
 		free(S[q]);
+}
+
+/* the window's sum from the profiles against the slow per-pixel weights:
+ * (in the column band) + (in the row band) - 1, a pixel's share of each
+ * band its overlap with it */
+static void test_window_sum(void)
+{
+	const int H = 9, W = 13;
+	float img[9 * 13];
+	struct c0_rng r;
+	c0_rng_init(&r, 3, 0);
+	for (int i = 0; i < H * W; i++)
+		img[i] = (float)c0_rng_uniform(&r);
+	const struct c0_bleach_window w = { 1.3, 10.6, 0.25, 7.5, NULL, NULL };
+	double slow = 0, total = 0;
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			double wx = fmax(0, fmin(w.x1, x + 1) - fmax(w.x0, x)), wy = fmax(0, fmin(w.y1, y + 1) - fmax(w.y0, y));
+			slow += img[y * W + x] * (wx + wy - 1), total += img[y * W + x];
+		}
+	CHECK_REL(c0_bleach_window_sum(&w, img, H, W), slow, 1e-12);
+	const struct c0_bleach_window all = { 0, W, 0, H, NULL, NULL };
+	CHECK_REL(c0_bleach_window_sum(&all, img, H, W), total, 1e-12);
+}
+
+/* a linear drift of dx px per frame */
+static void shift_x(const void *ctx, int q, int64_t t, double *dx, double *dy)
+{
+	*dx = *(const double *)ctx * (q * 200 + t), *dy = 0;
+}
+
+/* Spots drifting out of the field (none come in: the sample ends at its
+ * edges, as in a simulation) fade the whole frames' sums faster than the
+ * bleaching does; the window that follows them reads the rate */
+static void test_window_drift(void)
+{
+	enum { n = 3, T = 200, H = 24, W = 32, K = 40 };
+	const double k = 1e-4, v = 4.0 / (n * T), bg = 10;   /* 4 px over the acquisition */
+	float *data[n];
+	double sx[K], sy[K];
+	struct c0_rng r;
+	c0_rng_init(&r, 11, 0);
+	for (int j = 0; j < K; j++)
+		sx[j] = W * c0_rng_uniform(&r), sy[j] = H * c0_rng_uniform(&r);
+	struct c0_frames f[n];
+	double B[n], Bw[n];
+	const struct c0_bleach_window win = { 0, W - 4, 0, H, shift_x, &v };
+	for (int q = 0; q < n; q++) {
+		data[q] = malloc(sizeof(float) * T * H * W);
+		float *bgi = malloc(sizeof(float) * H * W);
+		for (int t = 0; t < T; t++)
+			for (int y = 0; y < H; y++)
+				for (int x = 0; x < W; x++) {
+					double a = 0, u = q * T + t;
+					for (int j = 0; j < K; j++)
+						a += 100 * exp(-(pow(x + 0.5 - sx[j] - v * u, 2) + pow(y + 0.5 - sy[j], 2)) / 2);
+					data[q][((size_t)t * H + y) * W + x] = (float)(bg + a * exp(-k * u));
+					bgi[y * W + x] = (float)bg;
+				}
+		CHECK(c0_frames_wrap(&f[q], data[q], T, H, W, 100, "drift") == C0_OK);
+		B[q] = bg * H * W, Bw[q] = c0_bleach_window_sum(&win, bgi, H, W);
+		CHECK(c0_frames_read(&f[q], 0, bgi) == C0_OK);   /* read before: its profiles are read again */
+		CHECK(c0_frames_keep_profiles(&f[q]) == C0_OK);
+		free(bgi);
+	}
+	const double *rows, *cols;
+	CHECK(c0_frames_profiles(&f[0], &rows, &cols) == C0_OK);
+	double r0 = 0, c5 = 0;   /* frame 0's first row, frame 1's sixth column */
+	for (int x = 0; x < W; x++)
+		r0 += data[0][x];
+	for (int y = 0; y < H; y++)
+		c5 += data[0][((size_t)H + y) * W + 5];
+	CHECK_REL(rows[0], r0, 1e-12);
+	CHECK_REL(cols[W + 5], c5, 1e-12);
+	struct c0_bleach_conf c = { 0 };
+	struct c0_bleach_result whole, moved;
+	CHECK(c0_bleach_run(&c, n, f, B, NULL, &whole) == C0_OK);
+	CHECK(c0_bleach_run(&c, n, f, Bw, &win, &moved) == C0_OK);
+	fprintf(stderr, "bleaching under drift: rate %.3g (whole frames %.3g) for %.3g\n", moved.k, whole.k, k);
+	CHECK_REL(moved.k, k, 0.05);
+	CHECK(whole.k > 1.5 * k);   /* the case does need the window */
+	for (int q = 0; q < n; q++)
+		c0_frames_close(&f[q]), free(data[q]);
 }
 
 static void test_check(void)
@@ -106,5 +192,7 @@ int main(void)
 	RUN(test_repeat);
 	RUN(test_fit);
 	RUN(test_check);
+	RUN(test_window_sum);
+	RUN(test_window_drift);
 	return CHECK_DONE();
 }

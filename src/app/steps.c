@@ -712,22 +712,50 @@ void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
 		bc->factor[i] = c->bleach_factors[i];
 }
 
+static void drift_shift(const void *d, int q, int64_t t, double *dx, double *dy)
+{
+	c0_drift_at(d, q, t, dx, dy);
+}
+
+/* Where the drift was corrected and the frames' profiles kept: the window
+ * of the sample's frame that stays in the field in every frame (0: none) */
+static int bleach_window(const struct c0_result *r, const struct c0_frames *f, struct c0_bleach_window *w)
+{
+	if (!drift_moved(r) || !f[0].rows)
+		return 0;
+	double lo[2] = { 0, 0 }, hi[2] = { 0, 0 };
+	for (int q = 0; q < r->n; q++)
+		for (int64_t t = 0; t < f[q].count; t++) {
+			double d[2];
+			c0_drift_at(r->drift, q, t, &d[0], &d[1]);
+			for (int a = 0; a < 2; a++)
+				lo[a] = fmin(lo[a], d[a]), hi[a] = fmax(hi[a], d[a]);
+		}
+	*w = (struct c0_bleach_window){ -lo[0], f[0].width - hi[0], -lo[1], f[0].height - hi[1], drift_shift, r->drift };
+	return w->x1 - w->x0 >= 1 && w->y1 - w->y0 >= 1;
+}
+
 int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f)
 {
 	const int n = r->n;
 	const struct c0_step_clock t = c0_step_begin("bleaching");
 	double B[C0_MAX_STACKS] = { 0 };
 	struct c0_bleach_conf bc;
+	struct c0_bleach_window win;
+	const int windowed = bleach_window(r, f, &win);
 	c0_run_conf_bleach(c, &bc);
 	for (int q = 0; q < n; q++)
-		for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
-			B[q] += r->ires[q].b[i];
+		if (windowed)
+			B[q] = c0_bleach_window_sum(&win, r->ires[q].b, r->ires[q].Ny, r->ires[q].Nx);
+		else
+			for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
+				B[q] += r->ires[q].b[i];
 	if (bc.mode == C0_BLEACH_REPEAT) {   /* intensity totals on the support: the repeat's over the first's */
 		const int first = bc.norder ? bc.order[0] : 0;
 		bc.repeat_ratio = c0_result_x_sum(r, n - 1) / c0_result_x_sum(r, first);
 	}
 	struct c0_bleach_result br;
-	int st = c0_bleach_run(&bc, n, f, B, &br);
+	int st = c0_bleach_run(&bc, n, f, B, windowed ? &win : NULL, &br);
 	if (st)
 		return st;
 	for (int q = 0; q < n; q++)

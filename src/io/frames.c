@@ -37,6 +37,32 @@ static void note_sum(struct c0_frames *f, int64_t t, const float *v)
 	for (size_t i = 0; i < n; i++)
 		s += v[i];
 	f->sum[t] = s;
+	if (!f->rows)
+		return;
+	double *r = f->rows + (size_t)t * f->height, *c = f->cols + (size_t)t * f->width;
+	memset(c, 0, (size_t)f->width * sizeof *c);
+	for (int y = 0; y < f->height; y++) {
+		const float *row = v + (size_t)y * f->width;
+		double a = 0;
+		for (int x = 0; x < f->width; x++)
+			a += row[x], c[x] += row[x];
+		r[y] = a;
+	}
+}
+
+int c0_frames_keep_profiles(struct c0_frames *f)
+{
+	if (f->rows)
+		return C0_OK;
+	f->rows = c0_alloc((size_t)f->count * f->height, sizeof *f->rows);
+	f->cols = c0_alloc((size_t)f->count * f->width, sizeof *f->cols);
+	if (!f->rows || !f->cols) {
+		free(f->rows), free(f->cols), f->rows = f->cols = NULL;
+		return C0_ENOMEM;
+	}
+	for (int64_t t = 0; t < f->count; t++)   /* the sums noted so far have no profiles */
+		f->sum[t] = NAN;
+	return C0_OK;
 }
 
 int c0_frames_open(struct c0_frames *f, const char *path)
@@ -129,12 +155,22 @@ int c0_frames_sums(struct c0_frames *f, const double **sums)
 	return st;
 }
 
+int c0_frames_profiles(struct c0_frames *f, const double **rows, const double **cols)
+{
+	const double *s;
+	*rows = *cols = NULL;
+	int st = f->rows ? c0_frames_sums(f, &s) : c0_fail(C0_EINVAL, "%s: no frame profiles kept", f->name);
+	if (!st)
+		*rows = f->rows, *cols = f->cols;
+	return st;
+}
+
 void c0_frames_close(struct c0_frames *f)
 {
 	if (f->tiff)
 		c0_tiff_close(f->tiff);
-	free(f->sum);
-	f->tiff = NULL, f->data = NULL, f->sum = NULL;
+	free(f->sum), free(f->rows), free(f->cols);
+	f->tiff = NULL, f->data = NULL, f->sum = f->rows = f->cols = NULL;
 }
 
 void c0_frames_expand_free(char **names, int n)

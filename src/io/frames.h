@@ -13,6 +13,8 @@ struct c0_frames {
 	struct c0_tiff_reader *tiff;   /* a file, or */
 	const float *data;             /* an array the caller owns */
 	double *sum;                   /* count sums of the raw frames, NaN until one is read whole */
+	double *rows, *cols;           /* NULL, or count x height row sums and count x width column sums
+				    * (c0_frames_keep_profiles), with sum */
 	const float *cal_offset;       /* NULL, or height x width: subtracted from every frame read (camera dark level) */
 	const float *cal_scale;        /* NULL, or height x width: then multiplied (per-pixel gain made even) */
 };
@@ -33,6 +35,12 @@ int c0_frames_read_rows(struct c0_frames *f, int64_t t, int y0, int ny, float *d
 /* The raw sum of every frame (the sum of its values, as floats, in double,
  * in pixel order), reading only the frames that no pass has read whole. */
 int c0_frames_sums(struct c0_frames *f, const double **sums);
+/* From now on every whole-frame read also notes the frame's row and column
+ * sums (the frames read before are read again for them). */
+int c0_frames_keep_profiles(struct c0_frames *f);
+/* The row and column sums of every frame (count x height, count x width),
+ * reading the frames not yet read whole since c0_frames_keep_profiles. */
+int c0_frames_profiles(struct c0_frames *f, const double **rows, const double **cols);
 void c0_frames_close(struct c0_frames *f);
 /* Multi-channel files (ImageJ channels=, OME SizeC or series) as one stack
  * per channel: a path whose file has C > 1 channels of several planes each

@@ -143,7 +143,57 @@ static int frame_sums(struct c0_frames *f, double **S, int64_t *T)
 	return st;
 }
 
-int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res)
+/* the sum of p[0..n) over [a, b), pixel i covering [i, i + 1) */
+static double band(const double *p, int n, double a, double b)
+{
+	double s = 0;
+	for (int i = a > 0 ? (int)floor(a) : 0; i < n && i < b; i++)
+		s += p[i] * (fmin(b, i + 1) - fmax(a, i));
+	return s;
+}
+
+static double window_of(const struct c0_bleach_window *w, const double *rows, const double *cols, double total, int H,
+			int W, double dx, double dy)
+{
+	return band(cols, W, w->x0 + dx, w->x1 + dx) + band(rows, H, w->y0 + dy, w->y1 + dy) - total;
+}
+
+double c0_bleach_window_sum(const struct c0_bleach_window *w, const float *img, int H, int W)
+{
+	double *rows = calloc((size_t)H, sizeof *rows), *cols = calloc((size_t)W, sizeof *cols), total = 0;
+	if (!rows || !cols) {
+		free(rows), free(cols);
+		return NAN;
+	}
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++)
+			rows[y] += img[(size_t)y * W + x], cols[x] += img[(size_t)y * W + x], total += img[(size_t)y * W + x];
+	double s = window_of(w, rows, cols, total, H, W, 0, 0);
+	free(rows), free(cols);
+	return s;
+}
+
+/* stack q's frame sums over the window */
+static int window_sums(const struct c0_bleach_window *w, int q, struct c0_frames *f, double **S, int64_t *T)
+{
+	const double *rows, *cols, *tot;
+	*T = f->count;
+	int st = c0_frames_profiles(f, &rows, &cols);
+	if (!st)
+		st = c0_frames_sums(f, &tot);
+	if (!st && !(*S = c0_alloc((size_t)f->count, sizeof **S)))
+		st = C0_ENOMEM;
+	for (int64_t t = 0; !st && t < f->count; t++) {
+		double dx, dy;
+		w->shift(w->ctx, q, t, &dx, &dy);
+		(*S)[t] = window_of(w, rows + (size_t)t * f->height, cols + (size_t)t * f->width, tot[t], f->height, f->width,
+				    dx, dy);
+	}
+	return st;
+}
+
+int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B,
+		  const struct c0_bleach_window *win, struct c0_bleach_result *res)
 {
 	memset(res, 0, sizeof *res);
 	res->significant = 1;
@@ -166,7 +216,7 @@ int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, co
 	int fail = 0;
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int q = 0; q < n; q++)
-		if (frame_sums(&f[q], &S[q], &T[q]))
+		if (win ? window_sums(win, q, &f[q], &S[q], &T[q]) : frame_sums(&f[q], &S[q], &T[q]))
 #pragma omp atomic write
 			fail = 1;
 	if (fail)   /* the per-thread messages are lost: say which step failed */

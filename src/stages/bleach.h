@@ -64,8 +64,27 @@ void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, 
  * the first and the last recorded stack (T their frame counts), then the
  * factors; k_sd is NAN (one ratio). */
 int c0_bleach_repeat(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
-/* The whole step for the stacks f: one pass each for its frame sums, then
- * the fit (mode estimate) and the factors; mode known copies the factors,
- * mode off sets them to 1, mode repeat fits k from the ratio. */
+/* Frame sums over a window that moves with the sample, where a drift was
+ * corrected: light that drifts across the field's edge would otherwise read
+ * as a fade (or as its opposite). The window is x0..x1, y0..y1 of the
+ * sample's frame (pixel i covers [i, i + 1)), seen in frame t of stack q
+ * shifted by shift(ctx, q, t). Its sum is taken from the frames' row and
+ * column sums (c0_frames_profiles): the band of its columns plus the band
+ * of its rows less the whole frame, which leaves out the four corners
+ * outside both bands (their area is the margins' product). */
+struct c0_bleach_window {
+	double x0, x1, y0, y1;
+	void (*shift)(const void *ctx, int q, int64_t t, double *dx, double *dy);
+	const void *ctx;
+};
+/* The same sum of a still image (H x W), e.g. a stack's background. */
+double c0_bleach_window_sum(const struct c0_bleach_window *w, const float *img, int H, int W);
+
+/* The whole step for the stacks f: one pass each for its frame sums (over
+ * the window win, or whole frames when NULL), then the fit (mode estimate)
+ * and the factors; mode known copies the factors, mode off sets them to 1,
+ * mode repeat fits k from the ratio. B: each stack's background summed as
+ * its frames are. */
 struct c0_frames;
-int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B, struct c0_bleach_result *res);
+int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, const double *B,
+		  const struct c0_bleach_window *win, struct c0_bleach_result *res);

@@ -77,6 +77,24 @@ def test_depth(tmp):
                 check(b0 > 8, "seed %d: without the correction the fade reads as depth (signed %+.1f > 8 nm)" % (seed, b0))
 
 
+def test_drift_bleaching(tmp):
+    """400,-300 nm of drift (seed 1): filaments drift out of the field, and whole frames' sums read that
+    as a fade (rate 1.37x the simulated, signed depth error -6.8 nm); the sums over the window that follows
+    the sample read 0.85x and +0.1 nm (docs/parameters.md, "Bleaching under drift")"""
+    data, sim, stacks = simulate(tmp, "drift1", "--seed", "1", "--pairs", "--drift-nm", "400,-300")
+    rep, d = run(tmp, "drift1_run", data, sim, stacks)
+    if rep is None:
+        return
+    k, kt = rep["bleaching"]["rate_per_frame"], sim["estimates"]["bleaching"]["rate_per_frame"]
+    f, ft = rep["bleaching"]["factors"], sim["estimates"]["bleaching"]["stack_factors"]
+    med, sg = d["median_abs_error_nm"], d["median_signed_error_nm"]
+    print("drift 400,-300 nm: bleaching rate %.3g (true %.3g), median depth error %.1f nm, signed %+.1f nm"
+          % (k, kt, med, sg), file=sys.stderr)
+    check(abs(k / kt - 1) <= 0.2, "drift: bleaching rate %.3g within 20%% of the simulated %.3g" % (k, kt))
+    check(all(abs(a / b - 1) < 0.04 for a, b in zip(f, ft)), "drift: stack factors %s match the simulated %s" % (f, ft))
+    check(med <= 15 and abs(sg) <= 3, "drift: median depth error %.1f <= 15 nm, |signed| %.1f <= 3 nm" % (med, sg))
+
+
 def test_sparse_shared_mu(tmp):
     """sparse fast blinking (issue 29): the MA-TIRF stacks share one intensity mu, the largest of their own
     discrepancy ones (0.1 at the first angle, 1.7 at the last here). With a mu per angle this stack read
@@ -293,5 +311,6 @@ with tempfile.TemporaryDirectory() as tmp:
         test_depth(tmp)
         test_close_pairs(tmp)
         test_sparse_shared_mu(tmp)
+        test_drift_bleaching(tmp)
         test_noisy_pixels(tmp)
 done()
