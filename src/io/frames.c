@@ -32,6 +32,8 @@ static void calibrate(const struct c0_frames *f, int y0, int ny, float *v)
 
 static void note_sum(struct c0_frames *f, int64_t t, const float *v)
 {
+	if (!isnan(f->sum[t]))
+		return;   /* noted by an earlier pass: the same raw frame */
 	const size_t n = (size_t)f->height * f->width;
 	double s = 0;
 	for (size_t i = 0; i < n; i++)
