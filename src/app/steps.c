@@ -744,9 +744,10 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 	struct c0_bleach_window win;
 	const int windowed = bleach_window(r, f, &win);
 	c0_run_conf_bleach(c, &bc);
-	for (int q = 0; q < n; q++)
+	int st = C0_OK;
+	for (int q = 0; !st && q < n; q++)
 		if (windowed)
-			B[q] = c0_bleach_window_sum(&win, r->ires[q].b, r->ires[q].Ny, r->ires[q].Nx);
+			st = c0_bleach_window_sum(&win, r->ires[q].b, r->ires[q].Ny, r->ires[q].Nx, &B[q]);
 		else
 			for (size_t i = 0; i < (size_t)r->ires[q].Ny * r->ires[q].Nx; i++)
 				B[q] += r->ires[q].b[i];
@@ -755,12 +756,17 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 		bc.repeat_ratio = c0_result_x_sum(r, n - 1) / c0_result_x_sum(r, first);
 	}
 	struct c0_bleach_result br;
-	int st = c0_bleach_run(&bc, n, f, B, windowed ? &win : NULL, &br);
+	if (!st)
+		st = c0_bleach_run(&bc, n, f, B, windowed ? &win : NULL, &br);
 	if (st)
 		return st;
 	for (int q = 0; q < n; q++)
 		r->bleach_factor[q] = br.factor[q];
 	c0_report_bleach(r->rep, &bc, &br, n);
+	if (windowed) {   /* the sample's part that stayed in the field (camera pixels of the first block) */
+		const double wv[4] = { win.x0, win.x1, win.y0, win.y1 };
+		cJSON_AddItemToObject(cJSON_GetObjectItem(r->rep, "bleaching"), "window_x0_x1_y0_y1_px", cJSON_CreateDoubleArray(wv, 4));
+	}
 	/* a fade the stacks cannot show (sparse or fast blinking: the frame sums
 	 * carry more blinking noise than fade) leaves the factors near 1 and the
 	 * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth bias") */

@@ -158,19 +158,19 @@ static double window_of(const struct c0_bleach_window *w, const double *rows, co
 	return band(cols, W, w->x0 + dx, w->x1 + dx) + band(rows, H, w->y0 + dy, w->y1 + dy) - total;
 }
 
-double c0_bleach_window_sum(const struct c0_bleach_window *w, const float *img, int H, int W)
+int c0_bleach_window_sum(const struct c0_bleach_window *w, const float *img, int H, int W, double *sum)
 {
-	double *rows = calloc((size_t)H, sizeof *rows), *cols = calloc((size_t)W, sizeof *cols), total = 0;
+	double *rows = c0_alloc((size_t)H, sizeof *rows), *cols = c0_alloc((size_t)W, sizeof *cols), total = 0;
 	if (!rows || !cols) {
 		free(rows), free(cols);
-		return NAN;
+		return C0_ENOMEM;
 	}
 	for (int y = 0; y < H; y++)
 		for (int x = 0; x < W; x++)
 			rows[y] += img[(size_t)y * W + x], cols[x] += img[(size_t)y * W + x], total += img[(size_t)y * W + x];
-	double s = window_of(w, rows, cols, total, H, W, 0, 0);
+	*sum = window_of(w, rows, cols, total, H, W, 0, 0);
 	free(rows), free(cols);
-	return s;
+	return C0_OK;
 }
 
 /* stack q's frame sums over the window */

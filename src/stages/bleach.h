@@ -78,7 +78,7 @@ struct c0_bleach_window {
 	const void *ctx;
 };
 /* The same sum of a still image (H x W), e.g. a stack's background. */
-double c0_bleach_window_sum(const struct c0_bleach_window *w, const float *img, int H, int W);
+int c0_bleach_window_sum(const struct c0_bleach_window *w, const float *img, int H, int W, double *sum);
 
 /* The whole step for the stacks f: one pass each for its frame sums (over
  * the window win, or whole frames when NULL), then the fit (mode estimate)

@@ -93,6 +93,9 @@ def test_drift_bleaching(tmp):
     check(abs(k / kt - 1) <= 0.2, "drift: bleaching rate %.3g within 20%% of the simulated %.3g" % (k, kt))
     check(all(abs(a / b - 1) < 0.04 for a, b in zip(f, ft)), "drift: stack factors %s match the simulated %s" % (f, ft))
     check(med <= 15 and abs(sg) <= 3, "drift: median depth error %.1f <= 15 nm, |signed| %.1f <= 3 nm" % (med, sg))
+    w = rep["bleaching"].get("window_x0_x1_y0_y1_px", [])
+    check(len(w) == 4 and 59 <= w[1] - w[0] <= 60.5 and 60 <= w[3] - w[2] <= 61.5,
+          "drift: the bleaching window leaves out the drift's 4 and 3 px: %s" % w)
 
 
 def test_sparse_shared_mu(tmp):
