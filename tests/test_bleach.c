@@ -126,8 +126,8 @@ static void test_window_drift(void)
 		CHECK(c0_frames_keep_profiles(&f[q]) == C0_OK);
 		free(bgi);
 	}
-	const double *rows, *cols;
-	CHECK(c0_frames_profiles(&f[0], &rows, &cols) == C0_OK);
+	const double *sums, *rows, *cols;
+	CHECK(c0_frames_profiles(&f[0], &sums, &rows, &cols) == C0_OK);
 	double r0 = 0, c5 = 0;   /* frame 0's first row, frame 1's sixth column */
 	for (int x = 0; x < W; x++)
 		r0 += data[0][x];

@@ -257,7 +257,9 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	r->pixel_nm = s.support.grid.pixel_nm, r->srf = s.support.grid.srf;
 	/* the bleaching's sums over a window that follows the drift (app/steps.c)
 	 * need each frame's row and column sums, noted from the drift's pass on */
-	for (int q = 0; !st && c->drift && c->nangles > 0 && c->bleach == C0_BLEACHING_ESTIMATE && !c->nbleach_factors && q < n; q++)
+	struct c0_bleach_conf bc;
+	c0_run_conf_bleach(c, &bc);
+	for (int q = 0; !st && c->drift && c->nangles > 0 && bc.mode == C0_BLEACH_ESTIMATE && q < n; q++)
 		st = c0_frames_keep_profiles(&f[q]);
 	if (!st && c->drift)
 		st = c0_step_drift(r, c, &s.support.grid, f, n);

@@ -40,13 +40,21 @@ void c0_step_end(struct c0_result *r, const struct c0_step_clock *k)
 	add_number(r->rep, "rss_rise_mb", k->key, round(peak - k->peak0));
 }
 
+/* 1: the frames were moved by a drift correction */
+static int drift_moved(const struct c0_result *r)
+{
+	struct c0_drift_info di;
+	if (!r->drift)
+		return 0;
+	c0_drift_get_info(r->drift, &di);
+	return di.corrected[0] || di.corrected[1];
+}
+
 /* The camera's read-noise map moved and spread as each stack's frames are
  * (a noisy pixel's variance follows it), where the drift is corrected */
 static int drift_noise(struct c0_result *r, const struct c0_frames *f, int n)
 {
-	struct c0_drift_info di;
-	c0_drift_get_info(r->drift, &di);
-	if (!r->cal_noise || !(di.corrected[0] || di.corrected[1]))
+	if (!r->cal_noise || !drift_moved(r))
 		return C0_OK;
 	const size_t np = (size_t)f[0].width * f[0].height;
 	for (int q = 0; q < n; q++) {
@@ -369,16 +377,6 @@ static const float *mask_values(struct c0_result *r, int i, float **tmp)
 	return *tmp = pixlist_values(&r->pl, r->ires[i].x);
 }
 
-/* 1: the frames were moved by a drift correction */
-static int drift_moved(const struct c0_result *r)
-{
-	struct c0_drift_info di;
-	if (!r->drift)
-		return 0;
-	c0_drift_get_info(r->drift, &di);
-	return di.corrected[0] || di.corrected[1];
-}
-
 /* stack i's residual (H x W) moved back to where the camera's pixels were,
  * for the pattern, which is the camera's, to be found in one place */
 static int pattern_unmove(const struct c0_result *r, int i, double *res, int H, int W)
@@ -402,9 +400,13 @@ static int pattern_less(const struct c0_result *r, int i, const double *ybar, co
 			double *out)
 {
 	const size_t N = (size_t)H * W;
-	float *mv = camera ? c0_alloc(N, sizeof *mv) : NULL;
-	int st = camera ? (mv ? c0_drift_image(r->drift, i, pat, mv) : C0_ENOMEM) : C0_OK;
-	const float *p = mv ? mv : pat;
+	float *mv = NULL;
+	int st = C0_OK;
+	if (camera && !(mv = c0_alloc(N, sizeof *mv)))
+		return C0_ENOMEM;
+	if (camera)
+		st = c0_drift_image(r->drift, i, pat, mv);
+	const float *p = camera ? mv : pat;
 	for (size_t k = 0; !st && k < N; k++)
 		out[k] = ybar[k] - p[k];
 	free(mv);

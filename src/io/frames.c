@@ -157,11 +157,10 @@ int c0_frames_sums(struct c0_frames *f, const double **sums)
 	return st;
 }
 
-int c0_frames_profiles(struct c0_frames *f, const double **rows, const double **cols)
+int c0_frames_profiles(struct c0_frames *f, const double **sums, const double **rows, const double **cols)
 {
-	const double *s;
 	*rows = *cols = NULL;
-	int st = f->rows ? c0_frames_sums(f, &s) : c0_fail(C0_EINVAL, "%s: no frame profiles kept", f->name);
+	int st = f->rows ? c0_frames_sums(f, sums) : c0_fail(C0_EINVAL, "%s: no frame profiles kept", f->name);
 	if (!st)
 		*rows = f->rows, *cols = f->cols;
 	return st;

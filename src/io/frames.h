@@ -38,9 +38,10 @@ int c0_frames_sums(struct c0_frames *f, const double **sums);
 /* From now on every whole-frame read also notes the frame's row and column
  * sums (the frames read before are read again for them). */
 int c0_frames_keep_profiles(struct c0_frames *f);
-/* The row and column sums of every frame (count x height, count x width),
- * reading the frames not yet read whole since c0_frames_keep_profiles. */
-int c0_frames_profiles(struct c0_frames *f, const double **rows, const double **cols);
+/* The sums, row sums and column sums of every frame (count, count x height,
+ * count x width), reading the frames not yet read whole since
+ * c0_frames_keep_profiles. */
+int c0_frames_profiles(struct c0_frames *f, const double **sums, const double **rows, const double **cols);
 void c0_frames_close(struct c0_frames *f);
 /* Multi-channel files (ImageJ channels=, OME SizeC or series) as one stack
  * per channel: a path whose file has C > 1 channels of several planes each

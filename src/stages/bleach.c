@@ -178,9 +178,7 @@ static int window_sums(const struct c0_bleach_window *w, int q, struct c0_frames
 {
 	const double *rows, *cols, *tot;
 	*T = f->count;
-	int st = c0_frames_profiles(f, &rows, &cols);
-	if (!st)
-		st = c0_frames_sums(f, &tot);
+	int st = c0_frames_profiles(f, &tot, &rows, &cols);
 	if (!st && !(*S = c0_alloc((size_t)f->count, sizeof **S)))
 		st = C0_ENOMEM;
 	for (int64_t t = 0; !st && t < f->count; t++) {

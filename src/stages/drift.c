@@ -736,8 +736,8 @@ static int add_image(const struct c0_drift *d, double dx, double dy, double w, v
 static int moved(const struct c0_drift *d, int q, const float *in, run_fn fn, float *out)
 {
 	const size_t n = (size_t)d->H * d->W;
-	struct moved m = { in, c0_alloc(n, sizeof *m.acc), fn == add_image ? c0_alloc(n, sizeof *m.tmp) : NULL };
-	int st = m.acc && (m.tmp || fn != add_image) ? each_run(d, q, fn, &m) : C0_ENOMEM;
+	struct moved m = { in, c0_alloc(n, sizeof *m.acc), c0_alloc(n, sizeof *m.tmp) };   /* tmp: add_image's */
+	int st = m.acc && m.tmp ? each_run(d, q, fn, &m) : C0_ENOMEM;
 	for (size_t i = 0; !st && i < n; i++)
 		out[i] = (float)m.acc[i];
 	free(m.acc), free(m.tmp);

@@ -137,7 +137,6 @@ def test_accuracy(tmp):
     check("common_pattern" not in rep["maps"] and "common_pattern" not in rep["off"], "common pattern: not evaluated with an offset map or off")
 
 
-
 def test_drift_pattern(tmp):
     """with 200,100 nm of drift (seed 1, 300 frames) the camera's pattern moves between the corrected
     stacks: found where the camera saw it (shared variance 4.1 ADU^2 there, 1.6 in the sample's frame,
