@@ -134,7 +134,7 @@ struct c0_run_conf {
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
-	.reweightings = 10, .drift = 1, .pixel_guard = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 20, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
+	.reweightings = 10, .drift = 1, .pixel_guard = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 100, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
 	.graph_radius = 2.25, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = -1, .sparsity = 3e-2, \
 	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1, \

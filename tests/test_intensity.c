@@ -6,6 +6,7 @@
 #include "check_adjoint.h"
 #include "ops/psi_omega.h"
 #include "ops/covop.h"
+#include "ops/neumann.h"
 #include "stages/intensity.h"
 #include "stages/pattern.h"
 #include "sim/sim.h"
@@ -90,6 +91,52 @@ static void test_operators(void)
 }
 
 /* data made by the model itself: the discrepancy target is reachable */
+struct grid2 { int Ny, Nx; };
+static void lap_apply(void *c, const double *x, double *y)
+{
+	const struct grid2 *g = c;
+	c0_neumann_laplacian(g->Ny, g->Nx, x, y);
+}
+
+/* The Laplacian is its own adjoint, and the cosine-transform inverse of
+ * a I + beta L^k is the inverse of the operator applied the slow way. */
+static void test_neumann(void)
+{
+	const int sizes[][2] = { { 7, 5 }, { 1, 6 }, { 12, 12 } };
+	for (int t = 0; t < 3; t++) {
+		const int Ny = sizes[t][0], Nx = sizes[t][1], N = Ny * Nx;
+		struct grid2 g = { Ny, Nx };
+		struct c0_linop L = { (size_t)N, (size_t)N, &g, lap_apply, lap_apply };
+		CHECK_ADJOINT(&L, NULL, 1e-12);
+		double *in = malloc(sizeof *in * N), *u = malloc(sizeof *u * N), *l1 = malloc(sizeof *l1 * N),
+		       *l2 = malloc(sizeof *l2 * N);
+		struct c0_neumann *nm;
+		CHECK(c0_neumann_new(Ny, Nx, 0, &nm) == C0_OK);
+		const double cases[][3] = { { 1, 100, 2 }, { 1, 20, 1 }, { 0.5, 3, 2 }, { 0, 7, 1 } };
+		for (int k = 0; k < 4; k++) {
+			const double a = cases[k][0], beta = cases[k][1];
+			const int pw = (int)cases[k][2];
+			double m = 0;
+			for (int i = 0; i < N; i++)
+				in[i] = c0_rng_normal(&rng), m += in[i] / N;
+			for (int i = 0; a == 0 && i < N; i++)
+				in[i] -= m;                 /* a = 0: the operator is singular on constants */
+			c0_neumann_solve(nm, a, beta, pw, in, u);
+			c0_neumann_laplacian(Ny, Nx, u, l1);
+			if (pw == 2)
+				c0_neumann_laplacian(Ny, Nx, l1, l2);
+			double e = 0, n = 0;
+			for (int i = 0; i < N; i++) {
+				double r = a * u[i] + beta * (pw == 2 ? l2[i] : l1[i]) - in[i];
+				e += r * r, n += in[i] * in[i];
+			}
+			CHECK_MSG(sqrt(e / n) < 1e-12, "%d x %d, a %g beta %g k %d: residual %g", Ny, Nx, a, beta, pw, sqrt(e / n));
+		}
+		c0_neumann_free(nm);
+		free(in), free(u), free(l1), free(l2);
+	}
+}
+
 static void test_discrepancy(void)
 {
 	const int Ny = 24, Nx = 24, r = 4, L = Ny * r * Nx * r;
@@ -357,6 +404,7 @@ int main(void)
 {
 	c0_rng_init(&rng, 5, 0);
 	RUN(test_operators);
+	RUN(test_neumann);
 	RUN(test_discrepancy);
 	RUN(test_simulated);
 	RUN(test_pattern);

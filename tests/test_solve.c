@@ -69,6 +69,13 @@ static void spd_apply(void *c, const double *x, double *y)
 	}
 }
 
+static void diag_apply(void *c, const double *x, double *y)
+{
+	const double *d = c;
+	for (int i = 0; i < NCG; i++)
+		y[i] = d[i] * x[i];
+}
+
 static void test_cg(void)
 {
 	double *B = malloc(sizeof(double) * NCG * NCG), *A = calloc(NCG * NCG, sizeof(double));
@@ -93,6 +100,13 @@ static void test_cg(void)
 			e += (x[i] - xs[i]) * (x[i] - xs[i]), n += xs[i] * xs[i];
 		CHECK_MSG(info.converged && sqrt(e / n) < 1e-8, "cg (precond %d): %d iterations, error %g", pre, info.iters, sqrt(e / n));
 	}
+	/* c0_pcg with the diagonal as a callback is c0_cg, to the bit */
+	double x2[NCG];
+	struct c0_cg_info i1, i2;
+	memset(x, 0, sizeof x), memset(x2, 0, sizeof x2);
+	CHECK(c0_cg(spd_apply, A, NCG, b, dinv, x, 1e-9, 500, &i1) == C0_OK);
+	CHECK(c0_pcg(spd_apply, A, NCG, b, diag_apply, dinv, x2, 1e-9, 500, &i2) == C0_OK);
+	CHECK(i1.iters == i2.iters && !memcmp(x, x2, sizeof x));
 	/* b = 0 gives x = 0 at once */
 	struct c0_cg_info info;
 	double z[NCG] = { 0 };

@@ -43,7 +43,7 @@ static const struct c0_param table[] = {
 	NUM(frc, C0_P_FLAG, "frc", "0|1", "solve each half of the frames too, for the localisation precision and the halves' FRC curve", "1"),
 	/* intensity and background */
 	ENUM(background, "none|constant|smooth", "background", "background model", "smooth"),
-	NUM(beta, C0_P_DOUBLE, "beta", "B", "background smoothness weight", "20"),
+	NUM(beta, C0_P_DOUBLE, "beta", "B", "background curvature weight: beta/2 ||L b||^2, L the camera grid's Laplacian (smoothing length beta^(1/4) pixels)", "100"),
 	NUM(nu, C0_P_DOUBLE, "nu", "F", "intensity discrepancy factor: residual^2 = nu^2 HW sigma2 / T (0: sqrt(T))", "1"),
 	NUM(mu, C0_P_DOUBLE, "mu", "M", "fixed smoothness weight instead of the discrepancy principle", "0 (discrepancy)"),
 	ENUM(discrepancy, "relative|plain", "discrepancy",

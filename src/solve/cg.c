@@ -14,8 +14,24 @@ static double dot(const double *a, const double *b, size_t n)
 	return s;
 }
 
+struct diag { const double *d; size_t n; };
+
+static void diag_apply(void *ctx, const double *in, double *out)
+{
+	const struct diag *g = ctx;
+	for (size_t i = 0; i < g->n; i++)
+		out[i] = g->d ? g->d[i] * in[i] : in[i];
+}
+
 int c0_cg(c0_linop_fn A, void *ctx, size_t n, const double *b, const double *dinv, double *x, double tol,
 	  int maxit, struct c0_cg_info *info)
+{
+	struct diag g = { dinv, n };
+	return c0_pcg(A, ctx, n, b, diag_apply, &g, x, tol, maxit, info);
+}
+
+int c0_pcg(c0_linop_fn A, void *ctx, size_t n, const double *b, c0_linop_fn M, void *mctx, double *x, double tol,
+	   int maxit, struct c0_cg_info *info)
 {
 	double *r = c0_alloc(n, sizeof *r), *p = c0_alloc(n, sizeof *p), *q = c0_alloc(n, sizeof *q);
 	double *z = c0_alloc(n, sizeof *z);
@@ -31,10 +47,10 @@ int c0_cg(c0_linop_fn A, void *ctx, size_t n, const double *b, const double *din
 		goto out;
 	}
 	A(ctx, x, q);
-	for (size_t i = 0; i < n; i++) {
+	for (size_t i = 0; i < n; i++)
 		r[i] = b[i] - q[i];
-		p[i] = z[i] = dinv ? dinv[i] * r[i] : r[i];
-	}
+	M(mctx, r, z);
+	memcpy(p, z, n * sizeof *p);
 	double rz = dot(r, z, n), rn = sqrt(dot(r, r, n));
 	for (int it = 0; it < maxit; it++) {
 		info->relres = rn / bn;
@@ -46,17 +62,14 @@ int c0_cg(c0_linop_fn A, void *ctx, size_t n, const double *b, const double *din
 		double pq = dot(p, q, n);
 		if (!(pq > 0))           /* semidefinite direction: nothing more to gain */
 			break;
-		/* one pass for the update, the preconditioner and both sums (each
-		 * summed in index order, as apart: the same numbers); two
-		 * independent sums, where apart each waited on its own adds */
 		const double a = rz / pq;
-		double rz2 = 0, rr = 0;
+		double rr = 0;
 		for (size_t i = 0; i < n; i++) {
 			x[i] += a * p[i], r[i] -= a * q[i];
-			z[i] = dinv ? dinv[i] * r[i] : r[i];
-			rz2 += r[i] * z[i], rr += r[i] * r[i];
+			rr += r[i] * r[i];
 		}
-		const double beta = rz2 / rz;
+		M(mctx, r, z);
+		const double rz2 = dot(r, z, n), beta = rz2 / rz;
 		for (size_t i = 0; i < n; i++)
 			p[i] = z[i] + beta * p[i];
 		rz = rz2;

@@ -11,3 +11,7 @@ struct c0_cg_info { int iters, converged; double relres; };
  * steps (a zero b gives x = 0 at once). */
 int c0_cg(c0_linop_fn A, void *ctx, size_t n, const double *b, const double *dinv, double *x, double tol,
 	  int maxit, struct c0_cg_info *info);
+/* The same, preconditioned by M (symmetric positive definite, an
+ * approximate inverse of A): z = M(mctx, r) each step. */
+int c0_pcg(c0_linop_fn A, void *ctx, size_t n, const double *b, c0_linop_fn M, void *mctx, double *x, double tol,
+	   int maxit, struct c0_cg_info *info);

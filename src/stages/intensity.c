@@ -1,5 +1,6 @@
 #include "stages/intensity.h"
 #include "stages/tiles.h"
+#include "ops/neumann.h"
 #include "ops/psi_omega.h"
 #include "optics/psf.h"
 #include "solve/root.h"
@@ -49,23 +50,12 @@ struct prob {
 	double *psi2;             /* ||psi_k||^2 on the support */
 	double *deg;              /* weighted graph degree of each support pixel */
 	double *y, *g, *v, *rhs;  /* workspaces */
+	double level;             /* the data's mean: where b starts */
+	double *lb;               /* NN: L b */
+	double *s0;               /* n + nb: the start, x = 0 and b = level */
+	struct c0_neumann *nm;    /* smooth: the background block's preconditioner */
 	int cg_iters, solves, rounds;
 };
-
-/* background smoothness: Neumann Laplacian on the coarse grid */
-static void lap_b(const struct prob *p, const double *b, double *out)
-{
-	const int Ny = p->P.Ny, Nx = p->P.Nx;
-	for (int y = 0; y < Ny; y++)
-		for (int x = 0; x < Nx; x++) {
-			double c = b[y * Nx + x], s = 0;
-			if (x > 0) s += c - b[y * Nx + x - 1];
-			if (x < Nx - 1) s += c - b[y * Nx + x + 1];
-			if (y > 0) s += c - b[(y - 1) * Nx + x];
-			if (y < Ny - 1) s += c - b[(y + 1) * Nx + x];
-			out[y * Nx + x] = s;
-		}
-}
 
 /* the normal operator of the quadratic, on the free variables */
 static void normal(void *ctx, const double *in, double *out)
@@ -91,8 +81,9 @@ static void normal(void *ctx, const double *in, double *out)
 	c0_grad_omega_adjoint(&p->P, p->g, gx);
 	for (int i = 0; i < n; i++)
 		out[i] += p->mu * gx[i];
-	if (nb == NN) {
-		lap_b(p, v + n, out + n);
+	if (nb == NN) {   /* beta L^2 b */
+		c0_neumann_laplacian(p->P.Ny, p->P.Nx, v + n, p->lb);
+		c0_neumann_laplacian(p->P.Ny, p->P.Nx, p->lb, out + n);
 		for (int i = 0; i < NN; i++)
 			out[n + i] = p->y[i] + p->c->beta * out[n + i];
 	} else if (nb == 1) {
@@ -106,8 +97,46 @@ static void normal(void *ctx, const double *in, double *out)
 			out[i] = 0;
 }
 
+/* The preconditioner: Jacobi on x; on a smooth background the exact inverse
+ * of its own block, I + beta L^2 (weights taken as 1), by cosine transforms:
+ * Jacobi leaves the curvature penalty's condition number, 1 + 64 beta, to CG. */
+static void precond(void *ctx, const double *in, double *out)
+{
+	struct prob *p = ctx;
+	const int n = p->n, nb = p->nb;
+	for (int i = 0; i < n + nb; i++)
+		out[i] = p->dinv[i] * in[i];
+	if (nb != p->NN)
+		return;
+	for (int i = 0; i < nb; i++)
+		p->lb[i] = p->fixed[n + i] ? 0 : in[n + i];
+	c0_neumann_solve(p->nm, 1, p->c->beta, 2, p->lb, out + n);
+	for (int i = 0; i < nb; i++)
+		if (p->fixed[n + i])
+			out[n + i] = 0;
+}
+
+static void start(const struct prob *p, double *sol)
+{
+	memset(sol, 0, sizeof *sol * (size_t)p->n);
+	for (int i = 0; i < p->nb; i++)
+		sol[p->n + i] = p->nb == 1 ? p->level / p->bscale : p->level;
+}
+
+static double norm(const double *v, size_t n)
+{
+	double s = 0;
+	for (size_t i = 0; i < n; i++)
+		s += v[i] * v[i];
+	return sqrt(s);
+}
+
 /* Solve for the current mu: CG on the free set, then fix negative variables
- * at zero and solve again until none is negative (an active-set projection). */
+ * at zero and solve again until none is negative (an active-set projection).
+ * CG's tolerance is relative to the residual at x = 0, b = the data's mean,
+ * not at zero: the camera offset and the mean background are nearly all of
+ * ||A^T ybar|| (100-140 of a few ADU of signal), and a tolerance on that
+ * stopped with the background still off by 0.1-1 ADU in its smooth modes. */
 static int solve(struct prob *p, double *sol)
 {
 	const int n = p->n, nb = p->nb, NN = p->NN;
@@ -129,13 +158,16 @@ static int solve(struct prob *p, double *sol)
 				b[i] = 0, sol[i] = 0;
 		for (int i = 0; i < n; i++)
 			p->dinv[i] = p->fixed[i] ? 1 : 1 / (p->psi2[i] + p->mu * p->deg[i]);
-		for (int i = 0; i < nb; i++) {
-			int y = i / p->P.Nx, x = i % p->P.Nx;
-			int d = (y > 0) + (y < p->P.Ny - 1) + (x > 0) + (x < p->P.Nx - 1);
-			p->dinv[n + i] = p->fixed[n + i] ? 1 : nb == NN ? 1 / (1 + p->c->beta * d) : 1;
-		}
+		for (int i = 0; i < nb; i++)
+			p->dinv[n + i] = 1;
+		start(p, p->s0);
+		normal(p, p->s0, p->s0 + n + nb);
+		for (int i = 0; i < n + nb; i++)
+			p->s0[n + nb + i] = b[i] - p->s0[n + nb + i];
+		const double bn = norm(b, (size_t)(n + nb));
+		const double tol = bn > 0 ? p->c->tol * norm(p->s0 + n + nb, (size_t)(n + nb)) / bn : p->c->tol;
 		struct c0_cg_info info;
-		int st = c0_cg(normal, p, (size_t)(n + nb), b, p->dinv, sol, p->c->tol, p->c->maxit, &info);
+		int st = c0_pcg(normal, p, (size_t)(n + nb), b, precond, p, sol, tol, p->c->maxit, &info);
 		if (st)
 			return st;
 		p->cg_iters += info.iters;
@@ -183,7 +215,7 @@ static double discrepancy(void *ctx, double t)
 		memcpy(d->sol, d->floor, sizeof *d->sol * nv);
 	else {
 		if (!(fabs(t - d->tprev) >= 1) || t <= d->tmin)
-			memset(d->sol, 0, sizeof *d->sol * nv);
+			start(d->p, d->sol);
 		if (solve(d->p, d->sol))
 			d->fail = 1;
 	}
@@ -197,19 +229,8 @@ static double discrepancy(void *ctx, double t)
 }
 
 /* No support pixel (a tile off the sample): x = 0 and the background alone,
- * min 1/2 ||b - ybar||^2 + beta/2 ||grad b||^2 (b >= 0 holds: ybar >= 0
- * smoothed stays so, and a negative b is clipped). */
-struct bgonly { int Ny, Nx; double beta; };
-
-static void bg_normal(void *ctx, const double *in, double *out)
-{
-	const struct bgonly *g = ctx;
-	struct prob p = { .P = { .Ny = g->Ny, .Nx = g->Nx } };
-	lap_b(&p, in, out);
-	for (int i = 0; i < g->Ny * g->Nx; i++)
-		out[i] = in[i] + g->beta * out[i];
-}
-
+ * min 1/2 ||b - ybar||^2 + beta/2 ||L b||^2, solved exactly (b >= 0 is not
+ * held: a negative b is clipped). */
 static int background_only(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx,
 			   struct c0_intensity_result *res)
 {
@@ -217,27 +238,23 @@ static int background_only(const struct c0_intensity_conf *c, const double *ybar
 	res->Ly = Ny * r, res->Lx = Nx * r, res->Ny = Ny, res->Nx = Nx, res->dp_status = -1;
 	res->x = c0_alloc((size_t)NN * r * r, sizeof *res->x);
 	res->b = c0_alloc((size_t)NN, sizeof *res->b);
-	double *b = c0_alloc((size_t)NN, sizeof *b), *dinv = c0_alloc((size_t)NN, sizeof *dinv);
-	int st = !res->x || !res->b || !b || !dinv ? C0_ENOMEM : C0_OK;
+	double *b = c0_alloc((size_t)NN, sizeof *b);
+	int st = !res->x || !res->b || !b ? C0_ENOMEM : C0_OK;
 	double m = 0;
 	for (int i = 0; !st && i < NN; i++)
 		m += ybar[i];
 	m /= NN;
-	if (!st && c->background == C0_BG_SMOOTH) {
-		struct bgonly g = { Ny, Nx, c->beta };
-		for (int i = 0; i < NN; i++) {
-			int y = i / Nx, x = i % Nx, d = (y > 0) + (y < Ny - 1) + (x > 0) + (x < Nx - 1);
-			dinv[i] = 1 / (1 + c->beta * d), b[i] = m;
-		}
-		struct c0_cg_info info;
-		st = c0_cg(bg_normal, &g, (size_t)NN, ybar, dinv, b, c->tol, c->maxit, &info);
-		res->cg_iters = info.iters, res->solves = 1;
+	struct c0_neumann *nm = NULL;
+	if (!st && c->background == C0_BG_SMOOTH && !(st = c0_neumann_new(Ny, Nx, 0, &nm))) {
+		c0_neumann_solve(nm, 1, c->beta, 2, ybar, b);
+		res->solves = 1;
 	} else
 		for (int i = 0; !st && i < NN; i++)
 			b[i] = c->background == C0_BG_CONSTANT ? m : 0;
 	for (int i = 0; !st && i < NN; i++)
 		res->b[i] = (float)fmax(0, b[i]);
-	free(b), free(dinv);
+	c0_neumann_free(nm);
+	free(b);
 	return st;
 }
 
@@ -265,7 +282,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 }
 
 /* The tiles' windows overlap by two PSF lags (6 sigma each): the PSF and
- * the background's smoothing length (sqrt(beta) ~ 4.5 coarse pixels) fit. */
+ * the background's smoothing length (beta^(1/4) ~ 3.2 coarse pixels) fit. */
 static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
 {
@@ -370,6 +387,8 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 	p.g = c0_alloc((size_t)p.P.ne + 1, sizeof *p.g);
 	p.v = c0_alloc(nv, sizeof *p.v);
 	p.rhs = c0_alloc(nv + p.n, sizeof *p.rhs);
+	p.lb = c0_alloc((size_t)p.NN, sizeof *p.lb);
+	p.s0 = c0_alloc(2 * nv, sizeof *p.s0);
 	double *yw = c->weight ? c0_alloc((size_t)p.NN, sizeof *yw) : NULL;
 	for (int i = 0; yw && i < p.NN; i++)
 		yw[i] = c->weight[i] * ybar[i];
@@ -377,11 +396,16 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 		p.yw = yw;
 	res->x = c0_alloc((size_t)p.P.Ly * p.P.Lx, sizeof *res->x);
 	res->b = c0_alloc((size_t)p.NN, sizeof *res->b);
-	if (!sol || !p.fixed || !p.y || !p.g || !p.v || !p.rhs || !res->x || !res->b || !p.dinv || !p.psi2 || !p.deg ||
+	if (!sol || !p.fixed || !p.y || !p.g || !p.v || !p.rhs || !p.lb || !p.s0 || !res->x || !res->b || !p.dinv || !p.psi2 || !p.deg ||
 	    (c->weight && !yw)) {
 		st = C0_ENOMEM;
 		goto out;
 	}
+	if (p.nb == p.NN && (st = c0_neumann_new(Ny, Nx, 1, &p.nm)))
+		goto out;
+	for (int i = 0; p.nb && i < p.NN; i++)
+		p.level += ybar[i] / p.NN;
+	start(&p, sol);
 	c0_psi_omega_diag(&p.P, p.psi2);
 	c0_grad_omega_diag(&p.P, p.deg);
 	res->Ly = p.P.Ly, res->Lx = p.P.Lx, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2;
@@ -402,6 +426,8 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 			p.mu = C0_INTENSITY_MU_MIN;
 			if (!(fsol = c0_alloc(nv, sizeof *fsol)))
 				st = C0_ENOMEM;
+			else
+				start(&p, fsol);
 			if (!st && !(st = solve(&p, fsol)))
 				res->floor2 = residual2(&p, fsol);
 			if (st)
@@ -429,7 +455,8 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 	res->tiles = 1, res->tiles_met = res->dp_status <= 0;
 out:
 	free(sol), free(fsol), free(p.fixed), free(p.dinv), free(p.psi2), free(p.deg), free(p.y), free(p.g), free(p.v), free(p.rhs);
-	free(yw);
+	free(p.lb), free(p.s0), free(yw);
+	c0_neumann_free(p.nm);
 	c0_psi_omega_free(&p.P);
 	return st;
 }

@@ -1,12 +1,17 @@
 /* Intensity and background of one angle on a known support (COL0RME step 2):
  *   min_{x >= 0 on Omega, b >= 0}  1/2 ||Psi_Omega x + b - ybar||^2
- *                                 + mu/2 ||grad_Omega x||^2 + beta/2 ||grad b||^2
+ *                                 + mu/2 ||grad_Omega x||^2 + beta/2 ||L b||^2
  * ybar is the stack's temporal mean (camera units), x the mean intensity per
  * fine pixel (camera units per frame, total over the PSF), b the background
  * including the camera offset. grad_Omega couples the support pixels closer
  * than graph_radius fine pixels, each difference weighted by 1/distance: with
  * only 4-neighbours a diagonal filament falls apart into single pixels that
- * nothing smooths (docs/parameters.md). mu by the discrepancy principle:
+ * nothing smooths (docs/parameters.md). L is the coarse grid's Laplacian
+ * (ops/neumann.h): a curvature penalty, under which a dip in b as narrow as
+ * the PSF costs (length / PSF)^2 more than a broad one, so b cannot trade
+ * against x along a structure; the gradient's cost is the same at every
+ * width in 2-D (docs/parameters.md, "The background's smoothness").
+ * mu by the discrepancy principle:
  *   ||Psi x + b - ybar||^2 = nu^2 H W sigma2 / T. */
 #pragma once
 #include "optics/grid.h"
@@ -19,10 +24,10 @@
 struct c0_intensity_conf {
 	struct c0_grid grid;       /* pixel_nm, fwhm_nm required; srf 4 */
 	enum c0_background background; /* smooth */
-	double beta;               /* 20: background smoothness (coarse grid) */
+	double beta;               /* 100: background curvature weight (coarse grid; smoothing length beta^(1/4) pixels) */
 	double nu;                 /* 1; 0 means sqrt(T), the reference's choice (docs/parameters.md) */
 	double mu;                 /* 0: discrepancy principle; > 0: fixed */
-	double tol;                /* 1e-3: CG relative residual (docs/parameters.md) */
+	double tol;                /* 1e-3: CG relative residual, from x = 0, b = the mean (docs/parameters.md) */
 	int maxit;                 /* 500 CG steps per active-set round */
 	double graph_radius;       /* 2.25 fine pixels: smoothness neighbourhood (docs/parameters.md) */
 	int relative;              /* 1: residual^2 = floor^2 + target^2, floor = the residual at the smallest mu */
@@ -34,7 +39,7 @@ struct c0_intensity_conf {
 	int common_pattern;        /* 0; 1: the whole method takes the MA-TIRF stacks' common fixed pattern
 				    * out of their means when no offset map is given (stages/pattern.h) */
 };
-#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 20, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL, 0 }
+#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 100, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL, 0 }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {

@@ -1,0 +1,130 @@
+#include "ops/neumann.h"
+#include "core/c0math.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <fftw3.h>
+#include <stddef.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* one row: its horizontal differences, and the vertical ones to the rows
+ * above and below where they exist (NULL at the edges) */
+static void lap_row(int Nx, const double *restrict c, const double *restrict up, const double *restrict dn,
+		    double *restrict o)
+{
+	if (Nx == 1) {
+		o[0] = 0;
+	} else {
+		o[0] = c[0] - c[1];
+		for (int x = 1; x < Nx - 1; x++)
+			o[x] = 2 * c[x] - c[x - 1] - c[x + 1];
+		o[Nx - 1] = c[Nx - 1] - c[Nx - 2];
+	}
+	if (up)
+		for (int x = 0; x < Nx; x++)
+			o[x] += c[x] - up[x];
+	if (dn)
+		for (int x = 0; x < Nx; x++)
+			o[x] += c[x] - dn[x];
+}
+
+void c0_neumann_laplacian(int Ny, int Nx, const double *in, double *out)
+{
+	for (int y = 0; y < Ny; y++) {
+		const double *c = in + (size_t)y * Nx;
+		lap_row(Nx, c, y > 0 ? c - Nx : NULL, y < Ny - 1 ? c + Nx : NULL, out + (size_t)y * Nx);
+	}
+}
+
+struct c0_neumann {
+	int Ny, Nx, Py, Px;      /* the grid, and the one transformed (padded: Py x Px) */
+	fftw_plan fwd, inv;   /* DCT-II and DCT-III (REDFT10, REDFT01) in place on work */
+	double *work, *ly, *lx;  /* eigenvalues of the 1-D second differences */
+	double *scale, a, beta;  /* 1 / ((a + beta l^k) 4 Ny Nx) for the last a, beta, k */
+	int k;
+};
+
+void c0_neumann_free(struct c0_neumann *s)
+{
+	if (!s)
+		return;
+	if (s->fwd) fftw_destroy_plan(s->fwd);
+	if (s->inv) fftw_destroy_plan(s->inv);
+	fftw_free(s->work), free(s->ly), free(s->lx), free(s->scale), free(s);
+}
+
+static void eig(int n, double *l)
+{
+	for (int k = 0; k < n; k++) {
+		double s = sin(C0_PI * k / (2.0 * n));
+		l[k] = 4 * s * s;
+	}
+}
+
+/* the smallest n' >= n whose prime factors are 2, 3, 5 and 7: a transform
+ * of a prime length is 5x slower than one of a smooth length near it */
+static int smooth_size(int n)
+{
+	for (;; n++) {
+		int m = n;
+		for (int f = 2; f <= 7; f++)
+			while (m % f == 0)
+				m /= f;
+		if (m == 1)
+			return n;
+	}
+}
+
+int c0_neumann_new(int Ny, int Nx, int pad, struct c0_neumann **out)
+{
+	struct c0_neumann *s = c0_alloc(1, sizeof *s);
+	*out = NULL;
+	if (!s)
+		return C0_ENOMEM;
+	s->Ny = Ny, s->Nx = Nx, s->Py = pad ? smooth_size(Ny) : Ny, s->Px = pad ? smooth_size(Nx) : Nx;
+	const int Py = s->Py, Px = s->Px;
+	s->work = fftw_malloc(sizeof *s->work * (size_t)Py * Px);
+	s->ly = c0_alloc((size_t)Py, sizeof *s->ly), s->lx = c0_alloc((size_t)Px, sizeof *s->lx);
+	s->scale = c0_alloc((size_t)Py * Px, sizeof *s->scale);
+	if (s->work && s->ly && s->lx && s->scale) {
+#pragma omp critical(c0_fftw_plan)   /* fftw's planner is not thread-safe */
+		{
+			s->fwd = fftw_plan_r2r_2d(Py, Px, s->work, s->work, FFTW_REDFT10, FFTW_REDFT10, FFTW_ESTIMATE);
+			s->inv = fftw_plan_r2r_2d(Py, Px, s->work, s->work, FFTW_REDFT01, FFTW_REDFT01, FFTW_ESTIMATE);
+		}
+	}
+	if (!s->fwd || !s->inv) {
+		c0_neumann_free(s);
+		return c0_fail(C0_ENOMEM, "cannot plan the cosine transforms of a %d x %d grid", Ny, Nx);
+	}
+	eig(Py, s->ly), eig(Px, s->lx);
+	*out = s;
+	return C0_OK;
+}
+
+void c0_neumann_solve(struct c0_neumann *s, double a, double beta, int k, const double *in, double *out)
+{
+	const int Py = s->Py, Px = s->Px;
+	const size_t n = (size_t)Py * Px;
+	if (!(s->a == a && s->beta == beta && s->k == k)) {   /* the eigenvalues' scaling, once per operator */
+		const double norm = 4.0 * (double)n;      /* DCT-III of DCT-II: 2N a dimension */
+		for (int y = 0; y < Py; y++)
+			for (int x = 0; x < Px; x++) {
+				double l = s->ly[y] + s->lx[x], d = a + beta * (k == 1 ? l : pow(l, k));
+				s->scale[(size_t)y * Px + x] = d > 0 ? 1 / (d * norm) : 0;   /* the constant mode when a = 0 */
+			}
+		s->a = a, s->beta = beta, s->k = k;
+	}
+	if (Px != s->Nx || Py != s->Ny)
+		memset(s->work, 0, sizeof *s->work * n);
+	for (int y = 0; y < s->Ny; y++)
+		memcpy(s->work + (size_t)y * Px, in + (size_t)y * s->Nx, sizeof *in * s->Nx);
+	fftw_execute(s->fwd);
+	for (size_t i = 0; i < n; i++)
+		s->work[i] *= s->scale[i];
+	fftw_execute(s->inv);
+	for (int y = 0; y < s->Ny; y++)
+		memcpy(out + (size_t)y * s->Nx, s->work + (size_t)y * Px, sizeof *out * s->Nx);
+}
