@@ -48,7 +48,7 @@ static const struct c0_param table[] = {
 	NUM(mu, C0_P_DOUBLE, "mu", "M", "fixed smoothness weight instead of the discrepancy principle", "0 (discrepancy)"),
 	ENUM(discrepancy, "relative|plain", "discrepancy",
 	     "intensity mu: residual = the model's floor (at mu = 1e-3) plus the noise level, or the noise level alone", "relative"),
-	NUM(cg_tol, C0_P_DOUBLE, "tol", "F", "CG stopping tolerance (relative residual)", "1e-3"),
+	NUM(cg_tol, C0_P_DOUBLE, "tol", "F", "CG stopping tolerance, relative to the residual at intensity 0 and the background at the data's mean", "1e-3"),
 	NUM(cg_iterations, C0_P_INT, "cg-iterations", "N", "CG steps per active-set round", "500"),
 	NUM(graph_radius, C0_P_DOUBLE, "graph-radius", "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", "2.25"),
 	LIST(noise_variance, C0_P_DOUBLES, "noise-variance", "V,...", "per-stack noise variance (camera units^2)", "estimated on the support"),

@@ -3,6 +3,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <complex.h>
 #include <fftw3.h>
 #include <stddef.h>
 #include <math.h>
@@ -40,9 +41,12 @@ void c0_neumann_laplacian(int Ny, int Nx, const double *in, double *out)
 
 struct c0_neumann {
 	int Ny, Nx, Py, Px;      /* the grid, and the one transformed (padded: Py x Px) */
-	fftw_plan fwd, inv;   /* DCT-II and DCT-III (REDFT10, REDFT01) in place on work */
-	double *work, *ly, *lx;  /* eigenvalues of the 1-D second differences */
-	double *scale, a, beta;  /* 1 / ((a + beta l^k) 4 Ny Nx) for the last a, beta, k */
+	int periodic;            /* the padded preconditioner: real FFTs on a periodic grid */
+	fftw_plan fwd, inv;      /* DCT-II and DCT-III in place, or r2c and c2r */
+	double *work;            /* Py x Px */
+	fftw_complex *spec;      /* periodic: Py x (Px/2 + 1) */
+	double *ly, *lx;         /* eigenvalues of the 1-D second differences */
+	double *scale, a, beta;  /* 1 / ((a + beta l^k) norm) for the last a, beta, k */
 	int k;
 };
 
@@ -52,13 +56,14 @@ void c0_neumann_free(struct c0_neumann *s)
 		return;
 	if (s->fwd) fftw_destroy_plan(s->fwd);
 	if (s->inv) fftw_destroy_plan(s->inv);
-	fftw_free(s->work), free(s->ly), free(s->lx), free(s->scale), free(s);
+	fftw_free(s->work), fftw_free(s->spec), free(s->ly), free(s->lx), free(s->scale), free(s);
 }
 
-static void eig(int n, double *l)
+/* mirrored edges: 4 sin^2(pi k / 2n); periodic: 4 sin^2(pi k / n) */
+static void eig(int n, int periodic, double *l)
 {
 	for (int k = 0; k < n; k++) {
-		double s = sin(C0_PI * k / (2.0 * n));
+		double s = sin(C0_PI * k / (periodic ? n : 2.0 * n));
 		l[k] = 4 * s * s;
 	}
 }
@@ -83,37 +88,43 @@ int c0_neumann_new(int Ny, int Nx, int pad, struct c0_neumann **out)
 	*out = NULL;
 	if (!s)
 		return C0_ENOMEM;
-	s->Ny = Ny, s->Nx = Nx, s->Py = pad ? smooth_size(Ny) : Ny, s->Px = pad ? smooth_size(Nx) : Nx;
-	const int Py = s->Py, Px = s->Px;
+	s->Ny = Ny, s->Nx = Nx, s->periodic = pad > 0;
+	s->Py = pad ? smooth_size(Ny + 2 * pad) : Ny, s->Px = pad ? smooth_size(Nx + 2 * pad) : Nx;
+	const int Py = s->Py, Px = s->Px, Pc = s->periodic ? Px / 2 + 1 : Px;
 	s->work = fftw_malloc(sizeof *s->work * (size_t)Py * Px);
+	s->spec = s->periodic ? fftw_malloc(sizeof *s->spec * (size_t)Py * Pc) : NULL;
 	s->ly = c0_alloc((size_t)Py, sizeof *s->ly), s->lx = c0_alloc((size_t)Px, sizeof *s->lx);
-	s->scale = c0_alloc((size_t)Py * Px, sizeof *s->scale);
-	if (s->work && s->ly && s->lx && s->scale) {
+	s->scale = c0_alloc((size_t)Py * Pc, sizeof *s->scale);
+	if (s->work && s->ly && s->lx && s->scale && (s->spec || !s->periodic)) {
 #pragma omp critical(c0_fftw_plan)   /* fftw's planner is not thread-safe */
-		{
+		if (s->periodic) {
+			s->fwd = fftw_plan_dft_r2c_2d(Py, Px, s->work, s->spec, FFTW_ESTIMATE);
+			s->inv = fftw_plan_dft_c2r_2d(Py, Px, s->spec, s->work, FFTW_ESTIMATE);
+		} else {
 			s->fwd = fftw_plan_r2r_2d(Py, Px, s->work, s->work, FFTW_REDFT10, FFTW_REDFT10, FFTW_ESTIMATE);
 			s->inv = fftw_plan_r2r_2d(Py, Px, s->work, s->work, FFTW_REDFT01, FFTW_REDFT01, FFTW_ESTIMATE);
 		}
 	}
 	if (!s->fwd || !s->inv) {
 		c0_neumann_free(s);
-		return c0_fail(C0_ENOMEM, "cannot plan the cosine transforms of a %d x %d grid", Ny, Nx);
+		return c0_fail(C0_ENOMEM, "cannot plan the transforms of a %d x %d grid", Ny, Nx);
 	}
-	eig(Py, s->ly), eig(Px, s->lx);
+	eig(Py, s->periodic, s->ly), eig(Px, s->periodic, s->lx);
 	*out = s;
 	return C0_OK;
 }
 
 void c0_neumann_solve(struct c0_neumann *s, double a, double beta, int k, const double *in, double *out)
 {
-	const int Py = s->Py, Px = s->Px;
-	const size_t n = (size_t)Py * Px;
+	const int Py = s->Py, Px = s->Px, Pc = s->periodic ? Px / 2 + 1 : Px;
+	const size_t n = (size_t)Py * Px, nc = (size_t)Py * Pc;
 	if (!(s->a == a && s->beta == beta && s->k == k)) {   /* the eigenvalues' scaling, once per operator */
-		const double norm = 4.0 * (double)n;      /* DCT-III of DCT-II: 2N a dimension */
+		/* c2r of r2c: n; DCT-III of DCT-II: 2N a dimension */
+		const double norm = s->periodic ? (double)n : 4.0 * (double)n;
 		for (int y = 0; y < Py; y++)
-			for (int x = 0; x < Px; x++) {
+			for (int x = 0; x < Pc; x++) {
 				double l = s->ly[y] + s->lx[x], d = a + beta * (k == 1 ? l : pow(l, k));
-				s->scale[(size_t)y * Px + x] = d > 0 ? 1 / (d * norm) : 0;   /* the constant mode when a = 0 */
+				s->scale[(size_t)y * Pc + x] = d > 0 ? 1 / (d * norm) : 0;   /* the constant mode when a = 0 */
 			}
 		s->a = a, s->beta = beta, s->k = k;
 	}
@@ -122,8 +133,12 @@ void c0_neumann_solve(struct c0_neumann *s, double a, double beta, int k, const 
 	for (int y = 0; y < s->Ny; y++)
 		memcpy(s->work + (size_t)y * Px, in + (size_t)y * s->Nx, sizeof *in * s->Nx);
 	fftw_execute(s->fwd);
-	for (size_t i = 0; i < n; i++)
-		s->work[i] *= s->scale[i];
+	if (s->periodic)
+		for (size_t i = 0; i < nc; i++)
+			s->spec[i] *= s->scale[i];
+	else
+		for (size_t i = 0; i < n; i++)
+			s->work[i] *= s->scale[i];
 	fftw_execute(s->inv);
 	for (int y = 0; y < s->Ny; y++)
 		memcpy(out + (size_t)y * s->Nx, s->work + (size_t)y * Px, sizeof *out * s->Nx);

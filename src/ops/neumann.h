@@ -11,11 +11,14 @@ void c0_neumann_laplacian(int Ny, int Nx, const double *in, double *out);
 
 struct c0_neumann;
 
-/* pad 0: the exact inverse below. pad 1 (a preconditioner): the inverse on
- * the smallest grid of 2,3,5,7-smooth sides that holds this one, in set to 0
- * outside it and the result restricted to it, E^T (a I + beta L'^k)^{-1} E:
- * still symmetric positive definite, exact in the interior's smooth modes,
- * and never a transform of a prime length (5x slower). */
+/* pad 0: the exact inverse below, by DCT-II and DCT-III. pad > 0 (a
+ * preconditioner): the grid set in one of 2,3,5,7-smooth sides at least
+ * 2 pad larger, zero around it, and (a I + beta L'^k)^{-1} there with
+ * periodic edges by real FFTs, restricted back: E^T (..)^{-1} E, symmetric
+ * positive definite, near the exact inverse where the grid is more than
+ * the smoothing length from an edge, at 2.5x less work than the cosine
+ * transforms (FFTW's real-to-complex plans are its fastest; a transform of a
+ * prime length is 5x slower than one of a smooth length near it). */
 int c0_neumann_new(int Ny, int Nx, int pad, struct c0_neumann **out);
 void c0_neumann_free(struct c0_neumann *s);
 /* out = (a I + beta L^k)^{-1} in, k >= 1, a > 0 or (a = 0 and the mean of in

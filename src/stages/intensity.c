@@ -401,7 +401,7 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 		st = C0_ENOMEM;
 		goto out;
 	}
-	if (p.nb == p.NN && (st = c0_neumann_new(Ny, Nx, 1, &p.nm)))
+	if (p.nb == p.NN && (st = c0_neumann_new(Ny, Nx, (int)ceil(4 * pow(c->beta, 0.25)), &p.nm)))
 		goto out;
 	for (int i = 0; p.nb && i < p.NN; i++)
 		p.level += ybar[i] / p.NN;

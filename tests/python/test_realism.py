@@ -103,8 +103,8 @@ def test_sparse_blinking(tmp):
     discrepancy ones (0.1 at the first angle, 1.7 at the last here): with a mu per angle this stack read
     17.3 nm (signed -4.3), shared 15.7 nm (-3.6). The background's curvature penalty keeps it from dipping
     under the dim deep structures: with the gradient penalty it sat 0.4-0.8 ADU low there at angles 1-4 and
-    the structures deeper than 250 nm read 17.0 nm shallow; now 0.0-0.4 ADU, -4.4 nm, and the whole stack
-    13.2 nm, signed -0.1 (docs/parameters.md, "Sparse blinking", "The background's smoothness")"""
+    the structures deeper than 250 nm read 17.0 nm shallow; now 0.0-0.4 ADU, -4.2 nm, and the whole stack
+    13.1 nm, signed -0.0 (docs/parameters.md, "Sparse blinking", "The background's smoothness")"""
     data, sim, stacks = simulate(tmp, "sparse1", "--seed", "1", "--pairs", "--tau-on", "10", "--tau-off", "120")
     rep, d = run(tmp, "sparse1_run", data, sim, stacks)
     if rep is None:
