@@ -97,9 +97,10 @@ static void normal(void *ctx, const double *in, double *out)
 			out[i] = 0;
 }
 
-/* The preconditioner: Jacobi on x; on a smooth background the exact inverse
- * of its own block, I + beta L^2 (weights taken as 1), by cosine transforms:
- * Jacobi leaves the curvature penalty's condition number, 1 + 64 beta, to CG. */
+/* The preconditioner: Jacobi on x; on a smooth background an inverse of its
+ * own block, I + beta L^2 (weights taken as 1), by FFTs on a padded grid
+ * (ops/neumann.h): Jacobi leaves the curvature penalty's condition number,
+ * 1 + 64 beta, to CG. */
 static void precond(void *ctx, const double *in, double *out)
 {
 	struct prob *p = ctx;
