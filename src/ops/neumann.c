@@ -54,8 +54,11 @@ void c0_neumann_free(struct c0_neumann *s)
 {
 	if (!s)
 		return;
-	if (s->fwd) fftw_destroy_plan(s->fwd);
-	if (s->inv) fftw_destroy_plan(s->inv);
+#pragma omp critical(c0_fftw_plan)   /* as planning, destroying a plan is not thread-safe */
+	{
+		if (s->fwd) fftw_destroy_plan(s->fwd);
+		if (s->inv) fftw_destroy_plan(s->inv);
+	}
 	fftw_free(s->work), fftw_free(s->spec), free(s->ly), free(s->lx), free(s->scale), free(s);
 }
 

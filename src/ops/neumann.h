@@ -5,8 +5,9 @@
  * is inverted exactly by two transforms and a scaling. */
 #pragma once
 
-/* out = L in (Ny x Nx): each pixel's sum over its existing 4-neighbours of
- * in_pixel - in_neighbour. Symmetric, positive semidefinite, L 1 = 0. */
+/* out = L in (Ny x Nx, separate arrays): each pixel's sum over its existing
+ * 4-neighbours of in_pixel - in_neighbour. Symmetric, positive semidefinite,
+ * L 1 = 0. */
 void c0_neumann_laplacian(int Ny, int Nx, const double *in, double *out);
 
 struct c0_neumann;
