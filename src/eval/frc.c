@@ -87,8 +87,10 @@ int c0_frc_compute(const float *a, const float *b, int H, int W, struct c0_frc *
 			break;
 		}
 out:
-	if (p)
+	if (p) {
+#pragma omp critical(c0_fftw_plan)   /* destroying a plan is no more thread-safe than planning */
 		fftw_destroy_plan(p);
+	}
 	fftw_free(re), fftw_free(fa), fftw_free(fb);
 	free(num), free(da), free(db);
 	if (st)

@@ -48,10 +48,13 @@ void c0_fshift_free(struct c0_fshift *s)
 		return;
 	for (int i = 0; i < s->npool; i++)
 		work_free(&s->pool[i]);
-	if (s->rf) fftw_destroy_plan(s->rf);
-	if (s->rb) fftw_destroy_plan(s->rb);
-	if (s->cf) fftw_destroy_plan(s->cf);
-	if (s->cb) fftw_destroy_plan(s->cb);
+#pragma omp critical(c0_fftw_plan)   /* destroying a plan is no more thread-safe than planning */
+	{
+		if (s->rf) fftw_destroy_plan(s->rf);
+		if (s->rb) fftw_destroy_plan(s->rb);
+		if (s->cf) fftw_destroy_plan(s->cf);
+		if (s->cb) fftw_destroy_plan(s->cb);
+	}
 	free(s);
 }
 

@@ -69,8 +69,11 @@ struct xcorr {
 
 static void xcorr_free(struct xcorr *x)
 {
-	if (x->f) fftw_destroy_plan(x->f);
-	if (x->b) fftw_destroy_plan(x->b);
+#pragma omp critical(c0_fftw_plan)   /* destroying a plan is no more thread-safe than planning */
+	{
+		if (x->f) fftw_destroy_plan(x->f);
+		if (x->b) fftw_destroy_plan(x->b);
+	}
 	if (!x->borrowed)
 		free(x->win), free(x->lp), fftw_free(x->ref);
 	fftw_free(x->re), fftw_free(x->sp), fftw_free(x->xs);
