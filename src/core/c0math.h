@@ -36,3 +36,19 @@ static inline size_t c0_lower_bound(const int *a, size_t lo, size_t hi, size_t v
 	}
 	return lo;
 }
+
+/* The smallest n' >= n, even if asked, with no prime factor above p: the
+ * lengths FFTW transforms fast (a prime length is 5x slower than a smooth
+ * one near it; for a real FFT an odd length 2x: 315^2 1.07 ms a pair,
+ * 320^2 0.46 ms). */
+static inline int c0_fft_size(int n, int p, int even)
+{
+	for (n += even && (n & 1);; n += even ? 2 : 1) {
+		int m = n;
+		for (int f = 2; f <= p; f++)
+			while (m % f == 0)
+				m /= f;
+		if (m == 1)
+			return n;
+	}
+}

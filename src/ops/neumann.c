@@ -71,21 +71,6 @@ static void eig(int n, int periodic, double *l)
 	}
 }
 
-/* the smallest even n' >= n whose prime factors are 2, 3, 5 and 7: a real
- * FFT of a prime length is 5x slower than one of a smooth length near it, and
- * of an odd one 2x (315^2: 1.07 ms a pair, 320^2: 0.46 ms) */
-static int smooth_size(int n)
-{
-	for (n += n & 1;; n += 2) {
-		int m = n;
-		for (int f = 2; f <= 7; f++)
-			while (m % f == 0)
-				m /= f;
-		if (m == 1)
-			return n;
-	}
-}
-
 int c0_neumann_new(int Ny, int Nx, int pad, struct c0_neumann **out)
 {
 	struct c0_neumann *s = c0_alloc(1, sizeof *s);
@@ -93,7 +78,7 @@ int c0_neumann_new(int Ny, int Nx, int pad, struct c0_neumann **out)
 	if (!s)
 		return C0_ENOMEM;
 	s->Ny = Ny, s->Nx = Nx, s->periodic = pad > 0;
-	s->Py = pad ? smooth_size(Ny + 2 * pad) : Ny, s->Px = pad ? smooth_size(Nx + 2 * pad) : Nx;
+	s->Py = pad ? c0_fft_size(Ny + 2 * pad, 7, 1) : Ny, s->Px = pad ? c0_fft_size(Nx + 2 * pad, 7, 1) : Nx;
 	const int Py = s->Py, Px = s->Px, Pc = s->periodic ? Px / 2 + 1 : Px;
 	s->work = fftw_malloc(sizeof *s->work * (size_t)Py * Px);
 	s->spec = s->periodic ? fftw_malloc(sizeof *s->spec * (size_t)Py * Pc) : NULL;

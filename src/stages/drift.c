@@ -79,19 +79,6 @@ static void xcorr_free(struct xcorr *x)
 	fftw_free(x->re), fftw_free(x->sp), fftw_free(x->xs);
 }
 
-/* the smallest n' >= n with no prime factor above 5 (FFTW's fast sizes) */
-static int fft_size(int n)
-{
-	for (;; n++) {
-		int m = n;
-		while (m % 2 == 0) m /= 2;
-		while (m % 3 == 0) m /= 3;
-		while (m % 5 == 0) m /= 5;
-		if (m == 1)
-			return n;
-	}
-}
-
 /* the transforms' buffers and plans; the window and reference are x's own
  * (share == NULL) or share's */
 static int xcorr_buffers(struct xcorr *x, const struct xcorr *share)
@@ -145,7 +132,7 @@ static int xcorr_init(struct xcorr *x, int H, int W, double sigma)
 	memset(x, 0, sizeof *x);
 	/* lags to a quarter of the field, and one more for the sub-pixel fit */
 	x->H = H, x->W = W, x->LY = H / 4 + 2, x->LX = W / 4 + 2;
-	x->PH = fft_size(H + x->LY), x->PW = fft_size(W + x->LX);
+	x->PH = c0_fft_size(H + x->LY, 5, 0), x->PW = c0_fft_size(W + x->LX, 5, 0);
 	x->ns = (size_t)x->PH * (x->PW / 2 + 1);
 	int st = xcorr_buffers(x, NULL);
 	if (st)
