@@ -242,42 +242,6 @@ static void test_weights(const struct c0_intensity_conf *c0, const double *ybar,
 	free(w), free(bad);
 }
 
-/* a and b the same solution, bit for bit (mu: a tiled solve's is the
- * tiles' geometric mean, exp of a mean of logs) */
-static int same(const struct c0_intensity_result *a, const struct c0_intensity_result *b)
-{
-	const size_t L = (size_t)a->Ly * a->Lx, N = (size_t)a->Ny * a->Nx;
-	return fabs(a->mu - b->mu) <= 1e-12 * b->mu && !memcmp(a->x, b->x, L * sizeof *a->x) && !memcmp(a->b, b->b, N * sizeof *a->b);
-}
-
-/* mu_probe (the stacks that share the largest mu): a probe above the
- * principle's mu returns the fixed-mu solve at the probe, in fewer solves;
- * one below returns the ordinary result. On tiles (c->tile set) the same for
- * the tiles' mean, also where some tiles' own mu lies above the probe. */
-static void test_probe(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
-		       const uint8_t *m, double sig2, const struct c0_intensity_result *own)
-{
-	const double f[] = { 4, 1.05, 0.25 };
-	for (int k = 0; k < 3; k++) {
-		struct c0_intensity_conf cp = *c, cf = *c;
-		cp.mu_probe = cf.mu = f[k] * own->mu;
-		struct c0_intensity_result rp, rf;
-		CHECK(c0_intensity_solve(&cp, ybar, Ny, Nx, T, m, sig2, &rp) == C0_OK);
-		CHECK(c0_intensity_solve(&cf, ybar, Ny, Nx, T, m, sig2, &rf) == C0_OK);
-		fprintf(stderr, "probe %g x mu (%d tiles): probed %d, %d solves (own %d, fixed %d)\n", f[k], rp.tiles, rp.probed,
-			rp.solves, own->solves, rf.solves);
-		if (f[k] > 1) {
-			CHECK_MSG(rp.probed == 1 && same(&rp, &rf), "probe %g x mu: not the fixed-mu solve", f[k]);
-			CHECK_MSG(rp.dp_status == 0 && fabs(rp.residual2 - rf.residual2) <= 1e-9 * rf.residual2,
-				  "probe %g x mu: status %d, residual %g against %g", f[k], rp.dp_status, rp.residual2, rf.residual2);
-		} else
-			CHECK_MSG(rp.probed == 0 && same(&rp, own), "probe %g x mu: not the ordinary result", f[k]);
-		if (f[k] == 4)
-			CHECK_MSG(rp.solves < own->solves, "probe: %d solves, the search %d", rp.solves, own->solves);
-		c0_intensity_result_free(&rp), c0_intensity_result_free(&rf);
-	}
-}
-
 /* simulated blinking data, fixed seed, true support */
 static void test_simulated(void)
 {
@@ -369,8 +333,6 @@ static void test_simulated(void)
 	CHECK_MSG(pt >= pn + 3, "tiles: PSNR %.2f dB, naive %.2f dB", pt, pn);
 	CHECK_MSG(sqrt(dx / nx) <= TILE_X_TOL, "tiles: x differs from one solve by %.1f%%", 100 * sqrt(dx / nx));
 	CHECK_MSG(db <= TILE_B_TOL, "tiles: background differs from one solve by %.1f%%", 100 * db);
-	test_probe(&c, ybar, Ny, Nx, s.frames, m, sig2, &res);
-	test_probe(&ct, ybar, Ny, Nx, s.frames, m, sig2, &tr[0]);
 	c0_intensity_result_free(&tr[0]), c0_intensity_result_free(&tr[1]);
 	test_weights(&c, ybar, Ny, Nx, s.frames, m, sig2, xt, &res, pe);
 	c0_intensity_result_free(&res);

@@ -76,8 +76,8 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 	cJSON *arr = cJSON_AddArrayToObject(rep, "intensity");
 	for (int i = 0; i < r->n; i++) {
 		cJSON *j = intensity_stack(r->names[i], &r->ires[i], ic, frames[i], tc[i]);
-		if (mu_own)   /* a probed stack's own mu was not searched for: it is at most the one it probed */
-			cJSON_AddNumberToObject(j, r->ires[i].probed ? "mu_own_at_most" : "mu_own", mu_own[i]);
+		if (mu_own)
+			cJSON_AddNumberToObject(j, "mu_own", mu_own[i]);
 		cJSON_AddItemToArray(arr, j);
 	}
 	cJSON *p = cJSON_AddObjectToObject(rep, "intensity_parameters");
@@ -96,7 +96,7 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 		: "mu makes the residual equal to the noise level nu^2 H W sigma2 / T; on data whose model error exceeds the noise this is never met and mu stays at its smallest value");
 	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
 	if (mu_own)
-		cJSON_AddStringToObject(p, "mu_shared", "the MA-TIRF stacks share one mu, the largest of their own (mu_own): the depth reads the ratios between angles, so each angle is smoothed alike. The stack likeliest to need the largest is solved first; a stack whose residual at that mu already reaches its target has its own mu below it and is not searched further (mu_own_at_most)");
+		cJSON_AddStringToObject(p, "mu_shared", "the MA-TIRF stacks share one mu, the largest of their own (mu_own): the depth reads the ratios between angles, so each angle is smoothed alike");
 }
 
 cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c, const struct c0_matirf_conf *m,

@@ -344,7 +344,6 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 			continue;
 		}
 		res.target2 = first.target2, res.floor2 = first.floor2, res.dp_status = first.dp_status, res.tiles_met = first.tiles_met;
-		res.probed = first.probed;
 		res.solves += first.solves, res.cg_iters += first.cg_iters, res.seconds += first.seconds;
 		c0_intensity_result_free(&r->ires[i]);
 		r->ires[i] = res;
@@ -366,61 +365,6 @@ static void solve_one(struct c0_result *r, const struct c0_intensity_conf *ic, i
 		sts[i] = intensity_compact(r, i);
 	if (sts[i])
 		snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
-}
-
-/* The share[] stack whose mu is likely the largest: the least contrast of
- * its mean (variance over the pixels) over the noise variance of a mean.
- * The dimmest angle needs the most smoothing. Only which stack is solved
- * first depends on it, not the results. */
-static int likely_largest(int n, const int *share, const double *const *mean, const double *s2, const int64_t *frames,
-			  size_t N)
-{
-	int best = -1;
-	double least = INFINITY;
-	for (int i = 0; i < n; i++) {
-		if (!share[i])
-			continue;
-		double m = 0, v = 0;
-		for (size_t p = 0; p < N; p++)
-			m += mean[i][p];
-		m /= (double)N;
-		for (size_t p = 0; p < N; p++)
-			v += (mean[i][p] - m) * (mean[i][p] - m);
-		const double c = v / (double)N / fmax(1e-300, s2[i] / (double)frames[i]);
-		if (best < 0 || c < least)
-			best = i, least = c;
-	}
-	return best;
-}
-
-/* The stacks which[] (NULL: all) solved, side by side when each is one
- * tile. The share[] stacks will share the largest mu: the likeliest largest
- * is solved first, and the others probe its mu (stages/intensity.h,
- * mu_probe), which spares the search of each whose own mu lies at or below
- * it (share_mu then finds them solved at that mu already). share NULL: each
- * its own. */
-static void solve_stacks(struct c0_result *r, const struct c0_intensity_conf *ic, const int *which, const int *share,
-			 const double *const *mean, int H, int W, const int64_t *frames, const double *s2, int corrected,
-			 int *sts, char (*msg)[256], struct c0_progress *pr, int *done)
-{
-	const int n = r->n, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
-	const int first = share ? likely_largest(n, share, mean, s2, frames, (size_t)H * W) : -1;
-	struct c0_intensity_conf c = *ic;
-	if (first >= 0) {
-		solve_one(r, ic, first, mean[first], H, W, frames, s2, corrected, sts, msg);
-		if (!sts[first] && r->ires[first].dp_status == 0)
-			c.mu_probe = r->ires[first].mu;
-		c0_progress_update(pr, ++*done);
-	}
-	const int bad = first >= 0 && sts[first];
-#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile && !bad)
-	for (int i = 0; i < n; i++) {
-		if (bad || i == first || (which && !which[i]))
-			continue;
-		solve_one(r, share && share[i] ? &c : ic, i, mean[i], H, W, frames, s2, corrected, sts, msg);
-#pragma omp critical(c0_intensity_progress)
-		c0_progress_update(pr, ++*done);
-	}
 }
 
 /* Stack i's intensity on the mask's pixels (raster order): xs[i], or its
@@ -542,21 +486,18 @@ static int common_pattern(struct c0_result *r, const struct c0_intensity_conf *i
 static void solve_again(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, double *const *fixed,
 			const int64_t *frames, const double *s2, int corrected, double *mu_own, int *sts, char (*msg)[256])
 {
-	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx;
-	int bad = 0, again[C0_MAX_STACKS], done = 0;
+	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
+	int bad = 0;
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile)
 	for (int i = 0; i < n; i++) {
-		again[i] = fixed[i] != NULL;
 		if (!fixed[i])
 			continue;
 		c0_intensity_result_free(&r->ires[i]);
 		free(r->xs[i]), r->xs[i] = NULL;
 		if (corrected)
 			free(r->corrected[i]), r->corrected[i] = NULL;
+		solve_one(r, ic, i, fixed[i], H, W, frames, s2, corrected, sts, msg);
 	}
-	struct c0_progress pr;
-	c0_progress_begin(&pr, "intensity (without the pattern)", n);
-	solve_stacks(r, ic, again, again, (const double *const *)fixed, H, W, frames, s2, corrected, sts, msg, &pr, &done);
-	c0_progress_end(&pr);
 	for (int i = 0; i < n; i++)
 		bad |= sts[i];
 	if (!bad)
@@ -577,7 +518,7 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 	const int n = r->n;
 	double *own[C0_MAX_STACKS] = { 0 }, s2[C0_MAX_STACKS], *fixed[C0_MAX_STACKS] = { 0 };
 	const double *mean[C0_MAX_STACKS];
-	const int H = f[0].height, W = f[0].width;
+	const int H = f[0].height, W = f[0].width, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
 	struct c0_progress pr;
 	int done = 0;
 	c0_progress_begin(&pr, "intensity (stacks)", 2 * n);
@@ -594,11 +535,16 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 	int bad = 0;
 	for (int i = 0; i < n; i++)
 		bad |= sts[i], mean[i] = known[i] ? known[i]->mean : own[i];
-	if (!bad)
-		solve_stacks(r, ic, NULL, share, mean, H, W, frames, s2, corrected, sts, msg, &pr, &done);
-	for (int i = 0; !bad && i < n; i++)   /* kept for mean_qNN.tif and the report's error map */
-		for (size_t p = 0; p < (size_t)H * W; p++)
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile && !bad)
+	for (int i = 0; i < n; i++) {
+		if (bad)
+			continue;
+		solve_one(r, ic, i, mean[i], H, W, frames, s2, corrected, sts, msg);
+		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
 			r->mean[(size_t)i * H * W + p] = (float)mean[i][p];
+#pragma omp critical(c0_intensity_progress)
+		c0_progress_update(&pr, ++done);
+	}
 	c0_progress_end(&pr);
 	for (int i = 0; i < n; i++)
 		bad |= sts[i];

@@ -9,6 +9,7 @@
 #include "core/mem.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -25,8 +26,6 @@ int c0_intensity_check(const struct c0_intensity_conf *c)
 		return c0_fail(C0_EINVAL, "graph_radius %g: must be in [1, 4] fine pixels", c->graph_radius);
 	if (c->tile < 0)
 		return c0_fail(C0_EINVAL, "tile %d: must be >= 0 camera pixels (0: the whole image)", c->tile);
-	if (!(c->mu_probe >= 0 && isfinite(c->mu_probe)))
-		return c0_fail(C0_EINVAL, "mu_probe %g: must be finite and >= 0", c->mu_probe);
 	return C0_OK;
 }
 
@@ -230,22 +229,6 @@ static double discrepancy(void *ctx, double t)
 	return d->hi - d->lo <= DP_LOGMU_TOL ? 0 : f;   /* the crossing is known to 1 % in mu: done */
 }
 
-/* The solve at mu (cold, as a fixed mu's): 1 when its residual reaches the
- * target, so that the principle's mu, the residual rising with mu, is at or
- * below it (p->mu = mu, sol its solution); else 0, the solution copied to
- * keep (unless NULL) and sol back at the start */
-static int probe(struct prob *p, double mu, double target, double *sol, double *keep, int *st)
-{
-	p->mu = mu;
-	start(p, sol);
-	if ((*st = solve(p, sol)) || residual2(p, sol) >= target)
-		return 1;
-	if (keep)
-		memcpy(keep, sol, sizeof *sol * (size_t)(p->n + p->nb));
-	start(p, sol);
-	return 0;
-}
-
 /* No support pixel (a tile off the sample): x = 0 and the background alone,
  * min 1/2 ||b - ybar||^2 + beta/2 ||L b||^2, solved exactly (b >= 0 is not
  * held: a negative b is clipped). */
@@ -277,7 +260,7 @@ static int background_only(const struct c0_intensity_conf *c, const double *ybar
 }
 
 static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
-		       const uint8_t *mask, double sigma2, int keep, struct c0_intensity_result *res);
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
 static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
 
@@ -292,7 +275,7 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 	if (c->mu == 0 && !(sigma2 > 0))
 		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give mu)", sigma2);
 	st = c->tile > 0 && c->tile < (Ny > Nx ? Ny : Nx) ? solve_tiled(c, ybar, Ny, Nx, T, mask, sigma2, res)
-							    : solve_whole(c, ybar, Ny, Nx, T, mask, sigma2, 0, res);
+							    : solve_whole(c, ybar, Ny, Nx, T, mask, sigma2, res);
 	res->seconds = c0_now() - t0;
 	if (st)
 		c0_intensity_result_free(res);
@@ -301,137 +284,76 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 
 /* The tiles' windows overlap by two PSF lags (6 sigma each): the PSF and
  * the background's smoothing length (beta^(1/4) ~ 3.2 coarse pixels) fit. */
-/* Tile t's window solved, its interior pasted into res; s: the tile's
- * interior share of the window (0: background only), its own mu (with a
- * probe: at most), residual2, target2, floor2, status, solves, CG steps,
- * probed */
-#define TILE_STATS 9
-static int solve_tile(const struct c0_intensity_conf *c, const struct c0_tile *t, const double *ybar, int Nx, int64_t T,
-		      const uint8_t *mask, double sigma2, int paste, struct c0_intensity_result *res, double *s)
-{
-	const int r = c->grid.srf, Lx = Nx * r;
-	const size_t nw = (size_t)t->h * t->w, Lw = nw * r * r;
-	double *y = malloc(nw * sizeof *y);
-	uint8_t *m = malloc(Lw);
-	float *wt = c->weight ? malloc(nw * sizeof *wt) : NULL;
-	struct c0_intensity_result tr;
-	memset(&tr, 0, sizeof tr);
-	int st = y && m && (wt || !c->weight) ? C0_OK : C0_ENOMEM, any = 0;
-	for (int a = 0; !st && a < t->h; a++)
-		memcpy(y + (size_t)a * t->w, ybar + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *y);
-	for (int a = 0; !st && wt && a < t->h; a++)
-		memcpy(wt + (size_t)a * t->w, c->weight + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *wt);
-	struct c0_intensity_conf tc = *c;   /* this tile's weights */
-	tc.weight = wt;
-	for (int a = 0; !st && a < t->h * r; a++) {
-		memcpy(m + (size_t)a * t->w * r, mask + (size_t)(t->y0 * r + a) * Lx + (size_t)t->x0 * r, (size_t)t->w * r);
-		for (int b = 0; b < t->w * r && !any; b++)
-			any = m[(size_t)a * t->w * r + b];
-	}
-	if (!st)
-		st = any ? solve_whole(&tc, y, t->h, t->w, T, m, sigma2, 1, &tr) : background_only(&tc, y, t->h, t->w, &tr);
-	if (!st && paste) {
-		const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
-		for (int a = 0; a < t->ih * r; a++)
-			memcpy(res->x + (size_t)(t->iy0 * r + a) * Lx + (size_t)t->ix0 * r,
-			       tr.x + (size_t)(oy * r + a) * tr.Lx + (size_t)ox * r, (size_t)t->iw * r * sizeof *res->x);
-		for (int a = 0; a < t->ih; a++)
-			memcpy(res->b + (size_t)(t->iy0 + a) * Nx + t->ix0, tr.b + (size_t)(oy + a) * t->w + ox,
-			       (size_t)t->iw * sizeof *res->b);
-	}
-	if (!st) {
-		s[0] = any ? (double)t->ih * t->iw / (double)nw : 0;
-		s[1] = tr.mu, s[2] = tr.residual2, s[3] = tr.target2, s[4] = tr.floor2;
-		s[5] = tr.dp_status, s[6] = tr.solves, s[7] = tr.cg_iters, s[8] = tr.probed;
-		if (tr.probed == 2)
-			s[1] = tr.mu_own;   /* the tile's own, above the probe */
-	}
-	c0_intensity_result_free(&tr);
-	free(y), free(m), free(wt);
-	return st;
-}
-
-/* The tiles k with again[k] (all when again is NULL), one per thread: each
- * solve then runs serially, so a tile's numbers do not depend on the thread
- * count. paste: their solutions into res and their stats into ts; else
- * their mu alone. Their counts of solves and CG steps add to acc's. */
-static int solve_tiles(const struct c0_intensity_conf *c, const struct c0_tiling *tl, const uint8_t *again, int paste,
-		       const double *ybar, int Nx, int64_t T, const uint8_t *mask, double sigma2,
-		       struct c0_intensity_result *res, double *ts, double *acc)
-{
-	struct c0_first_fail fail = { 0 };
-#pragma omp parallel for schedule(dynamic, 1)
-	for (int k = 0; k < tl->n; k++) {
-		if (again && !again[k])
-			continue;
-		double *s = ts + TILE_STATS * (size_t)k, n[TILE_STATS] = { 0 };
-		const int st = solve_tile(c, &tl->t[k], ybar, Nx, T, mask, sigma2, paste, res, n);
-		acc[2 * k] += n[6], acc[2 * k + 1] += n[7];
-		if (paste)
-			memcpy(s, n, sizeof n), s[6] = s[7] = 0;
-		else
-			s[1] = n[1];
-		c0_first_fail_note(&fail, st);
-	}
-	return c0_first_fail_raise(&fail);
-}
-
-/* With a probe every tile holds the probe's solution and its own mu or a
- * bound. The stack is probed when the tiles' mean mu is at most the probe:
- * with the bounds; else with the bounded tiles' own mu searched for; else
- * it is solved again without the probe, as without it. */
-static int settle_probe(const struct c0_intensity_conf *c, const struct c0_tiling *tl, const double *ybar, int Nx,
-			int64_t T, const uint8_t *mask, double sigma2, struct c0_intensity_result *res, double *ts,
-			double *acc, uint8_t *again)
-{
-	struct c0_intensity_conf cc = *c;
-	cc.mu_probe = 0;
-	int st = C0_OK;
-	for (int pass = 0; !st && pass < 3; pass++) {
-		double lb = 0, wb = 0;
-		for (int k = 0; k < tl->n; k++) {
-			const double *s = ts + TILE_STATS * (size_t)k;
-			again[k] = pass == 0 ? s[0] > 0 && s[8] == 1 : 1;
-			if (s[0] > 0)
-				lb += tl->t[k].ih * tl->t[k].iw * log(s[1]), wb += tl->t[k].ih * tl->t[k].iw;
-		}
-		if ((res->probed = pass < 2 && wb > 0 && exp(lb / wb) <= c->mu_probe * (1 + 1e-12)) || pass == 2)
-			break;
-		st = solve_tiles(&cc, tl, again, pass == 1, ybar, Nx, T, mask, sigma2, res, ts, acc);
-	}
-	return st;
-}
-
 static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
 {
-	const int r = c->grid.srf, halo = 2 * c0_grid_lag(&c->grid, 0);
+	const int r = c->grid.srf, Lx = Nx * r, halo = 2 * c0_grid_lag(&c->grid, 0);
 	struct c0_tiling tl;
 	int st = c0_tiling_make(Ny, Nx, c->tile, halo, &tl);
 	if (st)
 		return st;
-	res->Ly = Ny * r, res->Lx = Nx * r, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2, res->tiles = tl.n;
+	res->Ly = Ny * r, res->Lx = Lx, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2, res->tiles = tl.n;
 	res->x = c0_alloc((size_t)Ny * Nx * r * r, sizeof *res->x);
 	res->b = c0_alloc((size_t)Ny * Nx, sizeof *res->b);
-	double *ts = c0_alloc(TILE_STATS * (size_t)tl.n, sizeof *ts), *acc = c0_alloc(2 * (size_t)tl.n, sizeof *acc);
-	uint8_t *again = c0_alloc((size_t)tl.n, 1);
-	if (!res->x || !res->b || !ts || !acc || !again) {
-		free(ts), free(acc), free(again);
+	double *ts = c0_alloc(8 * (size_t)tl.n, sizeof *ts);   /* per tile: weight, mu, residual2, target2, floor2, status, solves, cg */
+	if (!res->x || !res->b || !ts) {
+		free(ts);
 		c0_tiling_free(&tl);
 		return C0_ENOMEM;
 	}
 	struct c0_intensity_conf cc = *c;
 	cc.tile = 0;
-	st = solve_tiles(&cc, &tl, NULL, 1, ybar, Nx, T, mask, sigma2, res, ts, acc);
-	if (!st && c->mu_probe > 0)
-		st = settle_probe(&cc, &tl, ybar, Nx, T, mask, sigma2, res, ts, acc, again);
+	struct c0_first_fail fail = { 0 };
+	/* one tile per thread: each solve then runs serially, so a tile's
+	 * numbers do not depend on the thread count */
+#pragma omp parallel for schedule(dynamic, 1)
+	for (int k = 0; k < tl.n; k++) {
+		const struct c0_tile *t = &tl.t[k];
+		const size_t nw = (size_t)t->h * t->w, Lw = nw * r * r;
+		double *y = malloc(nw * sizeof *y);
+		uint8_t *m = malloc(Lw);
+		float *wt = c->weight ? malloc(nw * sizeof *wt) : NULL;
+		struct c0_intensity_result tr;
+		memset(&tr, 0, sizeof tr);
+		int tst = y && m && (wt || !c->weight) ? C0_OK : C0_ENOMEM, any = 0;
+		for (int a = 0; !tst && a < t->h; a++)
+			memcpy(y + (size_t)a * t->w, ybar + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *y);
+		for (int a = 0; !tst && wt && a < t->h; a++)
+			memcpy(wt + (size_t)a * t->w, c->weight + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *wt);
+		struct c0_intensity_conf tc = cc;   /* this tile's weights */
+		tc.weight = wt;
+		for (int a = 0; !tst && a < t->h * r; a++) {
+			memcpy(m + (size_t)a * t->w * r, mask + (size_t)(t->y0 * r + a) * Lx + (size_t)t->x0 * r, (size_t)t->w * r);
+			for (int b = 0; b < t->w * r && !any; b++)
+				any = m[(size_t)a * t->w * r + b];
+		}
+		if (!tst)
+			tst = any ? solve_whole(&tc, y, t->h, t->w, T, m, sigma2, &tr) : background_only(&tc, y, t->h, t->w, &tr);
+		if (!tst) {
+			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+			for (int a = 0; a < t->ih * r; a++)
+				memcpy(res->x + (size_t)(t->iy0 * r + a) * Lx + (size_t)t->ix0 * r,
+				       tr.x + (size_t)(oy * r + a) * tr.Lx + (size_t)ox * r, (size_t)t->iw * r * sizeof *res->x);
+			for (int a = 0; a < t->ih; a++)
+				memcpy(res->b + (size_t)(t->iy0 + a) * Nx + t->ix0, tr.b + (size_t)(oy + a) * t->w + ox,
+				       (size_t)t->iw * sizeof *res->b);
+			double *s = ts + 8 * (size_t)k;
+			s[0] = any ? (double)t->ih * t->iw / (double)nw : 0;   /* the interior's share of the window */
+			s[1] = tr.mu, s[2] = tr.residual2, s[3] = tr.target2, s[4] = tr.floor2;
+			s[5] = tr.dp_status, s[6] = tr.solves, s[7] = tr.cg_iters;
+		}
+		c0_first_fail_note(&fail, tst);
+		c0_intensity_result_free(&tr);
+		free(y), free(m), free(wt);
+	}
+	st = c0_first_fail_raise(&fail);
 	/* in tile order: the same sums whatever the schedule */
 	double lmu = 0, wmu = 0;
 	res->dp_status = c->mu > 0 ? -1 : 0;
 	for (int k = 0; !st && k < tl.n; k++) {
-		const double *s = ts + TILE_STATS * (size_t)k;
+		const double *s = ts + 8 * (size_t)k;
 		const struct c0_tile *t = &tl.t[k];
-		res->solves += (int)acc[2 * k], res->cg_iters += (int)acc[2 * k + 1];
+		res->solves += (int)s[6], res->cg_iters += (int)s[7];
 		if (!(s[0] > 0))
 			continue;   /* background only: no mu */
 		lmu += t->ih * t->iw * log(s[1]), wmu += t->ih * t->iw;
@@ -440,17 +362,14 @@ static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, in
 		if (res->dp_status == 0 && s[5] > 0)
 			res->dp_status = (int)s[5];   /* the first tile whose principle failed says how */
 	}
-	res->mu = res->probed ? c->mu_probe : wmu > 0 ? exp(lmu / wmu) : 0;
-	free(ts), free(acc), free(again);
+	res->mu = wmu > 0 ? exp(lmu / wmu) : 0;
+	free(ts);
 	c0_tiling_free(&tl);
 	return st;
 }
 
-/* keep: where the probe's residual falls short, the solution stays the
- * probe's (probed 2; the search gives mu_own alone), for a tile whose stack
- * may still be below the probe as a whole */
 static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
-		       const uint8_t *mask, double sigma2, int keep, struct c0_intensity_result *res)
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
 {
 	int st;
 	struct prob p = { .c = c, .ybar = ybar, .yw = ybar, .NN = Ny * Nx };
@@ -515,26 +434,15 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 			if (st)
 				goto out;
 		}
-		double *psol = c->mu_probe > 0 && keep ? c0_alloc(nv, sizeof *psol) : NULL;
-		if (c->mu_probe > 0 && keep && !psol)
-			st = C0_ENOMEM;
-		else if (c->mu_probe > 0)
-			res->probed = probe(&p, c->mu_probe, res->floor2 + res->target2, sol, psol, &st);
-		if (!st && !res->probed) {
-			struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0, fsol };
-			double t;
-			int evals;
-			res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
-			st = d.fail ? C0_ENOMEM : C0_OK;
-			if (!st && psol) {   /* the search's mu, the probe's solution */
-				res->mu_own = exp(t), res->probed = 2, p.mu = c->mu_probe;
-				memcpy(sol, psol, sizeof *sol * nv);
-			} else if (!st && fabs(p.mu - exp(t)) > 1e-12 * p.mu) {   /* make sol belong to the returned mu */
-				p.mu = exp(t);
-				st = solve(&p, sol);
-			}
+		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0, fsol };
+		double t;
+		int evals;
+		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
+		st = d.fail ? C0_ENOMEM : C0_OK;
+		if (!st && fabs(p.mu - exp(t)) > 1e-12 * p.mu) {   /* make sol belong to the returned mu */
+			p.mu = exp(t);
+			st = solve(&p, sol);
 		}
-		free(psol);
 	}
 	if (st)
 		goto out;

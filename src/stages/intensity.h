@@ -38,13 +38,8 @@ struct c0_intensity_conf {
 				    * target stays; the camera's noisy pixels weigh less) */
 	int common_pattern;        /* 0; 1: the whole method takes the MA-TIRF stacks' common fixed pattern
 				    * out of their means when no offset map is given (stages/pattern.h) */
-	double mu_probe;           /* 0; > 0 with the principle (mu 0): first solve at mu_probe, and where the
-				    * residual there already reaches the target (the principle's mu is at
-				    * or below it) return that solve, probed = 1, without the search; else
-				    * the principle's own result, as without it. For stacks that will share
-				    * the largest mu: only the largest needs its own. */
 };
-#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 100, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL, 0, 0 }
+#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 100, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL, 0 }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {
@@ -56,9 +51,6 @@ struct c0_intensity_result {
 	int dp_status;             /* enum c0_root_status; 0 = discrepancy met */
 	int solves, cg_iters, active_rounds;
 	int tiles, tiles_met;      /* tiles solved (1: the whole image), and those whose principle was met */
-	int probed;                /* 1: the solve at mu_probe (mu = mu_probe), the principle's mu at or below it;
-				    * 2 (a tile alone): the solve at mu_probe, the principle's mu mu_own above it */
-	double mu_own;             /* probed 2 */
 	double seconds;
 };
 
@@ -66,10 +58,7 @@ int c0_intensity_check(const struct c0_intensity_conf *c);
 /* With tiles (c->tile smaller than the image): the tile grid of
  * stages/tiles.h, tiles solved side by side and their interiors kept; mu is
  * then the interior-weighted geometric mean of the tiles' mu, and residual2,
- * target2 and floor2 the tiles' values scaled to their interiors and summed;
- * with mu_probe every tile is solved at mu_probe first, and the result is
- * probed when the mean of the tiles' own mu (those at or below mu_probe
- * counted at it) is at most mu_probe; else solved again without it.
+ * target2 and floor2 the tiles' values scaled to their interiors and summed.
  * A window without support pixels solves only the background. */
 int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);

@@ -109,12 +109,9 @@ def test_sparse_blinking(tmp):
     rep, d = run(tmp, "sparse1_run", data, sim, stacks)
     if rep is None:
         return
-    mus = [i["mu"] for i in rep["intensity"]]
-    own = [i.get("mu_own", i.get("mu_own_at_most")) for i in rep["intensity"]]
-    probed = ["mu_own_at_most" in i for i in rep["intensity"]]
+    mus, own = [i["mu"] for i in rep["intensity"]], [i["mu_own"] for i in rep["intensity"]]
     check(all(abs(m / max(own) - 1) < 1e-9 for m in mus), "one mu for the MA-TIRF stacks, the largest own (%s, own %s)" % (mus, own))
-    check(probed.count(False) == 1 and all(p for p in probed[:-1]),
-          "the last (dimmest) stack searched for its own mu, the others only probed it (%s)" % probed)
+    check(max(own) > 5 * min(own), "the stacks' own mu differ (%s): the data where sharing matters" % own)
     med, sg = d["median_abs_error_nm"], d["median_signed_error_nm"]
     out, r = os.path.join(tmp, "sparse1_run"), sim["parameters"]["srf"]
     zt, z = tifffile.imread(os.path.join(data, "truth_depth.tif")), tifffile.imread(os.path.join(out, "depth.tif"))
