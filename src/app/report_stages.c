@@ -96,7 +96,7 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 		: "mu makes the residual equal to the noise level nu^2 H W sigma2 / T; on data whose model error exceeds the noise this is never met and mu stays at its smallest value");
 	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
 	if (mu_own)
-		cJSON_AddStringToObject(p, "mu_shared", "the MA-TIRF stacks share one mu, the largest of their own (mu_own): the depth reads the ratios between angles, so each angle is smoothed alike");
+		cJSON_AddStringToObject(p, "mu_shared", "the MA-TIRF stacks share one mu, the geometric mean of their own (mu_own), or the largest where the camera's fixed pattern is in the means (an offset map given, or the stacks' common pattern found): the depth reads the ratios between angles, so each angle is smoothed alike");
 }
 
 cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
