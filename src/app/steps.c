@@ -317,11 +317,11 @@ static int intensity_compact(struct c0_result *r, int i)
  * larger (docs/parameters.md, "Sparse blinking"). The shared one is the
  * geometric mean of theirs: the largest, the one the weakest stack needs,
  * over-smooths the others where the steepest angle is dim and noisy (EMCCD
- * sparse blinking, 200 frames: 26 against 21 nm). With a fixed pattern of
- * the camera in the means (largest: an offset map given, or the stacks'
- * common pattern found), the largest: intensities smoothed less take in
- * more of what stays in every frame (docs/parameters.md, "Which mu the
- * stacks share"). The stacks are solved again at that mu; the discrepancy
+ * sparse blinking, 200 frames: 26 against 21 nm). largest: the camera's
+ * fixed pattern is in the means (an offset map given, or the stacks'
+ * common pattern found), and intensities smoothed less would take in more
+ * of what stays in every frame (docs/parameters.md, "Which mu the stacks
+ * share"). The stacks are solved again at that mu; the discrepancy
  * figures of their own solve stay in the report beside their own mu
  * (mu_own). */
 static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, const double *const *mean,
@@ -333,9 +333,8 @@ static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, co
 	int m = 0;
 	for (int i = 0; i < n; i++) {
 		mu_own[i] = r->ires[i].mu;
-		if (share[i] && r->ires[i].dp_status == 0) {
+		if (share[i] && r->ires[i].dp_status == 0)
 			mu = fmax(mu, r->ires[i].mu), lg += log(r->ires[i].mu), m++;
-		}
 	}
 	if (!(mu > 0))
 		return;

@@ -5,6 +5,7 @@ refusals, and the calibrated run against the uncalibrated one.
 usage: test_scmos.py COL0RME [full|quick]   (quick: no accuracy run, for the sanitizer build)
 """
 import json
+import math
 import os
 import subprocess
 import sys
@@ -135,6 +136,11 @@ def test_accuracy(tmp):
           "common pattern: depth error %.1f nm without maps (bar 14.6), %.1f nm without the pattern" % (res["plain"][1], res["off"][1]))
     check(res["plain"][0] == res["off"][0], "common pattern: the support is not touched (Jaccard %.3f, %.3f)" % (res["plain"][0], res["off"][0]))
     check("common_pattern" not in rep["maps"] and "common_pattern" not in rep["off"], "common pattern: not evaluated with an offset map or off")
+    # the shared mu: the largest own where the camera's fixed pattern is in the means (the pattern found,
+    # or an offset map given), else their geometric mean (docs/parameters.md, "Which mu the stacks share")
+    for name, rule in (("plain", max), ("maps", max), ("off", lambda v: math.exp(sum(map(math.log, v)) / len(v)))):
+        mus, own = [i["mu"] for i in rep[name]["intensity"]], [i["mu_own"] for i in rep[name]["intensity"]]
+        check(all(abs(m / rule(own) - 1) < 1e-9 for m in mus), "shared mu (%s): %s, own %s" % (name, mus, own))
 
 
 def test_drift_pattern(tmp):
