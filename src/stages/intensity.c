@@ -104,10 +104,10 @@ static void normal(void *ctx, const double *in, double *out)
 static void precond(void *ctx, const double *in, double *out)
 {
 	struct prob *p = ctx;
-	const int n = p->n, nb = p->nb;
-	for (int i = 0; i < n + nb; i++)
+	const int n = p->n, nb = p->nb, smooth = nb == p->NN;
+	for (int i = 0; i < n + (smooth ? 0 : nb); i++)
 		out[i] = p->dinv[i] * in[i];
-	if (nb != p->NN)
+	if (!smooth)
 		return;
 	for (int i = 0; i < nb; i++)
 		p->lb[i] = p->fixed[n + i] ? 0 : in[n + i];
