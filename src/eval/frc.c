@@ -1,6 +1,7 @@
 #include "eval/frc.h"
 #include "core/c0math.h"
 #include "core/err.h"
+#include "core/fftw_plan.h"
 #include "core/mem.h"
 
 #include <complex.h>
@@ -87,10 +88,7 @@ int c0_frc_compute(const float *a, const float *b, int H, int W, struct c0_frc *
 			break;
 		}
 out:
-	if (p) {
-#pragma omp critical(c0_fftw_plan)   /* destroying a plan is no more thread-safe than planning */
-		fftw_destroy_plan(p);
-	}
+	c0_fftw_destroy(p);
 	fftw_free(re), fftw_free(fa), fftw_free(fb);
 	free(num), free(da), free(db);
 	if (st)

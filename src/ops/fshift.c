@@ -1,6 +1,7 @@
 #include "ops/fshift.h"
 #include "core/c0math.h"
 #include "core/err.h"
+#include "core/fftw_plan.h"
 #include "core/mem.h"
 
 #include <complex.h>
@@ -48,13 +49,7 @@ void c0_fshift_free(struct c0_fshift *s)
 		return;
 	for (int i = 0; i < s->npool; i++)
 		work_free(&s->pool[i]);
-#pragma omp critical(c0_fftw_plan)   /* destroying a plan is no more thread-safe than planning */
-	{
-		if (s->rf) fftw_destroy_plan(s->rf);
-		if (s->rb) fftw_destroy_plan(s->rb);
-		if (s->cf) fftw_destroy_plan(s->cf);
-		if (s->cb) fftw_destroy_plan(s->cb);
-	}
+	c0_fftw_destroy(s->rf), c0_fftw_destroy(s->rb), c0_fftw_destroy(s->cf), c0_fftw_destroy(s->cb);
 	free(s);
 }
 

@@ -1,6 +1,7 @@
 #include "ops/neumann.h"
 #include "core/c0math.h"
 #include "core/err.h"
+#include "core/fftw_plan.h"
 #include "core/mem.h"
 
 #include <complex.h>
@@ -54,11 +55,7 @@ void c0_neumann_free(struct c0_neumann *s)
 {
 	if (!s)
 		return;
-#pragma omp critical(c0_fftw_plan)   /* as planning, destroying a plan is not thread-safe */
-	{
-		if (s->fwd) fftw_destroy_plan(s->fwd);
-		if (s->inv) fftw_destroy_plan(s->inv);
-	}
+	c0_fftw_destroy(s->fwd), c0_fftw_destroy(s->inv);
 	fftw_free(s->work), fftw_free(s->spec), free(s->ly), free(s->lx), free(s->scale), free(s);
 }
 

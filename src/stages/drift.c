@@ -4,6 +4,7 @@
 #include "core/c0math.h"
 #include "core/clock.h"
 #include "core/err.h"
+#include "core/fftw_plan.h"
 #include "core/mem.h"
 #include "core/progress.h"
 
@@ -69,11 +70,7 @@ struct xcorr {
 
 static void xcorr_free(struct xcorr *x)
 {
-#pragma omp critical(c0_fftw_plan)   /* destroying a plan is no more thread-safe than planning */
-	{
-		if (x->f) fftw_destroy_plan(x->f);
-		if (x->b) fftw_destroy_plan(x->b);
-	}
+	c0_fftw_destroy(x->f), c0_fftw_destroy(x->b);
 	if (!x->borrowed)
 		free(x->win), free(x->lp), fftw_free(x->ref);
 	fftw_free(x->re), fftw_free(x->sp), fftw_free(x->xs);
