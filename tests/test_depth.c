@@ -13,6 +13,7 @@
 #include "eval/metrics.h"
 #include "core/rng.h"
 #include "core/err.h"
+#include "core/c0math.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -165,7 +166,7 @@ static void test_pool_sparse(void)
 		const float *xd[NQ] = { x[0], x[1], x[2] }, *xl[NQ] = { xs[0], xs[1], xs[2] };
 		float *od[NQ] = { dense[0], dense[1], dense[2] }, *ol[NQ] = { out[0], out[1], out[2] };
 		CHECK(c0_pool_guided(xd, NQ, m, guide, 30, NY, NX, h, od) == C0_OK);
-		CHECK(c0_pool_guided_at(xl, NQ, &pl, gs, 30, h, ol) == C0_OK);
+		CHECK(c0_pool_guided_at(xl, NQ, &pl, gs, 30, NULL, 0, h, ol) == C0_OK);
 		for (int q = 0; q < NQ; q++)
 			for (size_t k = 0; k < M; k++)
 				bad += memcmp(&out[q][k], &dense[q][pl.pix[k]], sizeof(float)) != 0;
@@ -209,6 +210,72 @@ static void test_pool_sparse(void)
 	}
 	CHECK(memcmp(whole, band, sizeof(float) * NP) == 0);
 	free(whole), free(band);
+}
+
+/* The strip along the structure: each pixel's normal from its neighbours'
+ * second moments, and the strip's sums, against a brute-force pass over
+ * every pair of pixels; on two parallel lines 4 pixels apart at any
+ * direction the normal is the lines' own and the strip never reaches the
+ * other line, whatever the guide. */
+static void test_pool_strip(void)
+{
+	enum { NY = 40, NX = 40, NP = NY * NX, NQ = 2, R = 3, H = 8 };
+	static uint8_t m[NP];
+	static float xs[NQ][NP], out[NQ][NP], nrm[2 * NP], gs[NP];
+	int bad = 0, crossed = 0;
+	for (int a = 0; a < 12; a++) {
+		const double t = a * C0_PI / 12, ux = cos(t), uy = sin(t);
+		memset(m, 0, sizeof m);
+		for (int line = 0; line < 2; line++)
+			for (double s = -30; s <= 30; s += 0.25) {
+				const int y = (int)lround(20 + s * uy - 2 * (2 * line - 1) * ux);
+				const int xx = (int)lround(20 + s * ux + 2 * (2 * line - 1) * uy);
+				if (y >= 0 && y < NY && xx >= 0 && xx < NX)
+					m[y * NX + xx] = 1 + line;
+			}
+		uint8_t mb[NP];
+		for (int i = 0; i < NP; i++)
+			mb[i] = m[i] != 0;
+		struct c0_pixlist pl;
+		CHECK(c0_pixlist_from_mask(mb, NY, NX, &pl) == C0_OK);
+		for (size_t k = 0; k < pl.M; k++) {
+			gs[k] = 0;   /* one depth everywhere: only the strip keeps the lines apart */
+			for (int q = 0; q < NQ; q++)
+				xs[q][k] = m[pl.pix[k]] == 1 ? (float)(1 + q) : 100.0f;
+		}
+		c0_pixlist_normals(&pl, R, nrm);
+		const float *xl[NQ] = { xs[0], xs[1] };
+		float *ol[NQ] = { out[0], out[1] };
+		CHECK(c0_pool_guided_at(xl, NQ, &pl, gs, 50, nrm, 1.0, H, ol) == C0_OK);
+		for (size_t k = 0; k < pl.M; k++) {
+			const int y = pl.pix[k] / NX, xx = pl.pix[k] % NX;
+			double sxx = 0, syy = 0, sxy = 0, acc[NQ] = { 0 };
+			for (size_t o = 0; o < pl.M; o++) {
+				const int dy = pl.pix[o] / NX - y, dx = pl.pix[o] % NX - xx;
+				if (dx * dx + dy * dy <= R * R)
+					sxx += dx * dx, syy += dy * dy, sxy += dx * dy;
+			}
+			const double al = 0.5 * atan2(2 * sxy, sxx - syy), nx = -sin(al), ny = cos(al);
+			bad += fabs(nrm[2 * k] - nx) > 1e-6 || fabs(nrm[2 * k + 1] - ny) > 1e-6;
+			for (size_t o = 0; o < pl.M; o++) {
+				const int dy = pl.pix[o] / NX - y, dx = pl.pix[o] % NX - xx;
+				if (abs(dx) <= H && abs(dy) <= H && fabs(nrm[2 * k] * dx + nrm[2 * k + 1] * dy) <= 1.0)
+					for (int q = 0; q < NQ; q++)
+						acc[q] += xs[q][o];
+			}
+			for (int q = 0; q < NQ; q++)
+				bad += fabs(out[q][k] - acc[q]) > 1e-4 * (1 + acc[q]);
+			/* away from the lines' ends: the normal is the lines' (to 15 deg) and line 1 sums itself alone */
+			const double along = (xx - 20) * ux + (y - 20) * uy;
+			if (m[pl.pix[k]] == 1 && fabs(along) < 12) {
+				bad += fabs(nx * uy - ny * ux) < cos(15 * C0_PI / 180);
+				crossed += out[0][k] >= 100;
+			}
+		}
+		c0_pixlist_free(&pl);
+	}
+	CHECK_MSG(bad == 0, "%d normals or strip sums differ from the brute force or the lines' direction", bad);
+	CHECK_MSG(crossed == 0, "%d pixels of one line summed the other's", crossed);
 }
 
 static void test_depth_error(void)
@@ -386,6 +453,7 @@ int main(void)
 	RUN(test_pool_window);
 	RUN(test_pool_guided);
 	RUN(test_pool_sparse);
+	RUN(test_pool_strip);
 	RUN(test_depth_error);
 	RUN(test_depthcode);
 	RUN(test_depth_fit);

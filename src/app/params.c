@@ -77,7 +77,7 @@ static const struct c0_param table[] = {
 	NUM(background_smooth, C0_P_DOUBLE, "background-smooth", "PX2", "smoothness weight of the estimated background", "100"),
 	NUM(psf_fwhm_nm, C0_P_DOUBLE, "psf-fwhm", "NM", "joint deconvolution: the images are the volume's projections blurred by a Gaussian PSF of this FWHM", "none"),
 	/* depth pooling */
-	NUM(depth_pool_nm, C0_P_DOUBLE, "depth-pool", "NM", "window over which intensities are summed for each pixel's depth (0: off; -1: the default)", "0.75 FWHM"),
+	NUM(depth_pool_nm, C0_P_DOUBLE, "depth-pool", "NM", "window over which intensities are summed for each pixel's depth: its length along the structure when guided (0: off; -1: the default)", "1.75 FWHM"),
 	NUM(depth_pool_range_nm, C0_P_DOUBLE, "depth-pool-range", "NM", "only window pixels whose first depth guess is within NM of the centre's are summed (0: all; -1: the default)", "50"),
 	/* photobleaching */
 	ENUM(bleach, "estimate|off|repeat", "bleach",

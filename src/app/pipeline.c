@@ -64,7 +64,8 @@ static int depth_guide(const struct c0_run_conf *ct, const struct c0_matirf_conf
 /* MA-TIRF's input: the intensities over their bleaching factors, each
  * pooled over a window of about pool_nm (odd, in fine pixels) on the
  * support, over the pixels whose guide depth is within pool_range_nm of the
- * centre's (0: all). All of it on the support's pixels alone (own, pooled:
+ * centre's and that lie on a strip along the centre's structure (range 0:
+ * the whole square window). All of it on the support's pixels alone (own, pooled:
  * nq arrays over pl), the fine grid being a thousand times larger. */
 static int pool_input(struct c0_result *r, const struct c0_run_conf *ct, const int *tirf, const struct c0_stage_confs *s,
 		      const struct c0_pixlist *pl, int h, int hg, float *const *own, float *const *pooled)
@@ -83,11 +84,14 @@ static int pool_input(struct c0_result *r, const struct c0_run_conf *ct, const i
 			st = c0_pool_window_at(own[i], pl, h, pooled[i]);
 		return st;
 	}
-	float *guide = c0_alloc(pl->M ? pl->M : 1, sizeof *guide);
-	st = guide ? depth_guide(ct, &s->matirf, pl, (const float *const *)own, hg, guide) : C0_ENOMEM;
-	if (!st)
-		st = c0_pool_guided_at((const float *const *)own, nq, pl, guide, s->pool_range_nm, h, pooled);
-	free(guide);
+	float *guide = c0_alloc(pl->M ? pl->M : 1, sizeof *guide), *nrm = c0_alloc(pl->M ? 2 * pl->M : 2, sizeof *nrm);
+	st = guide && nrm ? depth_guide(ct, &s->matirf, pl, (const float *const *)own, hg, guide) : C0_ENOMEM;
+	if (!st) {
+		c0_pixlist_normals(pl, C0_DEPTH_NORMAL_PX, nrm);
+		st = c0_pool_guided_at((const float *const *)own, nq, pl, guide, s->pool_range_nm, nrm,
+				       C0_DEPTH_POOL_WIDTH_PX, h, pooled);
+	}
+	free(guide), free(nrm);
 	return st;
 }
 
@@ -126,7 +130,7 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 		free(img[i]), img[i] = NULL;
 	if (!st)
 		c0_report_pool(cJSON_GetObjectItem(r->rep, "matirf"), h > 0 ? 2 * h + 1 : 0, guided ? s->pool_range_nm : 0,
-			       guided ? 2 * hg + 1 : 0);
+			       guided ? C0_DEPTH_POOL_WIDTH_PX : 0, guided ? 2 * hg + 1 : 0);
 	if (!st && ct->baseline)
 		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
 				    s->support.grid.pixel_nm, 1);

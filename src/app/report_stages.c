@@ -253,9 +253,10 @@ void c0_report_run_params(cJSON *rep, const struct c0_run_conf *c, const struct 
 		psf_image(p, c, s);
 }
 
-void c0_report_pool(cJSON *j, int window_px, double range_nm, int guide_window_px)
+void c0_report_pool(cJSON *j, int window_px, double range_nm, double strip_px, int guide_window_px)
 {
 	cJSON_AddNumberToObject(j, "depth_pool_window_px", window_px);
 	cJSON_AddNumberToObject(j, "depth_pool_range_nm", range_nm);
+	cJSON_AddNumberToObject(j, "depth_pool_strip_px", strip_px);
 	cJSON_AddNumberToObject(j, "depth_guide_window_px", guide_window_px);
 }

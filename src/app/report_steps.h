@@ -33,5 +33,6 @@ void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct 
 /* The run's "parameters": mode, grid, pooling, support stacks, PSF image. */
 void c0_report_run_params(cJSON *rep, const struct c0_run_conf *c, const struct c0_stage_confs *s,
 			  const struct c0_result *r, const int *only, int three_d);
-/* The depth pooling's windows (fine pixels; 0: off) in the MA-TIRF section j. */
-void c0_report_pool(cJSON *j, int window_px, double range_nm, int guide_window_px);
+/* The depth pooling's windows (fine pixels; 0: off) in the MA-TIRF section j;
+ * strip_px the guided window's half-width across the structure (0: the whole square). */
+void c0_report_pool(cJSON *j, int window_px, double range_nm, double strip_px, int guide_window_px);

@@ -169,8 +169,31 @@ int c0_pool_window_at(const float *x, const struct c0_pixlist *pl, int h, float 
 	return C0_OK;
 }
 
+void c0_pixlist_normals(const struct c0_pixlist *pl, int r, float *nrm)
+{
+	const int ny = pl->ny, nx = pl->nx;
+#pragma omp parallel for schedule(static)
+	for (size_t k = 0; k < pl->M; k++) {
+		const int y = pl->pix[k] / nx, xx = pl->pix[k] % nx;
+		const int x0 = xx - r < 0 ? 0 : xx - r, x1 = xx + r < nx ? xx + r : nx - 1;
+		double sxx = 0, syy = 0, sxy = 0;
+		for (int j = y - r < 0 ? 0 : y - r; j <= y + r && j < ny; j++) {
+			const size_t end = pl->row[j + 1];
+			for (size_t o = c0_lower_bound(pl->pix, pl->row[j], end, (size_t)j * nx + x0);
+			     o < end && (size_t)pl->pix[o] <= (size_t)j * nx + x1; o++) {
+				const int dx = pl->pix[o] - j * nx - xx, dy = j - y;
+				if (dx * dx + dy * dy <= r * r)
+					sxx += dx * dx, syy += dy * dy, sxy += dx * dy;
+			}
+		}
+		/* the major axis runs along the structure; the normal is at a right angle */
+		const double along = 0.5 * atan2(2 * sxy, sxx - syy);
+		nrm[2 * k] = (float)-sin(along), nrm[2 * k + 1] = (float)cos(along);
+	}
+}
+
 int c0_pool_guided_at(const float *const *x, int nq, const struct c0_pixlist *pl, const float *guide, double range,
-		      int h, float *const *out)
+		      const float *nrm, double width, int h, float *const *out)
 {
 	enum { QMAX = 64 };
 	if (nq > QMAX)
@@ -186,7 +209,8 @@ int c0_pool_guided_at(const float *const *x, int nq, const struct c0_pixlist *pl
 			const size_t end = pl->row[j + 1];
 			for (size_t o = c0_lower_bound(pl->pix, pl->row[j], end, (size_t)j * nx + x0);
 			     o < end && (size_t)pl->pix[o] <= (size_t)j * nx + x1; o++)
-				if (fabs(guide[o] - guide[k]) <= range)
+				if (fabs(guide[o] - guide[k]) <= range &&
+				    (!nrm || fabs(nrm[2 * k] * (pl->pix[o] - j * nx - xx) + nrm[2 * k + 1] * (j - y)) <= width))
 					for (int q = 0; q < nq; q++)
 						acc[q] += x[q][o];
 		}

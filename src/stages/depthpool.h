@@ -48,10 +48,18 @@ long c0_pixlist_find(const struct c0_pixlist *pl, size_t p);
 /* c0_pool_window on the list: x and out over pl. The summed-area table in a
  * band of 2h + 2 rows: the same sums as the whole table, bit for bit. */
 int c0_pool_window_at(const float *x, const struct c0_pixlist *pl, int h, float *out);
+/* Each pixel's unit normal to the structure it lies on, (x, y) at nrm[2k],
+ * nrm[2k + 1] over pl: the minor axis of the second moments of the list's
+ * pixels within r fine pixels (a disc). A lone pixel or a round blob gets an
+ * arbitrary one. */
+void c0_pixlist_normals(const struct c0_pixlist *pl, int r, float *nrm);
 /* c0_pool_guided on the list: x[q], guide and out[q] over pl; the same sums
- * in the same order, bit for bit. */
+ * in the same order, bit for bit. With nrm (c0_pixlist_normals) only the
+ * window's pixels within width fine pixels of the line through the centre
+ * along its structure are summed: a strip along a filament, which keeps out
+ * a neighbour beside it whatever the guide says. */
 int c0_pool_guided_at(const float *const *x, int nq, const struct c0_pixlist *pl, const float *guide, double range,
-		      int h, float *const *out);
+		      const float *nrm, double width, int h, float *const *out);
 /* A run's pooled MA-TIRF input: each angle's own and pooled intensities over pl. */
 struct c0_pooled {
 	const struct c0_pixlist *pl;
@@ -61,9 +69,16 @@ struct c0_pooled {
 void c0_pool_rescale_at(float *f, int nz, const int *pixel, size_t M, int nq, const struct c0_pixlist *pl,
 			const float *const *x, const float *const *pooled);
 
-/* Default window of run's depth pooling, as a fraction of the PSF FWHM:
- * wide enough to average the per-angle splitting noise (docs/parameters.md). */
-#define C0_DEPTH_POOL_FWHM 0.75
+/* Default window of run's depth pooling, as a multiple of the PSF FWHM:
+ * its length along the structure (the guided pool is a strip), long enough
+ * to average the blinking's and the splitting's noise (docs/parameters.md). */
+#define C0_DEPTH_POOL_FWHM 1.75
+/* The guided pool's strip: pixels within this many fine pixels of the line
+ * along the structure, whose direction comes from the support's pixels
+ * within C0_DEPTH_NORMAL_PX (docs/parameters.md, "Depth pooling along the
+ * structure"). */
+#define C0_DEPTH_POOL_WIDTH_PX 2.0
+#define C0_DEPTH_NORMAL_PX 3
 /* Within the window, only the pixels whose guide depth is within this many
  * nm of the centre's are summed, the guide being each pixel's single-depth
  * fit to its intensities summed over C0_DEPTH_GUIDE_FWHM: filaments 90 nm

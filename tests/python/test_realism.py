@@ -57,7 +57,8 @@ def test_depth(tmp):
         k, kt = rep["bleaching"]["rate_per_frame"], sim["estimates"]["bleaching"]["rate_per_frame"]
         print("seed %d: median depth error %.1f nm, median signed %+.1f nm; bleaching rate %.3g/frame (true %.3g, sd %.2g)"
               % (seed, med, bias, k, kt, rep["bleaching"]["rate_sd_per_frame"]), file=sys.stderr)
-        check(med <= 15, "seed %d: median depth error %.1f <= 15 nm" % (seed, med))
+        # the strip along the structure: 11.1 and 9.0 nm (13.3 and 10.1 with the 7-pixel square)
+        check(med <= 13, "seed %d: median depth error %.1f <= 13 nm" % (seed, med))
         # issue 29: measured -1.6 and -0.6 nm; the columns' mean depth read +3.0 and +3.9 (docs/parameters.md, "Depth bias")
         check(abs(bias) <= 3, "seed %d: |median signed error| %.1f <= 3 nm" % (seed, bias))
         check(abs(k / kt - 1) <= 0.15, "seed %d: bleaching rate %.3g within 15%% of the simulated %.3g" % (seed, k, kt))
@@ -125,7 +126,7 @@ def test_sparse_blinking(tmp):
                            - tifffile.imread(os.path.join(data, "truth_background_q%02d.tif" % q)))[under])) for q in range(1, 5)]
     print("sparse fast blinking: median depth error %.1f nm, signed %+.1f nm, deeper than 250 nm %+.1f nm; "
           "background under them %s ADU" % (med, sg, sg_deep, " ".join("%+.2f" % b for b in bg)), file=sys.stderr)
-    check(med <= 14.5, "sparse blinking: median depth error %.1f <= 14.5 nm (15.7 with the gradient penalty)" % med)
+    check(med <= 14, "sparse blinking: median depth error %.1f <= 14 nm (12.3 along the structure, 13.3 square)" % med)
     check(abs(sg) <= 2.5, "sparse blinking: |median signed depth error| %.1f <= 2.5 nm (-3.6 before)" % sg)
     check(abs(sg_deep) <= 8, "sparse blinking: structures deeper than 250 nm, signed error %+.1f within 8 nm (-17.0 before)" % sg_deep)
     check(max(abs(b) for b in bg) <= 0.55, "sparse blinking: the background under them off by %s ADU, within 0.55 "
@@ -145,7 +146,7 @@ def test_close_pairs(tmp):
     sg = d["median_signed_error_nm"]
     print("pairs 90 nm apart: median depth error %.1f nm (signed %+.1f nm) guided, %.1f nm (signed %+.1f nm) plain window"
           % (med, sg, med0, d0["median_signed_error_nm"]), file=sys.stderr)
-    check(med <= 20, "pairs 90 nm apart: median depth error %.1f <= 20 nm" % med)
+    check(med <= 15, "pairs 90 nm apart: median depth error %.1f <= 15 nm (12.0 along the structure, 14.3 square)" % med)
     check(abs(sg) <= 5, "pairs 90 nm apart: |median signed depth error| %.1f <= 5 nm" % sg)
     check(med0 >= med + 8, "pairs 90 nm apart: the plain window %.1f nm, the guided %.1f nm" % (med0, med))
 
