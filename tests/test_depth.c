@@ -214,9 +214,10 @@ static void test_pool_sparse(void)
 
 /* The strip along the structure: each pixel's normal from its neighbours'
  * second moments, and the strip's sums, against a brute-force pass over
- * every pair of pixels; on two parallel lines 4 pixels apart at any
- * direction the normal is the lines' own and the strip never reaches the
- * other line, whatever the guide. */
+ * every pair of pixels; on two parallel lines 5 pixels apart (a filament
+ * pair 125 nm apart at 25 nm pixels) at any direction the normal is the
+ * lines' own and the default strip never reaches the other line, whatever
+ * the guide. */
 static void test_pool_strip(void)
 {
 	enum { NY = 40, NX = 40, NP = NY * NX, NQ = 2, R = 3, H = 8 };
@@ -228,8 +229,8 @@ static void test_pool_strip(void)
 		memset(m, 0, sizeof m);
 		for (int line = 0; line < 2; line++)
 			for (double s = -30; s <= 30; s += 0.25) {
-				const int y = (int)lround(20 + s * uy - 2 * (2 * line - 1) * ux);
-				const int xx = (int)lround(20 + s * ux + 2 * (2 * line - 1) * uy);
+				const int y = (int)lround(20 + s * uy - 2.5 * (2 * line - 1) * ux);
+				const int xx = (int)lround(20 + s * ux + 2.5 * (2 * line - 1) * uy);
 				if (y >= 0 && y < NY && xx >= 0 && xx < NX)
 					m[y * NX + xx] = 1 + line;
 			}
@@ -246,7 +247,7 @@ static void test_pool_strip(void)
 		c0_pixlist_normals(&pl, R, nrm);
 		const float *xl[NQ] = { xs[0], xs[1] };
 		float *ol[NQ] = { out[0], out[1] };
-		CHECK(c0_pool_guided_at(xl, NQ, &pl, gs, 50, nrm, 1.0, H, ol) == C0_OK);
+		CHECK(c0_pool_guided_at(xl, NQ, &pl, gs, 50, nrm, C0_DEPTH_POOL_WIDTH_PX, H, ol) == C0_OK);
 		for (size_t k = 0; k < pl.M; k++) {
 			const int y = pl.pix[k] / NX, xx = pl.pix[k] % NX;
 			double sxx = 0, syy = 0, sxy = 0, acc[NQ] = { 0 };
@@ -259,7 +260,7 @@ static void test_pool_strip(void)
 			bad += fabs(nrm[2 * k] - nx) > 1e-6 || fabs(nrm[2 * k + 1] - ny) > 1e-6;
 			for (size_t o = 0; o < pl.M; o++) {
 				const int dy = pl.pix[o] / NX - y, dx = pl.pix[o] % NX - xx;
-				if (abs(dx) <= H && abs(dy) <= H && fabs(nrm[2 * k] * dx + nrm[2 * k + 1] * dy) <= 1.0)
+				if (abs(dx) <= H && abs(dy) <= H && fabs(nrm[2 * k] * dx + nrm[2 * k + 1] * dy) <= C0_DEPTH_POOL_WIDTH_PX)
 					for (int q = 0; q < NQ; q++)
 						acc[q] += xs[q][o];
 			}
