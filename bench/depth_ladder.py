@@ -11,8 +11,8 @@ stacks. The readout: each stack's intensity over its bleaching factor, summed
 over the guided strip (17 fine pixels along the structure, 2 either side of
 its line, pixels whose 5-pixel guess lies within 50 nm; docs/parameters.md,
 "Depth pooling along the structure"; before it a 7-pixel square, which the
-docs' earlier tables used) and fitted with one depth (1 nm grid), as `run` does before and after
-its MA-TIRF solve; the solve itself is left out (it reproduces its input's
+docs' earlier tables used) and fitted with one depth (1 nm grid), as `run`
+does before and after its MA-TIRF solve; the solve itself is left out (it reproduces its input's
 projections: on the grid's 5-angle CCD sparse-fast 500-frame stack of seed 1
 this proxy reads 11.7 / -0.2 nm where the run reads 11.6 / -0.2; with the
 square, on the docs' sparse-blinking stack, 17.5 / -3.7 against 17.0 / -3.6).
@@ -89,19 +89,23 @@ def guided(x, mask, guide, rng, h):
     return out
 
 
+def offset(dy, dx, H, W):
+    """the slices of the centres c and of their neighbours o at (dy, dx), inside an H x W image"""
+    return ((slice(max(0, -dy), H - max(0, dy)), slice(max(0, -dx), W - max(0, dx))),
+            (slice(max(0, dy), H - max(0, -dy)), slice(max(0, dx), W - max(0, -dx))))
+
+
 def normals(mask, r=3):
     """each pixel's unit normal (x, y) to its structure: the minor axis of the
     second moments of the mask's pixels within r (a disc), as c0_pixlist_normals"""
     H, W = mask.shape
-    m = mask.astype(float)
     sxx, syy, sxy = np.zeros((H, W)), np.zeros((H, W)), np.zeros((H, W))
     for dy in range(-r, r + 1):
         for dx in range(-r, r + 1):
             if dx * dx + dy * dy <= r * r:
-                sh = np.zeros((H, W))
-                sh[max(0, -dy):H - max(0, dy), max(0, -dx):W - max(0, dx)] = \
-                    m[max(0, dy):H - max(0, -dy), max(0, dx):W - max(0, -dx)]
-                sxx += sh * dx * dx; syy += sh * dy * dy; sxy += sh * dx * dy
+                c, o = offset(dy, dx, H, W)
+                n = mask[o]
+                sxx[c] += n * dx * dx; syy[c] += n * dy * dy; sxy[c] += n * dx * dy
     along = 0.5 * np.arctan2(2 * sxy, sxx - syy)
     return -np.sin(along), np.cos(along)
 
@@ -114,8 +118,7 @@ def strip(x, mask, guide, rng, h, width):
     xm, out = np.where(mask[None], x, 0), np.zeros_like(x)
     for dy in range(-h, h + 1):
         for dx in range(-h, h + 1):
-            c = (slice(max(0, -dy), H - max(0, dy)), slice(max(0, -dx), W - max(0, dx)))
-            o = (slice(max(0, dy), H - max(0, -dy)), slice(max(0, dx), W - max(0, -dx)))
+            c, o = offset(dy, dx, H, W)
             ok = mask[o] & (np.abs(nx[c] * dx + ny[c] * dy) <= width) & (np.abs(guide[o] - guide[c]) <= rng)
             out[(slice(None),) + c] += np.where(ok[None], xm[(slice(None),) + o], 0)
     return np.where(mask[None], out, 0)
