@@ -23,8 +23,9 @@ true realised intensities (truth_intensity_qNN.tif: each emitter's brightness
 times its own on-fraction at that angle) on the run's or the true support, the
 model intensities (the emitters' mean on-fraction: no blinking noise), and
 with INTENSITY_DIR the intensities of a `col0rme intensity` run (e.g. on the
-true support, then --true-support, or on stacks with the true background
-taken out). --windows:
+true support, then --true-support, which also reads them, and the truth, at
+the pixels the run covers, to compare with the run's support on the same
+pixels; or on stacks with the true background taken out). --windows:
 the run's intensities with other windows and ranges. With SIMDIRs alone: the
 true realised intensities on the true support (what the simulated blinking and
 bleaching leave to any readout), one line a simulation. --gls: also the
@@ -176,8 +177,9 @@ def depth(d, x, mask, f, h=8, hg=2, rng=50.0, fit=None, width=2.0):
     return gls(Wc, zc, xp, mask, f) if fit == "gls" else single(Wc, zc, xp, mask)
 
 
-def row(d, z, label):
-    m = d["zt"] > 0
+def row(d, z, label, at=None):
+    """at: only the true pixels where this mask is set (e.g. the run's depth > 0)"""
+    m = (d["zt"] > 0) & (True if at is None else at)
     v, t = z[m], d["zt"][m]
     ok = v > 0
     e, t = v[ok] - t[ok], t[ok]
@@ -206,14 +208,19 @@ def main():
         row(d, depth(d, d["xe"], d["es"], d["eb"], fit="gls"), "readout redone, the run's inputs, GLS fit")
     row(d, depth(d, d["xe"], d["es"], d["tb"]), "true bleaching factors")
     row(d, depth(d, d["xt"], d["es"], d["tb"]), "true realised intensities, the run's support")
-    row(d, depth(d, d["xt"], d["ts"], d["tb"]), "true realised intensities, true support")
+    zt = depth(d, d["xt"], d["ts"], d["tb"])
+    row(d, zt, "true realised intensities, true support")
+    row(d, zt, "the same, at the pixels the run covers", d["zrun"] > 0)
     if "--gls" in sys.argv:
         row(d, depth(d, d["xt"], d["ts"], d["tb"], fit="gls"), "true realised intensities, true support, GLS fit")
     row(d, depth(d, d["xm"], d["ts"], d["tb"]), "model intensities (no blinking noise), true support")
     if len(args) > 2:
         xi = np.array([tf.imread(args[2] + "/intensity_q%02d.tif" % (q + 1)) for q in range(d["nq"])]).astype(float)
         mask = d["ts"] if "--true-support" in sys.argv else d["es"]
-        row(d, depth(d, xi, mask, d["tb"]), "intensities of %s, true bleaching" % args[2])
+        zi = depth(d, xi, mask, d["tb"])
+        row(d, zi, "intensities of %s, true bleaching" % args[2])
+        if "--true-support" in sys.argv:
+            row(d, zi, "the same, at the pixels the run covers", d["zrun"] > 0)
     if "--windows" in sys.argv:
         for h in (2, 3, 4, 5, 6, 8):
             for rng in (50, 100, 0):
