@@ -80,16 +80,6 @@ def box(x, mask, h):
     return np.where(mask, o, 0)
 
 
-def guided(x, mask, guide, rng, h):
-    out = np.zeros_like(x)
-    H, W = mask.shape
-    for y, xx in zip(*np.nonzero(mask)):
-        y0, y1, x0, x1 = max(0, y - h), min(H, y + h + 1), max(0, xx - h), min(W, xx + h + 1)
-        m = mask[y0:y1, x0:x1] & (np.abs(guide[y0:y1, x0:x1] - guide[y, xx]) <= rng)
-        out[:, y, xx] = x[:, y0:y1, x0:x1][:, m].sum(1)
-    return out
-
-
 def offset(dy, dx, H, W):
     """the slices of the centres c and of their neighbours o at (dy, dx), inside an H x W image"""
     return ((slice(max(0, -dy), H - max(0, dy)), slice(max(0, -dx), W - max(0, dx))),
@@ -112,15 +102,19 @@ def normals(mask, r=3):
 
 
 def strip(x, mask, guide, rng, h, width):
-    """guided() over the (2h+1)^2 window's pixels within width of the line
-    along each centre's structure, as the run's c0_pool_guided_at"""
+    """each masked pixel's sum over the (2h+1)^2 window's masked pixels whose
+    guide lies within rng of the centre's and, unless width is None, within
+    width of the line along the centre's structure, as the run's
+    c0_pool_guided_at (width None: the guided square of before the strip)"""
     H, W = mask.shape
-    nx, ny = normals(mask)
+    nx, ny = normals(mask) if width is not None else (None, None)
     xm, out = np.where(mask[None], x, 0), np.zeros_like(x)
     for dy in range(-h, h + 1):
         for dx in range(-h, h + 1):
             c, o = offset(dy, dx, H, W)
-            ok = mask[o] & (np.abs(nx[c] * dx + ny[c] * dy) <= width) & (np.abs(guide[o] - guide[c]) <= rng)
+            ok = mask[o] & (np.abs(guide[o] - guide[c]) <= rng)
+            if width is not None:
+                ok &= np.abs(nx[c] * dx + ny[c] * dy) <= width
             out[(slice(None),) + c] += np.where(ok[None], xm[(slice(None),) + o], 0)
     return np.where(mask[None], out, 0)
 
@@ -173,7 +167,7 @@ def depth(d, x, mask, f, h=8, hg=2, rng=50.0, fit=None, width=2.0):
     if rng <= 0:
         xp = np.array([box(v, mask, h) for v in x])
     else:
-        xp = strip(x, mask, g, rng, h, width) if width else guided(x, mask, g, rng, h)
+        xp = strip(x, mask, g, rng, h, width)
     return gls(Wc, zc, xp, mask, f) if fit == "gls" else single(Wc, zc, xp, mask)
 
 
