@@ -5,6 +5,7 @@
 #include "check.h"
 #include "check_adjoint.h"
 #include "ops/psi_omega.h"
+#include "stages/depthpool.h"
 #include "ops/covop.h"
 #include "ops/neumann.h"
 #include "stages/intensity.h"
@@ -88,6 +89,87 @@ static void test_operators(void)
 	c0_covop_free(&op);
 	c0_psi_omega_free(&P);
 	free(m), free(x), free(y), free(full), free(ref);
+}
+
+/* The oriented graph: against every pair of support pixels weighed by the
+ * formula, on two parallel lines 3 fine pixels apart and a diagonal one; no
+ * edge joins the parallel lines, those along a line keep 1/distance, and the
+ * operator stays adjoint. Then the two lines, 4 fine pixels apart, one 3x
+ * the other, at a fixed mu that the isotropic radius-4 graph spends on
+ * pulling them together: oriented, each line keeps its own level. */
+static void test_orient(void)
+{
+	const int Ny = 12, Nx = 12, r = 4, Ly = Ny * r, Lx = Nx * r, L = Ly * Lx;
+	uint8_t *m = calloc(L, 1);
+	for (int x = 4; x < Lx - 4; x++)
+		m[20 * Lx + x] = m[23 * Lx + x] = 1;
+	for (int k = 2; k < 14; k++)
+		m[(30 + k) * Lx + 4 + k] = 1;
+	struct c0_psi_omega P;
+	struct c0_pixlist pl;
+	CHECK(c0_pixlist_from_mask(m, Ly, Lx, &pl) == C0_OK);
+	float *nrm = malloc(sizeof(float) * 2 * pl.M);
+	c0_pixlist_normals(&pl, 3, nrm);
+	CHECK(c0_psi_omega_init_dir(&P, Ny, Nx, r, 1.1, m, 4, nrm, 20) == C0_OK);
+	int ok = 1, want = 0, across = 0, along = 1;
+	for (int a = 0; a < P.n; a++)
+		for (int b = a + 1; b < P.n; b++) {
+			const int dy = P.idx[b] / Lx - P.idx[a] / Lx, dx = P.idx[b] % Lx - P.idx[a] % Lx, d2 = dx * dx + dy * dy;
+			if (d2 > 16)
+				continue;
+			const double ca = nrm[2 * a] * dx + nrm[2 * a + 1] * dy, cb = nrm[2 * b] * dx + nrm[2 * b + 1] * dy;
+			const double w = pow(1 - 0.5 * (ca * ca + cb * cb) / d2, 10) / sqrt(d2);
+			int found = -1;
+			for (int e = 0; e < P.ne; e++)
+				if (P.e0[e] == a && P.e1[e] == b)
+					found = e;
+			want += w * sqrt(d2) >= C0_ORIENT_DROP;
+			ok &= found < 0 ? w * sqrt(d2) < C0_ORIENT_DROP : fabs(P.ew[found] - w) < 1e-6 * w;
+		}
+	for (int e = 0; e < P.ne; e++) {
+		const int ya = P.idx[P.e0[e]] / Lx, yb = P.idx[P.e1[e]] / Lx;
+		across += ya < 25 && ya != yb;
+		if (ya == 20 && yb == 20)
+			along &= fabs(P.ew[e] - 1.0 / (P.idx[P.e1[e]] - P.idx[P.e0[e]])) < 1e-6;
+	}
+	CHECK_MSG(ok && P.ne == want && !across && along, "oriented graph: formula %d, edges %d of %d, across %d, along %d", ok, P.ne,
+		  want, across, along);
+	const struct c0_linop D = c0_grad_omega_linop(&P);
+	CHECK_ADJOINT(&D, NULL, 1e-12);
+	/* the two lines, 1 and 3 a pixel */
+	memset(m + 30 * Lx, 0, (size_t)(L - 30 * Lx));
+	m[20 * Lx + 4] = 0, m[20 * Lx + 5] = 0;   /* one line a little shorter: no exact symmetry */
+	double *x = malloc(sizeof(double) * L), *y = malloc(sizeof(double) * Ny * Nx);
+	struct c0_psi_omega Q;
+	CHECK(c0_psi_omega_init(&Q, Ny, Nx, r, 1.1, m, 1) == C0_OK);
+	for (int k = 0; k < Q.n; k++)
+		x[k] = Q.idx[k] / Lx == 20 ? 1 : 3;
+	c0_psi_omega_forward(&Q, x, y);
+	struct c0_intensity_conf c = C0_INTENSITY_DEFAULTS;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 1.1 * 100 / 0.42466090014400953;
+	c.background = C0_BG_NONE, c.mu = 0.3, c.graph_radius = 4, c.tol = 1e-8;
+	double lvl[2][2];
+	for (int o = 0; o < 2; o++) {
+		struct c0_intensity_result res;
+		c.graph_orient = o ? 20 : 0;
+		CHECK(c0_intensity_solve(&c, y, Ny, Nx, 100, m, 1, &res) == C0_OK);
+		double s[2] = { 0 }, n[2] = { 0 };
+		for (int k = 0; k < Q.n; k++) {
+			const int i = Q.idx[k] / Lx == 23, xx = Q.idx[k] % Lx;
+			if (xx >= 10 && xx < Lx - 10)   /* away from the ends */
+				s[i] += res.x[Q.idx[k]], n[i]++;
+		}
+		lvl[o][0] = s[0] / n[0], lvl[o][1] = s[1] / n[1];
+		c0_intensity_result_free(&res);
+	}
+	fprintf(stderr, "lines 1 and 3, 4 fine pixels apart: isotropic %.3f %.3f, oriented %.3f %.3f\n", lvl[0][0], lvl[0][1],
+		lvl[1][0], lvl[1][1]);
+	CHECK_MSG(fabs(lvl[1][0] - 1) < 0.05 && fabs(lvl[1][1] - 3) < 0.05 && fabs(lvl[0][0] - 1) > 0.2,
+		  "oriented: %.3f %.3f (1, 3); isotropic %.3f %.3f", lvl[1][0], lvl[1][1], lvl[0][0], lvl[0][1]);
+	c0_psi_omega_free(&Q);
+	c0_psi_omega_free(&P);
+	c0_pixlist_free(&pl);
+	free(m), free(nrm), free(x), free(y);
 }
 
 /* data made by the model itself: the discrepancy target is reachable */
@@ -427,6 +509,7 @@ int main(void)
 {
 	c0_rng_init(&rng, 5, 0);
 	RUN(test_operators);
+	RUN(test_orient);
 	RUN(test_neumann);
 	RUN(test_discrepancy);
 	RUN(test_simulated);

@@ -48,7 +48,8 @@ static void test_conf(void)
 	      s.intensity.grid.fwhm_nm == 229);   /* one grid for both stages */
 	CHECK(s.intensity.grid.srf == id.grid.srf && s.intensity.background == id.background && s.intensity.beta == id.beta &&
 	      s.intensity.nu == id.nu && s.intensity.mu == id.mu && s.intensity.tol == id.tol &&
-	      s.intensity.maxit == id.maxit && s.intensity.graph_radius == id.graph_radius);
+	      s.intensity.maxit == id.maxit && s.intensity.graph_radius == id.graph_radius &&
+	      s.intensity.graph_orient == id.graph_orient);
 	CHECK(!memcmp(&s.matirf.tirf, &md.tirf, sizeof md.tirf) && s.matirf.z0_nm == md.z0_nm && s.matirf.z1_nm == md.z1_nm &&
 	      s.matirf.dz_nm == md.dz_nm && s.matirf.reg == md.reg && s.matirf.kappa == md.kappa && s.matirf.wz == md.wz &&
 	      s.matirf.sparsity == md.sparsity && s.matirf.pdhg.maxit == md.pdhg.maxit && s.matirf.pdhg.tol == md.pdhg.tol &&
@@ -196,6 +197,8 @@ static void test_files_and_arrays(void)
 	expect_einval(c0_run(&c, ms, 2, &ra), "angles");
 	b = c, b.graph_radius = 0.5;
 	expect_einval(c0_run(&b, ms, 3, &ra), "graph_radius");
+	b = c, b.graph_orient = -1;
+	expect_einval(c0_run(&b, ms, 3, &ra), "graph_orient");
 	b = c, b.nsupport_stacks = 1, b.support_stacks[0] = 4;
 	expect_einval(c0_run(&b, ms, 3, &ra), "support_stacks");
 	b = c, b.angles[1] = 50, b.angles[2] = 50;   /* one below critical is support-only; two leave one TIRF angle */

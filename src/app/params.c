@@ -50,7 +50,8 @@ static const struct c0_param table[] = {
 	     "intensity mu: residual = the model's floor (at mu = 1e-3) plus the noise level, or the noise level alone", "relative"),
 	NUM(cg_tol, C0_P_DOUBLE, "tol", "F", "CG stopping tolerance, relative to the residual at intensity 0 and the background at the data's mean", "1e-3"),
 	NUM(cg_iterations, C0_P_INT, "cg-iterations", "N", "CG steps per active-set round", "500"),
-	NUM(graph_radius, C0_P_DOUBLE, "graph-radius", "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", "2.25"),
+	NUM(graph_radius, C0_P_DOUBLE, "graph-radius", "PX", "intensity smoothness couples support pixels up to this far apart (fine pixels)", "6"),
+	NUM(graph_orient, C0_P_DOUBLE, "graph-orient", "P", "intensity smoothness along the structure: an edge weighs (1 - cos^2)^(P/2), cos to the support's normal (0: every direction alike)", "20"),
 	LIST(noise_variance, C0_P_DOUBLES, "noise-variance", "V,...", "per-stack noise variance (camera units^2)", "estimated on the support"),
 	/* MA-TIRF */
 	LIST(angles, C0_P_DOUBLES, "angles", "DEG,...", "incidence angle in the glass of each stack/image, same order", "none (2D)"),

@@ -103,7 +103,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	s->intensity = (struct c0_intensity_conf){ .grid = grid,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,
-						   .graph_radius = c->graph_radius, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE,
+						   .graph_radius = c->graph_radius, .graph_orient = c->graph_orient, .relative = c->discrepancy == C0_DISCREPANCY_RELATIVE,
 						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE,
 						   .common_pattern = c->common_pattern };
 	c0_run_conf_matirf(c, &s->matirf);

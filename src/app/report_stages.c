@@ -95,6 +95,7 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 		: ic->relative ? "mu is the largest smoothness whose residual exceeds the model's floor (the residual at mu = 1e-3) by no more than the noise explains (nu^2 H W sigma2 / T): smoothing that costs less than the noise is kept. The floor is the model error (continuous positions on the fine grid, background shape), larger than the noise on real data, which is why the plain principle is never met there. Larger nu smooths more; mu fixes it."
 		: "mu makes the residual equal to the noise level nu^2 H W sigma2 / T; on data whose model error exceeds the noise this is never met and mu stays at its smallest value");
 	cJSON_AddNumberToObject(p, "graph_radius_px", ic->graph_radius);
+	cJSON_AddNumberToObject(p, "graph_orient", ic->graph_orient);
 	if (mu_own)
 		cJSON_AddStringToObject(p, "mu_shared", "the MA-TIRF stacks share one mu, the geometric mean of their own (mu_own), or the largest where the camera's fixed pattern is in the means (an offset map given, or the stacks' common pattern found): the depth reads the ratios between angles, so each angle is smoothed alike");
 }

@@ -184,6 +184,7 @@ static const struct prow {
 	{ "discrepancy factor \u03bd", "intensity_parameters.nu", "--nu", NULL },
 	{ "intensity smoothness \u03bc, %s", "intensity.%d.mu", "--mu", "discrepancy principle (relative): the largest \u03bc whose residual exceeds the model's floor by no more than the noise explains" },
 	{ "smoothness graph radius (fine px)", "intensity_parameters.graph_radius_px", "--graph-radius", NULL },
+	{ "smoothness along the structure (power)", "intensity_parameters.graph_orient", "--graph-orient", NULL },
 	{ "depth pooling window (nm)", "parameters.depth_pool_nm", "--depth-pool", "1.75 FWHM" },
 	{ "depth pooling range (nm)", "parameters.depth_pool_range_nm", "--depth-pool-range", NULL },
 	{ "bleaching correction", "bleaching.correction", "--bleach|--bleach-factors", NULL },

@@ -3,7 +3,7 @@
 #include "cli/cmdkit.h"
 
 static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "background", "beta", "nu", "discrepancy",
-				      "mu", "cg_tol", "graph_radius", "noise_variance", "offset_map", "variance_map", "gain_map", NULL };
+				      "mu", "cg_tol", "graph_radius", "graph_orient", "noise_variance", "offset_map", "variance_map", "gain_map", NULL };
 
 int cmd_intensity(int argc, char **argv)
 {

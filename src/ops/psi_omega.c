@@ -8,9 +8,54 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAXOFF 64   /* offsets within radius 4 number 24 */
+#define MAXOFF 160   /* offsets within radius 8 number 100 */
+
+/* The weight of the edge a -> b, offset (dx, dy): 1/distance, times the
+ * direction's factor with dir (0: dropped). */
+static double edge_weight(const float *dir, double power, int a, int b, int dx, int dy)
+{
+	const double d2 = dx * dx + dy * dy;
+	if (!dir)
+		return 1 / sqrt(d2);
+	const double ca = dir[2 * a] * dx + dir[2 * a + 1] * dy, cb = dir[2 * b] * dx + dir[2 * b + 1] * dy;
+	const double f = pow(fmax(0, 1 - 0.5 * (ca * ca + cb * cb) / d2), 0.5 * power);
+	return f < C0_ORIENT_DROP ? 0 : f / sqrt(d2);
+}
+
+/* The graph's edges to the later pixels (raster order) within the radius:
+ * counted (p->e0 NULL) or stored. */
+static int graph_edges(struct c0_psi_omega *p, const int *pos, double radius, const float *dir, double power)
+{
+	int no = 0, ox[MAXOFF], oy[MAXOFF], ne = 0;
+	const int R = (int)radius;
+	for (int dy = 0; dy <= R; dy++)
+		for (int dx = -R; dx <= R; dx++)
+			if ((dy > 0 || dx > 0) && dx * dx + dy * dy <= radius * radius && no < MAXOFF)
+				ox[no] = dx, oy[no++] = dy;
+	for (int y = 0; y < p->Ly; y++)
+		for (int x = 0; x < p->Lx; x++) {
+			const int k = pos[(size_t)y * p->Lx + x];
+			for (int o = 0; k >= 0 && o < no; o++) {
+				const int xx = x + ox[o], yy = y + oy[o];
+				if (xx < 0 || xx >= p->Lx || yy >= p->Ly || pos[(size_t)yy * p->Lx + xx] < 0)
+					continue;
+				const int l = pos[(size_t)yy * p->Lx + xx];
+				const double w = edge_weight(dir, power, k, l, ox[o], oy[o]);
+				if (w > 0 && p->e0)
+					p->e0[ne] = k, p->e1[ne] = l, p->ew[ne] = w;
+				ne += w > 0;
+			}
+		}
+	return ne;
+}
 
 int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma, const uint8_t *mask, double radius)
+{
+	return c0_psi_omega_init_dir(p, Ny, Nx, r, sigma, mask, radius, NULL, 0);
+}
+
+int c0_psi_omega_init_dir(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma, const uint8_t *mask, double radius,
+			  const float *dir, double power)
 {
 	memset(p, 0, sizeof *p);
 	p->Ny = Ny, p->Nx = Nx, p->Ly = Ny * r, p->Lx = Nx * r;
@@ -24,17 +69,11 @@ int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigm
 		free(pos);
 		return c0_fail(C0_EINVAL, "the support is empty: no fine pixel to estimate");
 	}
-	/* the graph: offsets to the later pixels (raster order) within the radius */
-	int no = 0, ox[MAXOFF], oy[MAXOFF];
-	const int R = (int)radius;
-	for (int dy = 0; dy <= R; dy++)
-		for (int dx = -R; dx <= R; dx++)
-			if ((dy > 0 || dx > 0) && dx * dx + dy * dy <= radius * radius && no < MAXOFF)
-				ox[no] = dx, oy[no++] = dy;
+	const int ne = graph_edges(p, pos, radius, dir, power);
 	p->idx = c0_alloc((size_t)p->n, sizeof *p->idx);
-	p->e0 = c0_alloc((size_t)p->n * no, sizeof *p->e0);
-	p->e1 = c0_alloc((size_t)p->n * no, sizeof *p->e1);
-	p->ew = c0_alloc((size_t)p->n * no, sizeof *p->ew);
+	p->e0 = c0_alloc((size_t)ne + 1, sizeof *p->e0);
+	p->e1 = c0_alloc((size_t)ne + 1, sizeof *p->e1);
+	p->ew = c0_alloc((size_t)ne + 1, sizeof *p->ew);
 	struct c0_band Gy, Gx;
 	int st = !p->idx || !p->e0 || !p->e1 || !p->ew ? C0_ENOMEM : C0_OK;
 	if (!st)
@@ -54,20 +93,10 @@ int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigm
 		c0_psi_omega_free(p);
 		return st;
 	}
-	for (int y = 0; y < p->Ly; y++)
-		for (int x = 0; x < p->Lx; x++) {
-			int k = pos[(size_t)y * p->Lx + x];
-			if (k < 0)
-				continue;
-			p->idx[k] = y * p->Lx + x;
-			for (int o = 0; o < no; o++) {
-				const int xx = x + ox[o], yy = y + oy[o];
-				if (xx < 0 || xx >= p->Lx || yy >= p->Ly || pos[(size_t)yy * p->Lx + xx] < 0)
-					continue;
-				p->e0[p->ne] = k, p->e1[p->ne] = pos[(size_t)yy * p->Lx + xx];
-				p->ew[p->ne++] = 1 / sqrt((double)(ox[o] * ox[o] + oy[o] * oy[o]));
-			}
-		}
+	for (size_t i = 0; i < L; i++)
+		if (pos[i] >= 0)
+			p->idx[pos[i]] = (int)i;
+	p->ne = graph_edges(p, pos, radius, dir, power);
 	free(pos);
 	return C0_OK;
 }

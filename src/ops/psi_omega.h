@@ -19,6 +19,16 @@ struct c0_psi_omega {
 };
 
 int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma_px, const uint8_t *mask, double radius);
+/* With dir (NULL: as c0_psi_omega_init), a unit vector (x, y) at dir[2k],
+ * dir[2k + 1] for each mask pixel k in raster order: each edge's weight is
+ * multiplied by (1 - c^2)^(power / 2), c^2 the mean over its two ends of the
+ * squared cosine between the edge and the end's dir, and an edge whose factor
+ * is below C0_ORIENT_DROP is left out. With each pixel's normal to the
+ * structure it lies on, a difference along the structure keeps its weight and
+ * one across it fades. */
+#define C0_ORIENT_DROP 1e-3   /* most of a long radius's edges: they would only cost time */
+int c0_psi_omega_init_dir(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma_px, const uint8_t *mask, double radius,
+			  const float *dir, double power);
 void c0_psi_omega_free(struct c0_psi_omega *p);
 void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double *y);  /* n -> Ny*Nx */
 void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x);  /* Ny*Nx -> n */

@@ -1,5 +1,6 @@
 #include "stages/intensity.h"
 #include "stages/tiles.h"
+#include "stages/depthpool.h"
 #include "ops/neumann.h"
 #include "ops/psi_omega.h"
 #include "optics/psf.h"
@@ -22,8 +23,10 @@ int c0_intensity_check(const struct c0_intensity_conf *c)
 		return c0_fail(C0_EINVAL, "beta %g, nu %g, mu %g: must be finite and >= 0", c->beta, c->nu, c->mu);
 	if (!(c->tol > 0 && c->tol < 1) || c->maxit < 1)
 		return c0_fail(C0_EINVAL, "cg_tol %g / cg_iterations %d: need a tolerance in (0, 1) and at least one step", c->tol, c->maxit);
-	if (!(c->graph_radius >= 1 && c->graph_radius <= 4))
-		return c0_fail(C0_EINVAL, "graph_radius %g: must be in [1, 4] fine pixels", c->graph_radius);
+	if (!(c->graph_radius >= 1 && c->graph_radius <= 8))
+		return c0_fail(C0_EINVAL, "graph_radius %g: must be in [1, 8] fine pixels", c->graph_radius);
+	if (!(c->graph_orient >= 0 && c->graph_orient <= 100))
+		return c0_fail(C0_EINVAL, "graph_orient %g: must be in [0, 100] (0: every direction alike)", c->graph_orient);
 	if (c->tile < 0)
 		return c0_fail(C0_EINVAL, "tile %d: must be >= 0 camera pixels (0: the whole image)", c->tile);
 	return C0_OK;
@@ -368,12 +371,35 @@ static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, in
 	return st;
 }
 
+/* Psi_Omega and its graph; with graph_orient, the graph's differences along
+ * each pixel's structure (its normal from the support's own shape, as the
+ * depth pool's strip) weigh more than those across it, which would smooth
+ * one filament into its neighbour. */
+static int graph_init(const struct c0_intensity_conf *c, int Ny, int Nx, const uint8_t *mask, struct c0_psi_omega *P)
+{
+	const double sigma = c0_grid_sigma_px(&c->grid);
+	if (c->graph_orient <= 0)
+		return c0_psi_omega_init(P, Ny, Nx, c->grid.srf, sigma, mask, c->graph_radius);
+	struct c0_pixlist pl;
+	int st = c0_pixlist_from_mask(mask, Ny * c->grid.srf, Nx * c->grid.srf, &pl);
+	float *nrm = st ? NULL : c0_alloc(2 * pl.M + 1, sizeof *nrm);
+	if (!st && !nrm)
+		st = C0_ENOMEM;
+	if (!st) {
+		c0_pixlist_normals(&pl, C0_DEPTH_NORMAL_PX, nrm);   /* in raster order, as Psi_Omega's unknowns */
+		st = c0_psi_omega_init_dir(P, Ny, Nx, c->grid.srf, sigma, mask, c->graph_radius, nrm, c->graph_orient);
+	}
+	free(nrm);
+	c0_pixlist_free(&pl);   /* c0_pixlist_from_mask sets pl, even when it fails */
+	return st;
+}
+
 static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
 {
 	int st;
 	struct prob p = { .c = c, .ybar = ybar, .yw = ybar, .NN = Ny * Nx };
-	if ((st = c0_psi_omega_init(&p.P, Ny, Nx, c->grid.srf, c0_grid_sigma_px(&c->grid), mask, c->graph_radius)))
+	if ((st = graph_init(c, Ny, Nx, mask, &p.P)))
 		return st;
 	p.n = p.P.n;
 	p.nb = c->background == C0_BG_SMOOTH ? p.NN : c->background == C0_BG_CONSTANT ? 1 : 0;

@@ -6,7 +6,10 @@
  * including the camera offset. grad_Omega couples the support pixels closer
  * than graph_radius fine pixels, each difference weighted by 1/distance: with
  * only 4-neighbours a diagonal filament falls apart into single pixels that
- * nothing smooths (docs/parameters.md). L is the coarse grid's Laplacian
+ * nothing smooths (docs/parameters.md). With graph_orient, a difference
+ * across the structure weighs less than one along it (ops/psi_omega.h), so
+ * that the smoothness does not pull a filament toward a neighbour at
+ * another depth. L is the coarse grid's Laplacian
  * (ops/neumann.h): a curvature penalty, under which a dip in b as narrow as
  * the PSF costs (length / PSF)^2 more than a broad one, so b cannot trade
  * against x along a structure; the gradient's cost is the same at every
@@ -29,7 +32,8 @@ struct c0_intensity_conf {
 	double mu;                 /* 0: discrepancy principle; > 0: fixed */
 	double tol;                /* 1e-3: CG relative residual, from x = 0, b = the mean (docs/parameters.md) */
 	int maxit;                 /* 500 CG steps per active-set round */
-	double graph_radius;       /* 2.25 fine pixels: smoothness neighbourhood (docs/parameters.md) */
+	double graph_radius;       /* 6 fine pixels: smoothness neighbourhood (docs/parameters.md) */
+	double graph_orient;       /* 20: an edge's weight times (1 - cos^2 with the pixels' normals)^(graph_orient/2); 0: none */
 	int relative;              /* 1: residual^2 = floor^2 + target^2, floor = the residual at the smallest mu */
 	int tile;                  /* 0: one solve on the whole image; else tiles of this side (camera
 				    * pixels) with a halo of two PSF lags, each with its own mu */
@@ -39,7 +43,7 @@ struct c0_intensity_conf {
 	int common_pattern;        /* 0; 1: the whole method takes the MA-TIRF stacks' common fixed pattern
 				    * out of their means when no offset map is given (stages/pattern.h) */
 };
-#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 100, 1, 0, 1e-3, 500, 2.25, 1, 0, NULL, 0 }
+#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 100, 1, 0, 1e-3, 500, 6, 20, 1, 0, NULL, 0 }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {
