@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAXOFF 160   /* offsets within radius 8 number 100 */
+#define MAXOFF 160   /* offsets within radius 8 number 98 */
 
 /* The weight of the edge a -> b, offset (dx, dy): 1/distance, times the
  * direction's factor with dir (0: dropped). */
