@@ -134,6 +134,9 @@ struct c0_run_conf {
 	/* the intensity smoothness's direction: each graph edge weighs (1 - cos^2)^(graph_orient/2),
 	 * cos between the edge and the support's normal at its ends (20; 0: every direction alike) */
 	double graph_orient;
+	/* the depth fit weighs the angles by the intensities' noise, measured on two halves of each
+	 * stack's frames in blocks of this many frames (20, longer than a blink; 0: equal weights) */
+	int depth_noise_block;
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
@@ -141,7 +144,8 @@ struct c0_run_conf {
 	.graph_radius = 6, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = -1, .sparsity = 3e-2, \
 	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1, \
-	.depth_pool_range_nm = -1, .fwhm_rule = C0_FWHM_DATA, .common_pattern = 1, .graph_orient = 20 }
+	.depth_pool_range_nm = -1, .fwhm_rule = C0_FWHM_DATA, .common_pattern = 1, .graph_orient = 20, \
+	.depth_noise_block = 20 }
 
 void c0_run_conf_init(struct c0_run_conf *c);
 /* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),

@@ -386,6 +386,129 @@ static void test_depth_fit(void)
 	CHECK_MSG(worst_bin < 0.3, "one bin: %g nm from its centre", worst_bin);
 }
 
+/* The fit on intensities against a brute-force search on a 0.01 nm grid,
+ * with weights; an angle with a large variance and a wrong value is left
+ * out by the weighted fit and not by the plain one */
+static void test_depth_fit_y(void)
+{
+	enum { NQ = 5, NP = 30 };
+	const struct c0_tirf t = C0_TIRF_DEFAULTS;
+	double p[NQ], g[NQ];
+	for (int q = 0; q < NQ; q++) {
+		CHECK(c0_tirf_p(&t, ANG[q], &p[q]) == C0_OK);
+		g[q] = c0_tirf_i0(&t, ANG[q]);
+	}
+	float yv[NQ][NP], var[NQ * NP], dw[NP], dp[NP];
+	const float *y[NQ];
+	for (int q = 0; q < NQ; q++)
+		y[q] = yv[q];
+	for (int k = 0; k < NP; k++)
+		for (int q = 0; q < NQ; q++) {
+			const double z = 400.0 * k / NP;
+			yv[q][k] = (float)(1000 * g[q] * exp(-p[q] * z) * (1 + 0.1 * c0_rng_normal(&rng)));
+			var[q * NP + k] = (float)(0.5 + c0_rng_uniform(&rng));
+		}
+	CHECK(c0_depth_fit_y(&t, NQ, ANG, NULL, 0, 400, y, NP, var, dw) == C0_OK);
+	double worst = 0;
+	for (int k = 0; k < NP; k++) {
+		double best = -1, zb = 0;
+		for (double z = 0; z <= 400 + 1e-9; z += 0.01) {
+			double s = 0, n = 0;
+			for (int q = 0; q < NQ; q++) {
+				const double w = g[q] * exp(-p[q] * z);
+				s += w * yv[q][k] / var[q * NP + k], n += w * w / var[q * NP + k];
+			}
+			if (s > 0 && s * s / n > best)
+				best = s * s / n, zb = z;
+		}
+		worst = fmax(worst, fabs(dw[k] - zb));
+	}
+	CHECK_MSG(worst < 0.05, "weighted fit vs brute force: %g nm", worst);
+	/* the first angle (the brightest, at depth 25 times the last) 30 % high, its variance 1e6 times the others' */
+	for (int k = 0; k < NP; k++)
+		for (int q = 0; q < NQ; q++) {
+			const double z = 100 + 200.0 * k / NP;
+			yv[q][k] = (float)(1000 * g[q] * exp(-p[q] * z) * (q == 0 ? 1.3 : 1));
+			var[q * NP + k] = q == 0 ? 1e6f : 1;
+		}
+	CHECK(c0_depth_fit_y(&t, NQ, ANG, NULL, 0, 400, y, NP, var, dw) == C0_OK);
+	CHECK(c0_depth_fit_y(&t, NQ, ANG, NULL, 0, 400, y, NP, NULL, dp) == C0_OK);
+	double ew = 0, ep = 0;
+	for (int k = 0; k < NP; k++)
+		ew = fmax(ew, fabs(dw[k] - (100 + 200.0 * k / NP))), ep = fmax(ep, fabs(dp[k] - (100 + 200.0 * k / NP)));
+	CHECK_MSG(ew < 1 && ep > 10, "one wrong angle: weighted %g nm off, plain %g nm", ew, ep);
+}
+
+/* The noise model on pooled intensities with known noise: relative noise of
+ * a different share per angle, the draw d independent of y's with the same
+ * law. Its sd per angle is found, no systematic part (the residuals are the
+ * noise), and the weighted fit reads closer than the plain one. With an
+ * absolute misfit in y that d does not hold, the systematic variance finds
+ * its size, and the weighted fit stays within a little of the plain one. */
+static int cmp_double(const void *a, const void *b);
+static double median_err(const float *d, const double *z, int n)
+{
+	double *e = malloc(sizeof *e * (size_t)n), m;
+	for (int k = 0; k < n; k++)
+		e[k] = fabs(d[k] - z[k]);
+	qsort(e, (size_t)n, sizeof *e, cmp_double);
+	m = e[n / 2];
+	free(e);
+	return m;
+}
+
+static void test_depth_noise(void)
+{
+	enum { NQ = 5, NP = 6000 };
+	const struct c0_tirf t = C0_TIRF_DEFAULTS;
+	const double sd[NQ] = { 0.02, 0.07, 0.04, 0.03, 0.06 };
+	double p[NQ], g[NQ], *z = malloc(sizeof *z * NP);
+	float *yv[NQ], *dv[NQ], *var = malloc(sizeof *var * NQ * NP), *dw = malloc(sizeof *dw * NP), *dp = malloc(sizeof *dp * NP);
+	for (int q = 0; q < NQ; q++) {
+		CHECK(c0_tirf_p(&t, ANG[q], &p[q]) == C0_OK);
+		g[q] = c0_tirf_i0(&t, ANG[q]);
+		yv[q] = malloc(sizeof *yv[q] * NP), dv[q] = malloc(sizeof *dv[q] * NP);
+	}
+	for (int pass = 0; pass < 2; pass++) {
+		const double sys = pass ? 40 : 0;   /* the misfit's sd, against a signal of about 1000 */
+		for (int k = 0; k < NP; k++) {
+			z[k] = 20 + 360 * c0_rng_uniform(&rng);
+			const double a = 1000 * (0.5 + c0_rng_uniform(&rng));
+			for (int q = 0; q < NQ; q++) {
+				const double m = a * g[q] * exp(-p[q] * z[k]);
+				yv[q][k] = (float)(m * (1 + sd[q] * c0_rng_normal(&rng)) + sys * c0_rng_normal(&rng));
+				dv[q][k] = (float)(m * sd[q] * c0_rng_normal(&rng));
+			}
+		}
+		struct c0_depth_noise ns;
+		CHECK(c0_depth_noise(&t, NQ, ANG, NULL, 0, 400, (const float *const *)yv, (const float *const *)dv, NP, var, &ns) == C0_OK);
+		CHECK(ns.nq == NQ && ns.pixels == NP);
+		for (int q = 0; q < NQ; q++)
+			CHECK_MSG(fabs(ns.rel_sd[q] / sd[q] - 1) < 0.1, "pass %d angle %d: relative sd %g, true %g", pass, q, ns.rel_sd[q], sd[q]);
+		CHECK(c0_depth_fit_y(&t, NQ, ANG, NULL, 0, 400, (const float *const *)yv, NP, var, dw) == C0_OK);
+		CHECK(c0_depth_fit_y(&t, NQ, ANG, NULL, 0, 400, (const float *const *)yv, NP, NULL, dp) == C0_OK);
+		const double ew = median_err(dw, z, NP), ep = median_err(dp, z, NP);
+		double rv = 0;   /* the random variance's mean over pixels and angles */
+		for (int k = 0; k < NP; k++)
+			for (int q = 0; q < NQ; q++)
+				rv += (double)dv[q][k] * dv[q][k] / (NP * NQ);
+		printf("noise model, %s: systematic variance %.0f (random %.0f), residuals / noise %.2f; median |error| weighted %.2f nm, plain %.2f nm\n",
+		       pass ? "with misfit 1600" : "noise only", ns.sys_var, rv, ns.resid_ratio, ew, ep);
+		if (!pass) {
+			CHECK_MSG(ns.sys_var < 0.25 * rv && fabs(ns.resid_ratio - 1) < 0.15,
+				  "noise only: systematic variance %g (random %g), residuals / noise %g", ns.sys_var, rv, ns.resid_ratio);
+			CHECK_MSG(ew < 0.9 * ep, "noise only: weighted %g nm, plain %g nm", ew, ep);
+		} else {
+			CHECK_MSG(fabs(ns.sys_var / (sys * sys) - 1) < 0.3 && ns.resid_ratio > 1.25,
+				  "with misfit: systematic variance %g (true %g), residuals / noise %g", ns.sys_var, sys * sys, ns.resid_ratio);
+			CHECK_MSG(ew < 1.05 * ep, "with misfit: weighted %g nm, plain %g nm", ew, ep);
+		}
+	}
+	for (int q = 0; q < NQ; q++)
+		free(yv[q]), free(dv[q]);
+	free(z), free(var), free(dw), free(dp);
+}
+
 static int cmp_double(const void *a, const void *b)
 {
 	const double x = *(const double *)a, y = *(const double *)b;
@@ -458,6 +581,8 @@ int main(void)
 	RUN(test_depth_error);
 	RUN(test_depthcode);
 	RUN(test_depth_fit);
+	RUN(test_depth_fit_y);
+	RUN(test_depth_noise);
 	RUN(test_depth_noise_free);
 	return CHECK_DONE();
 }

@@ -55,6 +55,14 @@ static void test_conf(void)
 	      s.matirf.sparsity == md.sparsity && s.matirf.pdhg.maxit == md.pdhg.maxit && s.matirf.pdhg.tol == md.pdhg.tol &&
 	      s.matirf.pdhg.relax == md.pdhg.relax && s.matirf.fused == md.fused);
 	CHECK(s.pool_nm == C0_DEPTH_POOL_FWHM * 229 && s.pool_range_nm == C0_DEPTH_POOL_RANGE_NM);
+	/* the frame halves serve the guided pool's depth fit: 2D, or no guide, none */
+	CHECK(s.intensity.noise_block == 0 && id.noise_block == 0);
+	struct c0_run_conf c3 = c;
+	c3.nangles = 2, c3.angles[0] = 62, c3.angles[1] = 66;
+	CHECK(c0_run_conf_stages(&c3, 100, &s) == C0_OK && s.intensity.noise_block == 20 && c3.depth_noise_block == 20);
+	c3.depth_pool_range_nm = 0;
+	CHECK(c0_run_conf_stages(&c3, 100, &s) == C0_OK && s.intensity.noise_block == 0);
+	CHECK(c0_run_conf_stages(&c, 100, &s) == C0_OK);
 	/* kappa -1: the plain default, or the deconvolution's with psf_fwhm_nm
 	 * (matirf only: run does not deconvolve); a given kappa is kept */
 	struct c0_matirf_conf m;
@@ -199,6 +207,8 @@ static void test_files_and_arrays(void)
 	expect_einval(c0_run(&b, ms, 3, &ra), "graph_radius");
 	b = c, b.graph_orient = -1;
 	expect_einval(c0_run(&b, ms, 3, &ra), "graph_orient");
+	b = c, b.depth_noise_block = -1;
+	expect_einval(c0_run(&b, ms, 3, &ra), "depth_noise_block");
 	b = c, b.nsupport_stacks = 1, b.support_stacks[0] = 4;
 	expect_einval(c0_run(&b, ms, 3, &ra), "support_stacks");
 	b = c, b.angles[1] = 50, b.angles[2] = 50;   /* one below critical is support-only; two leave one TIRF angle */

@@ -930,6 +930,38 @@ static void test_noise_fast(void)
 	c0_cov_acc_free(a), c0_cov_acc_free(b);
 }
 
+/* The two block halves' means against the frames' own sums: frame t holds
+ * t + pixel / 100, blocks of 3 over 14 frames (even blocks: 0-2, 6-8,
+ * 12-13; odd: 3-5, 9-11); under 2 blocks, none */
+static void test_block_means(void)
+{
+	enum { T = 14, H = 3, W = 4, B = 3 };
+	static float fr[T * H * W];
+	for (int t = 0; t < T; t++)
+		for (int p = 0; p < H * W; p++)
+			fr[(size_t)t * H * W + p] = (float)(t + p / 100.0);
+	struct c0_frames f;
+	CHECK(c0_frames_wrap(&f, fr, T, H, W, 100, "halves") == C0_OK);
+	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
+	c.grid = (struct c0_grid){ 100, 229, 4 };
+	float *half[2];
+	int64_t n[2];
+	double sec;
+	CHECK(c0_stack_block_means(&c, &f, B, half, n, &sec) == C0_OK);
+	CHECK(half[0] && half[1] && n[0] == 8 && n[1] == 6);
+	double err = 0;
+	for (int p = 0; half[0] && half[1] && p < H * W; p++) {
+		double s[2] = { 0, 0 };
+		for (int t = 0; t < T; t++)
+			s[(t / B) % 2] += t + p / 100.0;
+		err = fmax(err, fmax(fabs(half[0][p] - s[0] / 8), fabs(half[1][p] - s[1] / 6)));
+	}
+	CHECK_MSG(err < 1e-5, "block means: %g off", err);
+	free(half[0]), free(half[1]);
+	CHECK(c0_stack_block_means(&c, &f, 8, half, n, &sec) == C0_OK && !half[0] && !half[1] && n[0] == 0);
+	c0_frames_close(&f);
+}
+
 int main(void)
 {
 	c0_rng_init(&rng, 42, 0);
@@ -946,6 +978,7 @@ int main(void)
 	RUN(test_pixel_guard);
 	RUN(test_first_fail);
 	RUN(test_wrong_inputs);
+	RUN(test_block_means);
 	RUN(test_noise_variance);
 	RUN(test_solver_converges);
 	RUN(test_accuracy);

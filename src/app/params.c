@@ -80,6 +80,7 @@ static const struct c0_param table[] = {
 	/* depth pooling */
 	NUM(depth_pool_nm, C0_P_DOUBLE, "depth-pool", "NM", "window over which intensities are summed for each pixel's depth: its length along the structure when guided (0: off; -1: the default)", "1.75 FWHM"),
 	NUM(depth_pool_range_nm, C0_P_DOUBLE, "depth-pool-range", "NM", "only window pixels whose first depth guess is within NM of the centre's are summed (0: all; -1: the default)", "50"),
+	NUM(depth_noise_block, C0_P_INT, "depth-noise-block", "N", "the depth fit weighs the angles by the intensities' noise, from two halves of each stack's frames in blocks of N frames (0: equal weights)", "20"),
 	/* photobleaching */
 	ENUM(bleach, "estimate|off|repeat", "bleach",
 	     "photobleaching across the stacks: estimate the fade from the stacks' frame sums and divide each stack's intensity by its factor before MA-TIRF; "

@@ -4,6 +4,7 @@
  * MA-TIRF baseline from the background-corrected means when asked. */
 #include "app/pipeline.h"
 #include "app/report_steps.h"
+#include "stages/depthfit.h"
 #include "stages/depthpool.h"
 #include "core/err.h"
 #include "core/comm.h"
@@ -61,6 +62,44 @@ static int depth_guide(const struct c0_run_conf *ct, const struct c0_matirf_conf
 	return st;
 }
 
+/* The pooled intensities' noise variances (*var, nq x pl->M; stages/depthfit.h)
+ * from the intensity step's noise draws pooled as the intensities were
+ * (guide and normals), and its model ns; *var stays NULL without a draw for
+ * every angle, or where the residuals are mostly misfit. */
+static int pool_noise(const struct c0_result *r, const struct c0_run_conf *ct, const int *tirf,
+		      const struct c0_stage_confs *s, const struct c0_pixlist *pl, int h, const float *guide,
+		      const float *nrm, const float *const *pooled, float **var, struct c0_depth_noise *ns)
+{
+	const int nq = ct->nangles;
+	const size_t M = pl->M ? pl->M : 1;
+	for (int i = 0; i < nq; i++)
+		if (!r->xnoise[tirf[i]])
+			return C0_OK;
+	float *d[C0_MAX_STACKS] = { 0 }, *dp[C0_MAX_STACKS] = { 0 };
+	int st = C0_OK;
+	for (int i = 0; i < nq && !st; i++) {
+		const float g = (float)(1 / r->bleach_factor[tirf[i]]);
+		if (!(d[i] = c0_alloc(M, sizeof(float))) || !(dp[i] = c0_alloc(M, sizeof(float))))
+			st = C0_ENOMEM;
+		for (size_t k = 0; !st && k < pl->M; k++)
+			d[i][k] = r->xnoise[tirf[i]][k] * g;
+	}
+	if (!st)
+		st = c0_pool_guided_at((const float *const *)d, nq, pl, guide, s->pool_range_nm, nrm, C0_DEPTH_POOL_WIDTH_PX, h,
+				       dp);
+	if (!st && !(*var = c0_alloc((size_t)nq * M, sizeof **var)))
+		st = C0_ENOMEM;
+	const struct c0_matirf_conf *m = &s->matirf;
+	if (!st)
+		st = c0_depth_noise(&m->tirf, nq, ct->angles, ct->ngains ? ct->gains : NULL, m->z0_nm, c0_matirf_nz(m) * m->dz_nm,
+				    pooled, (const float *const *)dp, pl->M, *var, ns);
+	for (int i = 0; i < nq; i++)
+		free(d[i]), free(dp[i]);
+	if (st || ns->resid_ratio > C0_DEPTH_NOISE_RATIO)   /* mostly misfit: the volume's equal-weight readout */
+		free(*var), *var = NULL;
+	return st;
+}
+
 /* MA-TIRF's input: the intensities over their bleaching factors, each
  * pooled over a window of about pool_nm (odd, in fine pixels) on the
  * support, over the pixels whose guide depth is within pool_range_nm of the
@@ -68,7 +107,8 @@ static int depth_guide(const struct c0_run_conf *ct, const struct c0_matirf_conf
  * the whole square window). All of it on the support's pixels alone (own, pooled:
  * nq arrays over pl), the fine grid being a thousand times larger. */
 static int pool_input(struct c0_result *r, const struct c0_run_conf *ct, const int *tirf, const struct c0_stage_confs *s,
-		      const struct c0_pixlist *pl, int h, int hg, float *const *own, float *const *pooled)
+		      const struct c0_pixlist *pl, int h, int hg, float *const *own, float *const *pooled, float **var,
+		      struct c0_depth_noise *ns)
 {
 	const int nq = ct->nangles;
 	for (int i = 0; i < nq; i++) {
@@ -91,6 +131,8 @@ static int pool_input(struct c0_result *r, const struct c0_run_conf *ct, const i
 		st = c0_pool_guided_at((const float *const *)own, nq, pl, guide, s->pool_range_nm, nrm,
 				       C0_DEPTH_POOL_WIDTH_PX, h, pooled);
 	}
+	if (!st && var)
+		st = pool_noise(r, ct, tirf, s, pl, h, guide, nrm, (const float *const *)pooled, var, ns);
 	free(guide), free(nrm);
 	return st;
 }
@@ -113,8 +155,10 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 		for (size_t p = 0; !st && ct->baseline && p < Nc; p++)
 			base[i][p] = r->corrected[tirf[i]][p] * (float)(1 / r->bleach_factor[tirf[i]]);
 	}
+	float *var = NULL;   /* with the noise draws and the guided pool: the angles' weights in the depth fit */
+	struct c0_depth_noise ns = { 0 };
 	if (!st)
-		st = pool_input(r, ct, tirf, s, pl, h, guided ? hg : 0, own, pooled);
+		st = pool_input(r, ct, tirf, s, pl, h, guided ? hg : 0, own, pooled, &var, &ns);
 	/* the solve reads whole images, 0 off the support: untouched, their
 	 * pages stay out of memory (a few in ten at 2048 x 2048 camera pixels) */
 	for (int i = 0; !st && i < nq; i++) {
@@ -123,7 +167,7 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 		for (size_t k = 0; !st && k < pl->M; k++)
 			img[i][pl->pix[k]] = (h > 0 ? pooled : own)[i][k];
 	}
-	const struct c0_pooled pin = { pl, (const float *const *)own, (const float *const *)pooled };
+	const struct c0_pooled pin = { pl, (const float *const *)own, (const float *const *)pooled, var };
 	if (!st)
 		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)img, h > 0 ? &pin : NULL, Ly, Lx, fine, 0);
 	for (int i = 0; i < nq; i++)
@@ -131,11 +175,14 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 	if (!st)
 		c0_report_pool(cJSON_GetObjectItem(r->rep, "matirf"), h > 0 ? 2 * h + 1 : 0, guided ? s->pool_range_nm : 0,
 			       guided ? C0_DEPTH_POOL_WIDTH_PX : 0, guided ? 2 * hg + 1 : 0);
+	if (!st)
+		c0_report_depth_noise(cJSON_GetObjectItem(r->rep, "matirf"), ns.nq ? &ns : NULL, var != NULL, s->intensity.noise_block);
 	if (!st && ct->baseline)
 		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
 				    s->support.grid.pixel_nm, 1);
 	for (int i = 0; i < nq; i++)
 		free(own[i]), free(pooled[i]), free(base[i]);
+	free(var);
 	return st;
 }
 

@@ -89,6 +89,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	if (!(c->depth_pool_range_nm >= -1 && isfinite(c->depth_pool_range_nm)))
 		return c0_fail(C0_EINVAL, "depth_pool_range_nm %g: must be a depth difference in nm (0: every pixel of the window, -1: the default, %d)",
 			       c->depth_pool_range_nm, C0_DEPTH_POOL_RANGE_NM);
+	if (c->depth_noise_block < 0)
+		return c0_fail(C0_EINVAL, "depth_noise_block %d: must be a number of frames (0: equal weights)", c->depth_noise_block);
 	const struct c0_grid grid = { pixel_nm, fwhm, c->srf };
 	s->support = (struct c0_support_conf){ .grid = grid, .penalty = c->penalty,
 					       .lambda_rel = c->lambda, .lag = c->lag,
@@ -111,6 +113,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 		s->matirf.kappa = ((struct c0_matirf_conf)C0_MATIRF_DEFAULTS).kappa;
 	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
 	s->pool_range_nm = c->depth_pool_range_nm < 0 ? C0_DEPTH_POOL_RANGE_NM : c->depth_pool_range_nm;
+	/* the halves serve the guided pool's depth fit alone */
+	s->intensity.noise_block = c->nangles > 0 && s->pool_nm > 0 && s->pool_range_nm > 0 ? c->depth_noise_block : 0;
 	if ((unsigned)c->discrepancy > C0_DISCREPANCY_PLAIN || (unsigned)c->bleach > C0_BLEACHING_REPEAT ||
 	    (unsigned)c->acquisition > C0_ACQ_INTERLEAVED)
 		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,

@@ -1,6 +1,7 @@
 /* The other steps' parts of report.json: drift, render, intensity,
  * bleaching, MA-TIRF and the run's parameters. */
 #include "app/report_steps.h"
+#include "stages/depthfit.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -260,4 +261,26 @@ void c0_report_pool(cJSON *j, int window_px, double range_nm, double strip_px, i
 	cJSON_AddNumberToObject(j, "depth_pool_range_nm", range_nm);
 	cJSON_AddNumberToObject(j, "depth_pool_strip_px", strip_px);
 	cJSON_AddNumberToObject(j, "depth_guide_window_px", guide_window_px);
+}
+
+void c0_report_depth_noise(cJSON *j, const struct c0_depth_noise *ns, int used, int block)
+{
+	cJSON *w = cJSON_AddObjectToObject(j, "depth_weights");
+	cJSON_AddStringToObject(w, "rule", used ? "noise" : "equal");
+	cJSON_AddStringToObject(w, "what", "noise: each pixel's depth fitted to its pooled intensities, each angle weighed by "
+				"1 / (s_q m_q^2 + c_q + systematic), the random part from the intensities of two halves of "
+				"the frames (blocks of block_frames frames), the systematic part from the fit's residuals "
+				"beyond it; used where the residuals are at most max_ratio times the random part's "
+				"expectation. equal: the volume's projections fitted with equal weights (docs/parameters.md)");
+	cJSON_AddNumberToObject(w, "block_frames", block);
+	cJSON_AddNumberToObject(w, "max_ratio", C0_DEPTH_NOISE_RATIO);
+	if (!ns)
+		return;
+	cJSON_AddItemToObject(w, "relative_sd", cJSON_CreateDoubleArray(ns->rel_sd, ns->nq));
+	cJSON *a = cJSON_AddArrayToObject(w, "absolute_share");
+	for (int q = 0; q < ns->nq; q++)   /* JSON has no infinity: null where the relative part is 0 */
+		cJSON_AddItemToArray(a, isfinite(ns->abs_share[q]) ? cJSON_CreateNumber(ns->abs_share[q]) : cJSON_CreateNull());
+	cJSON_AddNumberToObject(w, "systematic_variance", ns->sys_var);
+	cJSON_AddNumberToObject(w, "residuals_over_noise", ns->resid_ratio);
+	cJSON_AddNumberToObject(w, "pixels", (double)ns->pixels);
 }

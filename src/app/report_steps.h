@@ -36,3 +36,7 @@ void c0_report_run_params(cJSON *rep, const struct c0_run_conf *c, const struct 
 /* The depth pooling's windows (fine pixels; 0: off) in the MA-TIRF section j;
  * strip_px the guided window's half-width across the structure (0: the whole square). */
 void c0_report_pool(cJSON *j, int window_px, double range_nm, double strip_px, int guide_window_px);
+/* The depth fit's weights (stages/depthfit.h): the noise model ns (NULL:
+ * none made), used or not; block: the frame halves' block length (0: none). */
+struct c0_depth_noise;
+void c0_report_depth_noise(cJSON *j, const struct c0_depth_noise *ns, int used, int block);

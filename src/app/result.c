@@ -66,7 +66,7 @@ void c0_result_free(struct c0_result *r)
 			free(r->corrected[q]);
 	}
 	for (int q = 0; q < C0_MAX_STACKS; q++)
-		free(r->xs[q]);
+		free(r->xs[q]), free(r->xnoise[q]);
 	c0_pixlist_free(&r->pl);
 	free(r->sres), free(r->ires), free(r->corrected), free(r->mask), free(r->names), free(r->json);
 	c0_drift_free(r->drift), free(r->render), free(r->mean);

@@ -241,14 +241,20 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 /* One stack's mean and noise variance: from the support step when that ran
  * on it, else one streaming pass (the covariance on the support's tiles
  * when the noise variance has to be estimated, else just the mean). */
-static int intensity_read(const struct c0_support_conf *sc0, void *hook, const float *noise, struct c0_frames *f,
-			  const uint8_t *mask, double *s2, const struct c0_support_result *known, double **own, int64_t *frames,
-			  double *seconds)
+static struct c0_support_conf stream_conf(const struct c0_support_conf *sc0, void *hook, const float *noise)
 {
 	struct c0_support_conf scc = *sc0;
 	scc.frame_fn = hook ? c0_drift_frame_fn : NULL, scc.frame_ctx = hook;
 	if (scc.noise_map)
 		scc.noise_map = noise;
+	return scc;
+}
+
+static int intensity_read(const struct c0_support_conf *sc0, void *hook, const float *noise, struct c0_frames *f,
+			  const uint8_t *mask, double *s2, const struct c0_support_result *known, double **own, int64_t *frames,
+			  double *seconds)
+{
+	struct c0_support_conf scc = stream_conf(sc0, hook, noise);
 	*own = NULL;
 	if (known) {
 		*frames = known->frames, *s2 = known->sigma2, *seconds = 0;
@@ -514,6 +520,53 @@ static void solve_again(struct c0_result *r, const struct c0_intensity_conf *ic,
 		share_mu(r, ic, share, (const double *const *)fixed, frames, s2, corrected, 1, mu_own, sts, msg);
 }
 
+/* Stack i's noise draw (r->xnoise[i]): its two block halves' means (float,
+ * freed here) solved at its final mu, half their difference on pl, scaled to
+ * the whole stack's noise, var(a - b) being var(frame) (1/n_a + 1/n_b) */
+static int noise_draw(struct c0_result *r, const struct c0_intensity_conf *ic, int i, float *const *half,
+		      const int64_t *count, double s2)
+{
+	const int H = r->ires[i].Ny, W = r->ires[i].Nx;
+	const size_t N = (size_t)H * W;
+	struct c0_intensity_conf c = *ic;
+	c.mu = r->ires[i].mu;
+	float *x[2] = { NULL, NULL };
+	double *mean = c0_alloc(N, sizeof *mean);
+	int st = mean ? C0_OK : C0_ENOMEM;
+	for (int k = 0; k < 2 && !st; k++) {
+		struct c0_intensity_result res;
+		for (size_t p = 0; p < N; p++)
+			mean[p] = half[k][p];
+		if (!(st = intensity_solve(&c, mean, H, W, count[k], r->mask, s2, noise_of(r, i), &res, NULL))) {
+			if (!(x[k] = pixlist_values(&r->pl, res.x)))
+				st = C0_ENOMEM;
+			c0_intensity_result_free(&res);
+		}
+	}
+	const double scale = 1 / sqrt((double)(count[0] + count[1]) * (1.0 / count[0] + 1.0 / count[1]));
+	for (size_t k = 0; !st && k < r->pl.M; k++)
+		x[0][k] = (float)((x[0][k] - x[1][k]) * scale);
+	if (!st)
+		r->xnoise[i] = x[0], x[0] = NULL;
+	free(x[0]), free(x[1]), free(mean);
+	return st;
+}
+
+/* The noise draws of the share[] stacks (all without share), side by side
+ * when each is one tile */
+static void noise_draws(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, float *(*half)[2],
+			int64_t (*count)[2], const double *s2, int *sts, char (*msg)[256])
+{
+	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile)
+	for (int i = 0; i < n; i++) {
+		if (!half[i][0] || (share && !share[i]))
+			continue;
+		if ((sts[i] = noise_draw(r, ic, i, half[i], count[i], s2[i])))
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+	}
+}
+
 /* Every stack's mean and noise variance side by side (each reads its own
  * file), then the solves: side by side when each is one tile, else one
  * stack after the other with its tiles side by side (5 stacks on 2 threads
@@ -527,6 +580,8 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 {
 	const int n = r->n;
 	double *own[C0_MAX_STACKS] = { 0 }, s2[C0_MAX_STACKS], *fixed[C0_MAX_STACKS] = { 0 };
+	float *half[C0_MAX_STACKS][2] = { { 0 } };
+	int64_t count[C0_MAX_STACKS][2] = { { 0 } };
 	const double *mean[C0_MAX_STACKS];
 	const int H = f[0].height, W = f[0].width, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
 	struct c0_progress pr;
@@ -537,6 +592,12 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 		s2[i] = sigma2 ? sigma2[i] : 0;
 		sts[i] = intensity_read(sc, r->drift ? r->hooks[i] : NULL, noise_of(r, i), &f[i], r->mask, &s2[i], known[i], &own[i],
 					&frames[i], &tc[i]);
+		double th = 0;
+		if (!sts[i] && ic->noise_block > 0 && (!share || share[i])) {
+			const struct c0_support_conf scc = stream_conf(sc, r->drift ? r->hooks[i] : NULL, noise_of(r, i));
+			sts[i] = c0_stack_block_means(&scc, &f[i], ic->noise_block, half[i], count[i], &th);
+			tc[i] += th;
+		}
 		if (sts[i])
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 #pragma omp critical(c0_intensity_progress)
@@ -570,7 +631,11 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 			solve_again(r, ic, share, fixed, frames, s2, corrected, mu_own, sts, msg);
 	}
 	for (int i = 0; i < n; i++)
-		free(own[i]), free(fixed[i]);
+		bad |= sts[i];
+	if (!bad && ic->noise_block > 0)
+		noise_draws(r, ic, share, half, count, s2, sts, msg);
+	for (int i = 0; i < n; i++)
+		free(own[i]), free(fixed[i]), free(half[i][0]), free(half[i][1]);
 }
 
 int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, const struct c0_support_conf *sc,
@@ -622,16 +687,30 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 	return C0_OK;
 }
 
-/* the single-depth fit of each column (stages/depthfit.h) into res->depth
- * at its pixel; 0 off the columns, as their volume */
-static int depth_fit_cols(const struct c0_matirf_conf *m, const struct c0_run_conf *c, int nq, struct c0_matirf_result *res)
+/* the single-depth fit (stages/depthfit.h) of each column into res->depth at
+ * its pixel; 0 off the columns, as their volume. With the pooled
+ * intensities' noise known, the fit weighs the angles by it and reads the
+ * pooled intensities themselves: the solve's projections are fitted to
+ * them with equal weights and smoothed across pixels, which takes back most
+ * of what the weights gain (docs/parameters.md, "Weighting the angles by
+ * the noise of frame halves"). */
+static int depth_fit_cols(const struct c0_matirf_conf *m, const struct c0_run_conf *c, int nq, const struct c0_pooled *pool,
+			  struct c0_matirf_result *res)
 {
-	float *d = c0_alloc(res->M ? (size_t)res->M : 1, sizeof *d);
-	int st = d ? c0_depth_fit(&m->tirf, nq, c->angles, c->ngains ? c->gains : NULL, res->nz, m->z0_nm, m->dz_nm, res->f,
-				  (size_t)res->M, d)
-		   : C0_ENOMEM;
-	for (size_t k = 0; !st && k < (size_t)res->M; k++)
-		res->depth[res->pixel[k]] = d[k];
+	const int w = pool && pool->var;
+	const size_t M = (size_t)res->M, L = w ? pool->pl->M : M;
+	float *d = c0_alloc(L ? L : 1, sizeof *d);
+	int st = d ? C0_OK : C0_ENOMEM;
+	const double *gain = c->ngains ? c->gains : NULL;
+	if (!st && w)
+		st = c0_depth_fit_y(&m->tirf, nq, c->angles, gain, m->z0_nm, res->nz * m->dz_nm, pool->pooled, L, pool->var, d);
+	else if (!st)
+		st = c0_depth_fit(&m->tirf, nq, c->angles, gain, res->nz, m->z0_nm, m->dz_nm, res->f, M, d);
+	for (size_t k = 0, i = 0; !st && k < M; k++) {
+		while (w && i < L && pool->pl->pix[i] < res->pixel[k])   /* pixel[] and pl's pixels both increase */
+			i++;
+		res->depth[res->pixel[k]] = !w ? d[k] : i < L && pool->pl->pix[i] == res->pixel[k] ? d[i] : 0;
+	}
 	free(d);
 	return st;
 }
@@ -661,7 +740,7 @@ int c0_step_matirf(struct c0_result *r, const struct c0_run_conf *c, const struc
 	 * mean: its 100 nm pixels hold several depths, whose brightness-weighted
 	 * mean the single fit misses (demo: -29 nm signed, the mean -8 nm) */
 	const double tfit = c0_now();
-	if (!baseline && (st = depth_fit_cols(m, c, nq, res)))
+	if (!baseline && (st = depth_fit_cols(m, c, nq, pool, res)))
 		return st;
 	if (!baseline)
 		r->vol_pixel_nm = pixel_nm;

@@ -60,10 +60,13 @@ void c0_pixlist_normals(const struct c0_pixlist *pl, int r, float *nrm);
  * a neighbour beside it whatever the guide says. */
 int c0_pool_guided_at(const float *const *x, int nq, const struct c0_pixlist *pl, const float *guide, double range,
 		      const float *nrm, double width, int h, float *const *out);
-/* A run's pooled MA-TIRF input: each angle's own and pooled intensities over pl. */
+/* A run's pooled MA-TIRF input: each angle's own and pooled intensities over
+ * pl, and the pooled intensities' noise variances (nq x pl->M,
+ * stages/depthfit.h; NULL: the depth fit weighs the angles alike). */
 struct c0_pooled {
 	const struct c0_pixlist *pl;
 	const float *const *own, *const *pooled;
+	const float *var;
 };
 /* c0_pool_rescale with x and pooled over pl (pixel[] on pl, increasing). */
 void c0_pool_rescale_at(float *f, int nz, const int *pixel, size_t M, int nq, const struct c0_pixlist *pl,

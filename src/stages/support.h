@@ -119,6 +119,14 @@ int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames
  * variance is already known and the covariance is not needed. */
 int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double **mean, int64_t *frames,
 		  double *seconds);
+/* One streaming pass for the means of the frames' two block halves: the
+ * frames whose block of `block` frames has an even number (t / block even)
+ * into half[0], the others into half[1] (allocated), count[k] frames each;
+ * both NULL when the stack has fewer than 2 blocks. Blocks longer than a
+ * blink keep the halves' blinking apart, which alternate frames share
+ * (docs/parameters.md). */
+int c0_stack_block_means(const struct c0_support_conf *c, struct c0_frames *f, int block, float *half[2],
+			 int64_t count[2], double *seconds);
 /* Noise variance of a stack whose support is known: the same model with
  * r_x free on the mask only and no penalty (100 iterations), in one pass on
  * the support's tile grid (memory: the float band of the frame and one

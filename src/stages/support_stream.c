@@ -131,6 +131,54 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double 
 	return st;
 }
 
+/* frames of even blocks (t / block even) into a, the others into b */
+struct block_halves {
+	float *half[2];
+	double *sum[2];
+	int64_t count[2];
+	size_t n;
+	int block;
+};
+
+static int add_block(void *ctx, int64_t t, const float *rows)
+{
+	struct block_halves *h = ctx;
+	const int k = (int)((t / h->block) % 2);
+	double *s = h->sum[k];
+	for (size_t i = 0; i < h->n; i++)
+		s[i] += rows[i];
+	h->count[k]++;
+	return C0_OK;
+}
+
+int c0_stack_block_means(const struct c0_support_conf *c, struct c0_frames *in, int block, float *half[2],
+			 int64_t count[2], double *seconds)
+{
+	half[0] = half[1] = NULL, count[0] = count[1] = 0, *seconds = 0;
+	if (block < 1 || in->count < 2 * (int64_t)block)
+		return C0_OK;
+	const double t0 = c0_now();
+	struct block_halves h = { { NULL, NULL }, { NULL, NULL }, { 0, 0 }, (size_t)in->width * in->height, block };
+	int st = C0_OK;
+	for (int k = 0; k < 2 && !st; k++)
+		if (!(h.sum[k] = c0_alloc(h.n, sizeof *h.sum[k])))
+			st = C0_ENOMEM;
+	if (!st)
+		st = each_frame(c, in, 0, 0, in->height, NULL, add_block, &h);
+	for (int k = 0; k < 2 && !st; k++) {   /* means as floats: what the solve reads, at half the memory */
+		if (!(half[k] = c0_alloc(h.n, sizeof *half[k])))
+			st = C0_ENOMEM;
+		for (size_t i = 0; !st && i < h.n; i++)
+			half[k][i] = (float)(h.sum[k][i] / (double)h.count[k]);
+	}
+	free(h.sum[0]), free(h.sum[1]);
+	count[0] = h.count[0], count[1] = h.count[1];
+	if (st)
+		free(half[0]), free(half[1]), half[0] = half[1] = NULL;
+	*seconds = c0_now() - t0;
+	return st;
+}
+
 static int add_one(void *ctx, int64_t t, const float *rows)
 {
 	(void)t;
