@@ -5,6 +5,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 int c0_report_drift(cJSON *rep, const struct c0_drift *d, double px)

@@ -250,19 +250,42 @@ static struct c0_support_conf stream_conf(const struct c0_support_conf *sc0, voi
 	return scc;
 }
 
-static int intensity_read(const struct c0_support_conf *sc0, void *hook, const float *noise, struct c0_frames *f,
-			  const uint8_t *mask, double *s2, const struct c0_support_result *known, double **own, int64_t *frames,
-			  double *seconds)
+static int intensity_read(const struct c0_support_conf *scc, struct c0_frames *f, const uint8_t *mask, double *s2,
+			  const struct c0_support_result *known, double **own, int64_t *frames, double *seconds)
 {
-	struct c0_support_conf scc = stream_conf(sc0, hook, noise);
 	*own = NULL;
 	if (known) {
 		*frames = known->frames, *s2 = known->sigma2, *seconds = 0;
 		return C0_OK;
 	}
 	if (*s2 > 0)
-		return c0_stack_mean(&scc, f, own, frames, seconds);
-	return c0_stack_noise(&scc, f, mask, own, frames, s2, seconds);
+		return c0_stack_mean(scc, f, own, frames, seconds);
+	return c0_stack_noise(scc, f, mask, own, frames, s2, seconds);
+}
+
+/* intensity_read, and with block the means of the frames' two block halves
+ * (half, count; stages/support.h): summed in the same pass, or in a pass of
+ * their own where the support step gave the mean */
+static int read_stack(const struct c0_support_conf *sc, void *hook, const float *noise, struct c0_frames *f,
+		      const uint8_t *mask, double *s2, const struct c0_support_result *known, int block, double **own,
+		      int64_t *frames, double *seconds, float *half[2], int64_t count[2])
+{
+	struct c0_support_conf scc = stream_conf(sc, hook, noise);
+	struct c0_block_halves bh = { 0 };
+	const int tap = block > 0 && !known && f->count >= 2 * (int64_t)block;
+	int st = tap ? c0_block_halves_init(&bh, block, (size_t)f->width * f->height, scc.frame_fn, scc.frame_ctx) : C0_OK;
+	if (tap && !st)
+		scc.frame_fn = c0_block_halves_fn, scc.frame_ctx = &bh;
+	if (!st)
+		st = intensity_read(&scc, f, mask, s2, known, own, frames, seconds);
+	if (tap && !st)
+		st = c0_block_halves_finish(&bh, half, count);
+	free(bh.sum[0]), free(bh.sum[1]);
+	double th = 0;
+	if (!st && block > 0 && known)
+		st = c0_stack_block_means(&scc, f, block, half, count, &th);
+	*seconds += th;
+	return st;
 }
 
 /* With the camera's read-noise map (less its median, noise): each pixel's
@@ -590,14 +613,8 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int i = 0; i < n; i++) {
 		s2[i] = sigma2 ? sigma2[i] : 0;
-		sts[i] = intensity_read(sc, r->drift ? r->hooks[i] : NULL, noise_of(r, i), &f[i], r->mask, &s2[i], known[i], &own[i],
-					&frames[i], &tc[i]);
-		double th = 0;
-		if (!sts[i] && ic->noise_block > 0 && (!share || share[i])) {
-			const struct c0_support_conf scc = stream_conf(sc, r->drift ? r->hooks[i] : NULL, noise_of(r, i));
-			sts[i] = c0_stack_block_means(&scc, &f[i], ic->noise_block, half[i], count[i], &th);
-			tc[i] += th;
-		}
+		sts[i] = read_stack(sc, r->drift ? r->hooks[i] : NULL, noise_of(r, i), &f[i], r->mask, &s2[i], known[i],
+				    !share || share[i] ? ic->noise_block : 0, &own[i], &frames[i], &tc[i], half[i], count[i]);
 		if (sts[i])
 			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 #pragma omp critical(c0_intensity_progress)

@@ -8,8 +8,9 @@
 
 #define MAXQ_FIT 64
 
-/* The candidate depths z0 + c step (c < nc, at most 1 nm apart, ends
- * included) and their exponentials Wc[c nq + q] = g_q I0 e^{-p_q z}. */
+/* The candidate depths z0 + c step over [z0, z0 + range] (c < nc, at most
+ * hmax apart, ends included) and their exponentials Wc[c nq + q] = g_q I0
+ * e^{-p_q z}. */
 struct cands {
 	int nq, nc;
 	double z0, step, p[MAXQ_FIT];
@@ -17,13 +18,13 @@ struct cands {
 };
 
 static int cands_init(const struct c0_tirf *t, int nq, const double *angles, const double *gain, double z0, double range,
-		      double dz, struct cands *c)
+		      double hmax, struct cands *c)
 {
 	c->Wc = NULL;
-	if (nq < 1 || nq > MAXQ_FIT || !(range > 0) || !(dz > 0))
-		return c0_fail(C0_EINVAL, "depth fit: %d angles, a range of %g nm in bins of %g nm", nq, range, dz);
+	if (nq < 1 || nq > MAXQ_FIT || !(range > 0) || !(hmax > 0))
+		return c0_fail(C0_EINVAL, "depth fit: %d angles, a range of %g nm in steps of %g nm", nq, range, hmax);
 	c->nq = nq, c->z0 = z0;
-	c->nc = 1 + (int)fmin(4096, ceil(range / fmin(1.0, dz / 4)));
+	c->nc = 1 + (int)fmin(4096, ceil(range / hmax));
 	c->step = range / (c->nc - 1);
 	if (!(c->Wc = c0_alloc((size_t)nq * c->nc, sizeof *c->Wc)))
 		return C0_ENOMEM;
@@ -112,7 +113,7 @@ int c0_depth_fit(const struct c0_tirf *t, int nq, const double *angles, const do
 		return c0_fail(C0_EINVAL, "depth fit: %d bins", nz);
 	struct cands c;
 	double *W = c0_alloc((size_t)nq * nz, sizeof *W);
-	int st = cands_init(t, nq, angles, gain, z0, nz * dz, dz, &c);
+	int st = cands_init(t, nq, angles, gain, z0, nz * dz, fmin(1.0, dz / 4), &c);
 	if (!st)
 		st = W ? c0_tirf_weights(t, nq, angles, gain, nz, z0, dz, W) : C0_ENOMEM;
 	int fail = 0;

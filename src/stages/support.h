@@ -119,12 +119,27 @@ int c0_stack_covariance_halves(const struct c0_support_conf *c, struct c0_frames
  * variance is already known and the covariance is not needed. */
 int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double **mean, int64_t *frames,
 		  double *seconds);
-/* One streaming pass for the means of the frames' two block halves: the
- * frames whose block of `block` frames has an even number (t / block even)
- * into half[0], the others into half[1] (allocated), count[k] frames each;
- * both NULL when the stack has fewer than 2 blocks. Blocks longer than a
- * blink keep the halves' blinking apart, which alternate frames share
- * (docs/parameters.md). */
+/* The means of a stack's two block halves: the frames whose block of
+ * `block` frames has an even number (t / block even) into half 0, the
+ * others into half 1. Blocks longer than a blink keep the halves' blinking
+ * apart, which alternate frames share (docs/parameters.md). Summed by a
+ * frame hook that wraps another (fn, ctx; NULL: none), so that a pass made
+ * for something else sums them too: set c0_block_halves_fn with the struct
+ * as the conf's hook; finish gives the means (allocated, float), both NULL
+ * when a half has no frame, and frees the sums. */
+struct c0_block_halves {
+	c0_frame_fn fn;
+	void *ctx;
+	int block;
+	size_t n;                  /* pixels a frame */
+	double *sum[2];
+	int64_t count[2];
+};
+int c0_block_halves_init(struct c0_block_halves *h, int block, size_t n, c0_frame_fn fn, void *ctx);
+int c0_block_halves_fn(void *ctx, int64_t t, float *frame, int H, int W);
+int c0_block_halves_finish(struct c0_block_halves *h, float *half[2], int64_t count[2]);
+/* One streaming pass for them alone (count[k] frames each; none under 2
+ * blocks). */
 int c0_stack_block_means(const struct c0_support_conf *c, struct c0_frames *f, int block, float *half[2],
 			 int64_t count[2], double *seconds);
 /* Noise variance of a stack whose support is known: the same model with

@@ -131,23 +131,45 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *in, double 
 	return st;
 }
 
-/* frames of even blocks (t / block even) into a, the others into b */
-struct block_halves {
-	float *half[2];
-	double *sum[2];
-	int64_t count[2];
-	size_t n;
-	int block;
-};
-
-static int add_block(void *ctx, int64_t t, const float *rows)
+int c0_block_halves_init(struct c0_block_halves *h, int block, size_t n, c0_frame_fn fn, void *ctx)
 {
-	struct block_halves *h = ctx;
+	*h = (struct c0_block_halves){ fn, ctx, block, n, { NULL, NULL }, { 0, 0 } };
+	for (int k = 0; k < 2; k++)
+		if (!(h->sum[k] = c0_alloc(n, sizeof *h->sum[k])))
+			return free(h->sum[0]), h->sum[0] = NULL, C0_ENOMEM;
+	return C0_OK;
+}
+
+int c0_block_halves_fn(void *ctx, int64_t t, float *frame, int H, int W)
+{
+	struct c0_block_halves *h = ctx;
+	int st = h->fn ? h->fn(h->ctx, t, frame, H, W) : C0_OK;
 	const int k = (int)((t / h->block) % 2);
-	double *s = h->sum[k];
-	for (size_t i = 0; i < h->n; i++)
-		s[i] += rows[i];
-	h->count[k]++;
+	for (size_t i = 0; !st && i < h->n; i++)
+		h->sum[k][i] += frame[i];
+	h->count[k] += !st;
+	return st;
+}
+
+int c0_block_halves_finish(struct c0_block_halves *h, float *half[2], int64_t count[2])
+{
+	int st = C0_OK;
+	half[0] = half[1] = NULL, count[0] = h->count[0], count[1] = h->count[1];
+	for (int k = 0; k < 2 && count[0] > 0 && count[1] > 0 && !st; k++) {   /* as floats: what the solve reads */
+		if (!(half[k] = c0_alloc(h->n, sizeof *half[k])))
+			st = C0_ENOMEM;
+		for (size_t i = 0; !st && i < h->n; i++)
+			half[k][i] = (float)(h->sum[k][i] / (double)count[k]);
+	}
+	free(h->sum[0]), free(h->sum[1]), h->sum[0] = h->sum[1] = NULL;
+	if (st || !half[1])
+		free(half[0]), free(half[1]), half[0] = half[1] = NULL;
+	return st;
+}
+
+static int use_none(void *ctx, int64_t t, const float *rows)
+{
+	(void)ctx, (void)t, (void)rows;
 	return C0_OK;
 }
 
@@ -158,23 +180,15 @@ int c0_stack_block_means(const struct c0_support_conf *c, struct c0_frames *in, 
 	if (block < 1 || in->count < 2 * (int64_t)block)
 		return C0_OK;
 	const double t0 = c0_now();
-	struct block_halves h = { { NULL, NULL }, { NULL, NULL }, { 0, 0 }, (size_t)in->width * in->height, block };
-	int st = C0_OK;
-	for (int k = 0; k < 2 && !st; k++)
-		if (!(h.sum[k] = c0_alloc(h.n, sizeof *h.sum[k])))
-			st = C0_ENOMEM;
+	struct c0_block_halves h;
+	int st = c0_block_halves_init(&h, block, (size_t)in->width * in->height, c->frame_fn, c->frame_ctx);
+	struct c0_support_conf cc = *c;
+	cc.frame_fn = c0_block_halves_fn, cc.frame_ctx = &h;
 	if (!st)
-		st = each_frame(c, in, 0, 0, in->height, NULL, add_block, &h);
-	for (int k = 0; k < 2 && !st; k++) {   /* means as floats: what the solve reads, at half the memory */
-		if (!(half[k] = c0_alloc(h.n, sizeof *half[k])))
-			st = C0_ENOMEM;
-		for (size_t i = 0; !st && i < h.n; i++)
-			half[k][i] = (float)(h.sum[k][i] / (double)h.count[k]);
-	}
+		st = each_frame(&cc, in, 0, 0, in->height, NULL, use_none, NULL);
+	if (!st)
+		st = c0_block_halves_finish(&h, half, count);
 	free(h.sum[0]), free(h.sum[1]);
-	count[0] = h.count[0], count[1] = h.count[1];
-	if (st)
-		free(half[0]), free(half[1]), half[0] = half[1] = NULL;
 	*seconds = c0_now() - t0;
 	return st;
 }
