@@ -930,6 +930,14 @@ static void test_noise_fast(void)
 	c0_cov_acc_free(a), c0_cov_acc_free(b);
 }
 
+static int double_frame(void *ctx, int64_t t, float *frame, int H, int W)
+{
+	(void)ctx, (void)t;
+	for (int i = 0; i < H * W; i++)
+		frame[i] *= 2;
+	return C0_OK;
+}
+
 /* The two block halves' means against the frames' own sums: frame t holds
  * t + pixel / 100, blocks of 3 over 14 frames (even blocks: 0-2, 6-8,
  * 12-13; odd: 3-5, 9-11); under 2 blocks, none */
@@ -959,6 +967,11 @@ static void test_block_means(void)
 	CHECK_MSG(err < 1e-5, "block means: %g off", err);
 	free(half[0]), free(half[1]);
 	CHECK(c0_stack_block_means(&c, &f, 8, half, n, &sec) == C0_OK && !half[0] && !half[1] && n[0] == 0);
+	/* the halves wrap the conf's own hook: they see its frames */
+	c.frame_fn = double_frame;
+	CHECK(c0_stack_block_means(&c, &f, B, half, n, &sec) == C0_OK && half[0] && half[1]);
+	CHECK(half[0] && half[1] && fabs(half[0][5] - 2 * (49 / 8.0 + 0.05)) < 1e-4 && fabs(half[1][5] - 2 * (42 / 6.0 + 0.05)) < 1e-4);
+	free(half[0]), free(half[1]);
 	c0_frames_close(&f);
 }
 
