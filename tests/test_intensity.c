@@ -288,6 +288,51 @@ static void test_discrepancy(void)
 	free(m), free(x), free(y);
 }
 
+/* The unbounded solve (linear) of the difference of two means is the
+ * difference of their bounded solves where no bound is active (intensities
+ * of 30-70 over a background of 100, both well above 0), at the same mu;
+ * and it needs a given mu */
+static void test_linear(void)
+{
+	const int Ny = 24, Nx = 24, r = 4, L = Ny * r * Nx * r, N = Ny * Nx;
+	uint8_t *m = calloc(L, 1);
+	for (int a = 10; a < 86; a++)
+		m[a * Nx * r + 30] = m[40 * Nx * r + a] = 1;
+	struct c0_psi_omega P;
+	c0_psi_omega_init(&P, Ny, Nx, r, 0.97, m, 1);
+	double *x = malloc(sizeof(double) * P.n), *y[2], *d = malloc(sizeof(double) * N);
+	for (int k = 0; k < P.n; k++)
+		x[k] = 50 + 20 * sin(k * 0.1);
+	for (int h = 0; h < 2; h++) {
+		y[h] = malloc(sizeof(double) * N);
+		c0_psi_omega_forward(&P, x, y[h]);
+		for (int i = 0; i < N; i++)
+			y[h][i] += 100 + 2 * c0_rng_normal(&rng);
+	}
+	for (int i = 0; i < N; i++)
+		d[i] = y[0][i] - y[1][i];
+	struct c0_intensity_conf c = C0_INTENSITY_DEFAULTS;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 0.97 * 100 / 0.42466090014400953, c.mu = 0.5, c.tol = 1e-8;
+	struct c0_intensity_result a0, a1, dl;
+	CHECK(c0_intensity_solve(&c, y[0], Ny, Nx, 100, m, 4, &a0) == C0_OK);
+	CHECK(c0_intensity_solve(&c, y[1], Ny, Nx, 100, m, 4, &a1) == C0_OK);
+	c.linear = 1;
+	CHECK(c0_intensity_solve(&c, d, Ny, Nx, 100, m, 4, &dl) == C0_OK);
+	double num = 0, den = 0, mn = 1e9;
+	for (int k = 0; k < P.n; k++) {
+		const int p = P.idx[k];
+		const double e = (double)a0.x[p] - a1.x[p];
+		num += (dl.x[p] - e) * (dl.x[p] - e), den += e * e, mn = fmin(mn, fmin(a0.x[p], a1.x[p]));
+	}
+	CHECK_MSG(mn > 0 && sqrt(num / den) < 1e-3, "linear solve of the difference: %g relative to the difference of solves "
+		  "(smallest intensity %g)", sqrt(num / den), mn);
+	c.mu = 0;
+	CHECK(c0_intensity_solve(&c, d, Ny, Nx, 100, m, 4, &dl) == C0_EINVAL && strstr(c0_errmsg(), "linear"));
+	c0_intensity_result_free(&a0), c0_intensity_result_free(&a1), c0_intensity_result_free(&dl);
+	c0_psi_omega_free(&P);
+	free(m), free(x), free(y[0]), free(y[1]), free(d);
+}
+
 /* Per-pixel weights: all 1 gives the unweighted numbers bit for bit (one
  * solve and tiles); 5 % of the pixels with a mean 50 ADU high (a camera's
  * noisy or hot pixels, their offsets unknown) spoil the plain fit, and weights of
@@ -512,6 +557,7 @@ int main(void)
 	RUN(test_orient);
 	RUN(test_neumann);
 	RUN(test_discrepancy);
+	RUN(test_linear);
 	RUN(test_simulated);
 	RUN(test_pattern);
 	return CHECK_DONE();

@@ -66,8 +66,9 @@ struct c0_result {
 	 * it (c0_result_intensity). A stack whose x is not 0 off the mask keeps x. */
 	struct c0_pixlist pl;
 	float *xs[C0_MAX_STACKS];
-	/* with the intensity conf's noise_block: half the difference of stack q's
-	 * two block halves' intensities over pl (a draw of xs[q]'s noise), else NULL */
+	/* with the intensity conf's noise_block: the intensity of the difference of
+	 * stack q's two block halves' means, scaled to the whole stack, over pl (a
+	 * draw of xs[q]'s noise), else NULL */
 	float *xnoise[C0_MAX_STACKS];
 	double fwhm_stated_nm, fwhm_data_nm, fwhm_nm; /* the PSF width given, the covariance's (0: none), used (support step) */
 	float *cal_offset, *cal_scale, *cal_noise; /* the camera calibration (app/calib.c), NULL without */

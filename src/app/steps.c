@@ -543,35 +543,37 @@ static void solve_again(struct c0_result *r, const struct c0_intensity_conf *ic,
 		share_mu(r, ic, share, (const double *const *)fixed, frames, s2, corrected, 1, mu_own, sts, msg);
 }
 
-/* Stack i's noise draw (r->xnoise[i]): its two block halves' means (float,
- * freed here) solved at its final mu, half their difference on pl, scaled to
- * the whole stack's noise, var(a - b) being var(frame) (1/n_a + 1/n_b) */
+/* Stack i's noise draw (r->xnoise[i]): the difference of its two block
+ * halves' means (float, freed by the caller) solved at its final mu without
+ * bounds, which is the difference of the halves' own solves (the step is
+ * linear where no bound is active), on pl, scaled to the whole stack's
+ * noise: var(a - b) = var(frame) (1/n_a + 1/n_b) */
 static int noise_draw(struct c0_result *r, const struct c0_intensity_conf *ic, int i, float *const *half,
 		      const int64_t *count, double s2)
 {
 	const int H = r->ires[i].Ny, W = r->ires[i].Nx;
 	const size_t N = (size_t)H * W;
 	struct c0_intensity_conf c = *ic;
-	c.mu = r->ires[i].mu;
-	float *x[2] = { NULL, NULL };
-	double *mean = c0_alloc(N, sizeof *mean);
-	int st = mean ? C0_OK : C0_ENOMEM;
-	for (int k = 0; k < 2 && !st; k++) {
-		struct c0_intensity_result res;
-		for (size_t p = 0; p < N; p++)
-			mean[p] = half[k][p];
-		if (!(st = intensity_solve(&c, mean, H, W, count[k], r->mask, s2, noise_of(r, i), &res, NULL))) {
-			if (!(x[k] = pixlist_values(&r->pl, res.x)))
-				st = C0_ENOMEM;
-			c0_intensity_result_free(&res);
-		}
-	}
+	c.mu = r->ires[i].mu, c.linear = 1;
+	double *d = c0_alloc(N, sizeof *d);
+	if (!d)
+		return C0_ENOMEM;
+	for (size_t p = 0; p < N; p++)
+		d[p] = (double)half[0][p] - half[1][p];
+	struct c0_intensity_result res = { 0 };
+	int st = intensity_solve(&c, d, H, W, count[0] + count[1], r->mask, s2, noise_of(r, i), &res, NULL);
+	float *x = st ? NULL : pixlist_values(&r->pl, res.x);
+	if (!st && !x)
+		st = C0_ENOMEM;
 	const double scale = 1 / sqrt((double)(count[0] + count[1]) * (1.0 / count[0] + 1.0 / count[1]));
 	for (size_t k = 0; !st && k < r->pl.M; k++)
-		x[0][k] = (float)((x[0][k] - x[1][k]) * scale);
+		x[k] = (float)(x[k] * scale);
 	if (!st)
-		r->xnoise[i] = x[0], x[0] = NULL;
-	free(x[0]), free(x[1]), free(mean);
+		r->xnoise[i] = x;
+	else
+		free(x);
+	c0_intensity_result_free(&res);
+	free(d);
 	return st;
 }
 

@@ -33,7 +33,7 @@ int c0_depth_fit_y(const struct c0_tirf *t, int nq, const double *angles, const 
  * a share of the signal that differs from angle to angle; the plain fit
  * weighs every angle by its intensity squared. y[q] (np values each): the
  * pooled intensities; d[q]: the same pooling of a draw of their noise (the
- * intensities of two halves of the frames, half their difference). Fitted
+ * intensity of the difference of two halves of the frames). Fitted
  * from the data alone:
  *  - each angle's random variance s_q m_q^2 + c_q, m the plain single-depth
  *    fit's model, by non-negative least squares of d^2 over the pixels;

@@ -176,6 +176,8 @@ static int solve(struct prob *p, double *sol)
 			return st;
 		p->cg_iters += info.iters;
 		p->rounds++;
+		if (p->c->linear)
+			break;
 		int neg = 0;
 		for (int i = 0; i < n + nb; i++)
 			if (!p->fixed[i] && sol[i] < 0)
@@ -275,6 +277,8 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 	int st = c0_intensity_check(c);
 	if (st)
 		return st;
+	if (c->linear && !(c->mu > 0))
+		return c0_fail(C0_EINVAL, "linear intensity solve: needs a given mu (got %g)", c->mu);
 	if (c->mu == 0 && !(sigma2 > 0))
 		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give mu)", sigma2);
 	st = c->tile > 0 && c->tile < (Ny > Nx ? Ny : Nx) ? solve_tiled(c, ybar, Ny, Nx, T, mask, sigma2, res)

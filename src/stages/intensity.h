@@ -42,12 +42,15 @@ struct c0_intensity_conf {
 				    * target stays; the camera's noisy pixels weigh less) */
 	int common_pattern;        /* 0; 1: the whole method takes the MA-TIRF stacks' common fixed pattern
 				    * out of their means when no offset map is given (stages/pattern.h) */
-	int noise_block;           /* 0; > 0: the whole method also solves the means of the frames' two halves
-				    * in blocks of this many frames at the final mu: half their difference is a
-				    * draw of the intensity's noise, which the depth readout weighs the angles by
-				    * (stages/depthfit.h, c0_depth_noise) */
+	int noise_block;           /* 0; > 0: the whole method also solves the difference of the means of the
+				    * frames' two halves in blocks of this many frames (linear, at the final
+				    * mu): a draw of the intensity's noise, which the depth readout weighs the
+				    * angles by (stages/depthfit.h, c0_depth_noise) */
+	int linear;                /* 0; 1: x and b unbounded, one CG solve and no active set: for the
+				    * difference of two means, whose solution is then the difference of
+				    * theirs wherever neither one's bounds are active (needs mu > 0) */
 };
-#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 100, 1, 0, 1e-3, 500, 6, 20, 1, 0, NULL, 0, 0 }
+#define C0_INTENSITY_DEFAULTS { { 0, 0, 4 }, C0_BG_SMOOTH, 100, 1, 0, 1e-3, 500, 6, 20, 1, 0, NULL, 0, 0, 0 }
 #define C0_INTENSITY_MU_MIN 1e-3   /* the smallest mu the principle may choose */
 
 struct c0_intensity_result {

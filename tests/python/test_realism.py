@@ -141,7 +141,7 @@ def test_sparse_blinking(tmp):
 def test_depth_weights(tmp):
     """sparse fast blinking at 200 frames an angle (issue 29; like the grid's CCD sparse-fast 200 cell of seed 1,
     which reads 16.1 -> 13.9 nm): the depth fit weighs the angles by the noise of the frames' two block halves,
-    which under sparse blinking explains the fit's residuals (1.09 times its expectation here); with equal
+    which under sparse blinking explains the fit's residuals (1.07 times its expectation here); with equal
     weights (--depth-noise-block 0) the volume's readout of before: 17.1 -> 14.6 nm (docs/parameters.md,
     "Weighting the angles by the noise of frame halves")"""
     data, sim, stacks = simulate(tmp, "sparse200", "--seed", "1", "--pairs", "--tau-on", "10", "--tau-off", "120",
