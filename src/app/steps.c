@@ -543,6 +543,11 @@ static void solve_again(struct c0_result *r, const struct c0_intensity_conf *ic,
 		share_mu(r, ic, share, (const double *const *)fixed, frames, s2, corrected, 1, mu_own, sts, msg);
 }
 
+/* The noise draw's CG tolerance: it feeds variances fitted over the
+ * support's thousands of pixels, whose sampling error is far above 1 % of
+ * the draw (docs/parameters.md) */
+#define C0_NOISE_DRAW_TOL 1e-2
+
 /* Stack i's noise draw (r->xnoise[i]): the difference of its two block
  * halves' means (float, freed by the caller) solved at its final mu without
  * bounds, which is the difference of the halves' own solves (the step is
@@ -554,7 +559,7 @@ static int noise_draw(struct c0_result *r, const struct c0_intensity_conf *ic, i
 	const int H = r->ires[i].Ny, W = r->ires[i].Nx;
 	const size_t N = (size_t)H * W;
 	struct c0_intensity_conf c = *ic;
-	c.mu = r->ires[i].mu, c.linear = 1;
+	c.mu = r->ires[i].mu, c.linear = 1, c.tol = fmax(c.tol, C0_NOISE_DRAW_TOL);
 	double *d = c0_alloc(N, sizeof *d);
 	if (!d)
 		return C0_ENOMEM;
