@@ -269,8 +269,8 @@ void c0_report_depth_noise(cJSON *j, const struct c0_depth_noise *ns, int used, 
 	cJSON *w = cJSON_AddObjectToObject(j, "depth_weights");
 	cJSON_AddStringToObject(w, "rule", used ? "noise" : "equal");
 	cJSON_AddStringToObject(w, "what", "noise: each pixel's depth fitted to its pooled intensities, each angle weighed by "
-				"1 / (s_q m_q^2 + c_q + systematic), the random part from the intensities of two halves of "
-				"the frames (blocks of block_frames frames), the systematic part from the fit's residuals "
+				"1 / (s_q m_q^2 + c_q + systematic), the random part from the intensity of the difference of "
+				"two halves of the frames (blocks of block_frames frames), the systematic part from the fit's residuals "
 				"beyond it; used where the residuals are at most max_ratio times the random part's "
 				"expectation. equal: the volume's projections fitted with equal weights (docs/parameters.md)");
 	cJSON_AddNumberToObject(w, "block_frames", block);
