@@ -326,9 +326,10 @@ static void test_linear(void)
 	}
 	CHECK_MSG(mn > 0 && sqrt(num / den) < 1e-3, "linear solve of the difference: %g relative to the difference of solves "
 		  "(smallest intensity %g)", sqrt(num / den), mn);
+	c0_intensity_result_free(&a0), c0_intensity_result_free(&a1), c0_intensity_result_free(&dl);
 	c.mu = 0;
 	CHECK(c0_intensity_solve(&c, d, Ny, Nx, 100, m, 4, &dl) == C0_EINVAL && strstr(c0_errmsg(), "linear"));
-	c0_intensity_result_free(&a0), c0_intensity_result_free(&a1), c0_intensity_result_free(&dl);
+	c0_intensity_result_free(&dl);
 	c0_psi_omega_free(&P);
 	free(m), free(x), free(y[0]), free(y[1]), free(d);
 }
