@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAXQ_FIT 64
+#define MAXQ_FIT C0_DEPTH_MAXQ
 
 /* The candidate depths z0 + c step over [z0, z0 + range] (c < nc, at most
  * hmax apart, ends included) and their exponentials Wc[c nq + q] = g_q I0
@@ -14,29 +14,39 @@
 struct cands {
 	int nq, nc;
 	double z0, step, p[MAXQ_FIT];
-	double *Wc;
+	double *Wc, *nrm;   /* nrm[c] = |w_c|^2, the equal weights' norms */
 };
+
+static void cands_free(struct cands *c)
+{
+	free(c->Wc), free(c->nrm);
+	c->Wc = c->nrm = NULL;
+}
 
 static int cands_init(const struct c0_tirf *t, int nq, const double *angles, const double *gain, double z0, double range,
 		      double hmax, struct cands *c)
 {
-	c->Wc = NULL;
+	c->Wc = c->nrm = NULL;
 	if (nq < 1 || nq > MAXQ_FIT || !(range > 0) || !(hmax > 0))
 		return c0_fail(C0_EINVAL, "depth fit: %d angles, a range of %g nm in steps of %g nm", nq, range, hmax);
 	c->nq = nq, c->z0 = z0;
 	c->nc = 1 + (int)fmin(4096, ceil(range / hmax));
 	c->step = range / (c->nc - 1);
-	if (!(c->Wc = c0_alloc((size_t)nq * c->nc, sizeof *c->Wc)))
-		return C0_ENOMEM;
-	for (int q = 0; q < nq; q++) {
-		int st = c0_tirf_p(t, angles[q], &c->p[q]);
-		if (st)
-			return free(c->Wc), c->Wc = NULL, st;
+	c->Wc = c0_alloc((size_t)nq * c->nc, sizeof *c->Wc), c->nrm = c0_alloc((size_t)c->nc, sizeof *c->nrm);
+	int st = c->Wc && c->nrm ? C0_OK : C0_ENOMEM;
+	for (int q = 0; !st && q < nq; q++) {
+		if ((st = c0_tirf_p(t, angles[q], &c->p[q])))
+			break;
 		const double g = c0_tirf_i0(t, angles[q]) * (gain ? gain[q] : 1);
 		for (int k = 0; k < c->nc; k++)
 			c->Wc[(size_t)k * nq + q] = g * exp(-c->p[q] * (z0 + k * c->step));
 	}
-	return C0_OK;
+	for (int k = 0; !st && k < c->nc; k++)
+		for (int q = 0; q < nq; q++)
+			c->nrm[k] += c->Wc[(size_t)k * nq + q] * c->Wc[(size_t)k * nq + q];
+	if (st)
+		cands_free(c);
+	return st;
 }
 
 /* each candidate's score for projections y under inverse variances iv (NULL:
@@ -47,11 +57,12 @@ static int scores(const struct cands *c, const double *y, const double *iv, doub
 	int best = -1;
 	for (int k = 0; k < c->nc; k++) {
 		const double *w = c->Wc + (size_t)k * c->nq;
-		double s = 0, n = 0;
-		for (int q = 0; q < c->nq; q++) {
-			const double u = iv ? iv[q] : 1;
-			s += w[q] * y[q] * u, n += w[q] * w[q] * u;
-		}
+		double s = 0, n = iv ? 0 : c->nrm[k];
+		for (int q = 0; q < c->nq; q++)
+			if (iv)
+				s += w[q] * y[q] * iv[q], n += w[q] * w[q] * iv[q];
+			else
+				s += w[q] * y[q];
 		score[k] = s > 0 ? s * s / n : 0;
 		if (score[k] > 0 && (best < 0 || score[k] > score[best]))
 			best = k, *amp = s / n;
@@ -102,7 +113,7 @@ int c0_depth_fit_y(const struct c0_tirf *t, int nq, const double *angles, const 
 			free(score);
 		}
 	}
-	free(c.Wc);
+	cands_free(&c);
 	return st ? st : fail ? C0_ENOMEM : C0_OK;
 }
 
@@ -141,7 +152,7 @@ int c0_depth_fit(const struct c0_tirf *t, int nq, const double *angles, const do
 			free(score);
 		}
 	}
-	free(W), free(c.Wc);
+	free(W), cands_free(&c);
 	return st ? st : fail ? C0_ENOMEM : C0_OK;
 }
 
@@ -170,7 +181,7 @@ static void project(const struct cands *c, const double *m, const double *iv, co
 		pred[q] = x[q] = 0;
 		for (int l = 0; l < nq && det > 0; l++) {
 			/* J_q G^-1 J_l' with J_q = m_q (1, -p_q) */
-			const double h = m[q] * m[l] * (d - b * (-c->p[l]) - b * (-c->p[q]) + a * c->p[q] * c->p[l]) / det * iv[l];
+			const double h = m[q] * m[l] * (d + b * c->p[l] + b * c->p[q] + a * c->p[q] * c->p[l]) / det * iv[l];
 			const double r = (q == l) - h;
 			pred[q] += r * r * vr[l], x[q] += r * r;
 		}
@@ -285,7 +296,7 @@ int c0_depth_noise(const struct c0_tirf *t, int nq, const double *angles, const 
 		out->abs_share[q] = s[q] * tot.m2[q] > 0 ? cq[q] * tot.n[q] / (s[q] * tot.m2[q]) : INFINITY;
 	}
 	out->nq = nq, out->pixels = st ? 0 : (size_t)tot.n[0];
-	for (int it = 0; !st && it < 3; it++) {   /* sys settles in 2-3 steps (bench/depth_weights.py) */
+	for (int it = 0; !st && it < 3; it++) {   /* sys settles in 2-3 steps (measured with 11cec5f's bench/depth_weights.py) */
 		st = noise_pass(&c, y, d, np, 1, s, cq, sys, best, amp, &tot);
 		sys = tot.xx > 0 ? fmax(0, tot.rx / tot.xx) : 0;
 		out->resid_ratio = tot.pred > 0 ? tot.r2 / tot.pred : 0;
@@ -296,6 +307,6 @@ int c0_depth_noise(const struct c0_tirf *t, int nq, const double *angles, const 
 			const double m = best[p] < 0 ? 0 : amp[p] * c.Wc[(size_t)best[p] * nq + q];
 			var[(size_t)q * np + p] = (float)fmax(s[q] * m * m + cq[q] + sys, 1e-30);
 		}
-	free(best), free(amp), free(c.Wc);
+	free(best), free(amp), cands_free(&c);
 	return st;
 }

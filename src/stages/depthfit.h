@@ -52,10 +52,11 @@ int c0_depth_fit_y(const struct c0_tirf *t, int nq, const double *angles, const 
  * projections, smoothed across pixels, read better (docs/parameters.md,
  * "Weighting the angles by the noise of frame halves"). */
 #define C0_DEPTH_NOISE_RATIO 1.5
+#define C0_DEPTH_MAXQ 64     /* angles a depth fit takes */
 struct c0_depth_noise {
 	int nq;
-	double rel_sd[64];     /* sqrt(s_q): the random noise's relative sd per angle */
-	double abs_share[64];  /* c_q / (s_q mean m_q^2): its absolute part's share */
+	double rel_sd[C0_DEPTH_MAXQ];     /* sqrt(s_q): the random noise's relative sd per angle */
+	double abs_share[C0_DEPTH_MAXQ];  /* c_q / (s_q mean m_q^2): its absolute part's share */
 	double sys_var;        /* the systematic variance */
 	double resid_ratio;    /* the weighted fit's squared residuals over the random part's expectation */
 	size_t pixels;         /* the pixels fitted */
