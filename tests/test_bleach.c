@@ -33,6 +33,7 @@ static void test_fit(void)
 	memset(&res, 0, sizeof res);
 	CHECK(c0_bleach_fit(n, (const double *const *)S, T, B, &res) == C0_OK);
 	CHECK_REL(res.k, k, 0.03);
+	CHECK(res.k == res.k_fit);
 	CHECK(res.k_sd > 0 && fabs(res.k - k) < 4 * res.k_sd);
 	c0_bleach_factors(&c, n, T, &res);
 	for (int q = 0; q < n; q++) {
@@ -191,8 +192,35 @@ static void test_repeat(void)
 	CHECK(c0_bleach_check(&i, 3) == C0_EINVAL && strstr(c0_errmsg(), "sequential"));
 }
 
+/* frame sums that rise: the fit says so (k_fit < 0), the rate is held at 0
+ * and every factor is 1; a falling fit is left alone (test_fit) */
+static void test_rise(void)
+{
+	const int n = 3;
+	const int64_t T[3] = { 200, 200, 200 };
+	struct c0_bleach_conf c = { 0 };
+	const double k = -1e-4, A = 4e4, B[3] = { 1e5, 1e5, 1e5 };
+	double *S[3];
+	for (int q = 0; q < n; q++) {
+		S[q] = malloc(sizeof(double) * (size_t)T[q]);
+		for (int t = 0; t < T[q]; t++)
+			S[q][t] = B[q] + A * exp(-k * (200.0 * q + t));
+	}
+	struct c0_bleach_result res;
+	memset(&res, 0, sizeof res);
+	CHECK(c0_bleach_fit(n, (const double *const *)S, T, B, &res) == C0_OK);
+	CHECK(res.k_fit < 0 && fabs(res.k_fit / k - 1) < 0.05);
+	CHECK(res.k == 0);
+	c0_bleach_factors(&c, n, T, &res);
+	for (int q = 0; q < n; q++)
+		CHECK(res.factor[q] == 1);
+	for (int q = 0; q < n; q++)
+		free(S[q]);
+}
+
 int main(void)
 {
+	RUN(test_rise);
 	RUN(test_repeat);
 	RUN(test_fit);
 	RUN(test_check);

@@ -229,6 +229,12 @@ void c0_fig_bleach(struct c0_html *h, const struct c0_rundir *d)
 	if (isfinite(ksd)) {
 		c0_html_add(h, " \u00b1 ");
 		c0_html_num(h, "bleaching.rate_sd_per_frame", ksd);
+		const double kfit = c0_json_num(d->rep, "bleaching.rate_fit_per_frame", NAN);
+		if (kfit < 0) {   /* clamped: a fade cannot reverse */
+			c0_html_add(h, " (the slopes' fit, ");
+			c0_html_num(h, "bleaching.rate_fit_per_frame", kfit);
+			c0_html_add(h, ", is below 0: a fade cannot reverse)");
+		}
 	} else if (isfinite(c0_json_num(d->rep, "bleaching.repeat_ratio", NAN)))   /* bleach repeat: one ratio, no sd */
 		c0_html_add(h, " (from the repeat of the first angle, the last stack)");
 	c0_html_add(h, " per frame; factors");

@@ -191,7 +191,7 @@ static const struct prow {
 	{ "depth fit: the angles' weights", "matirf.depth_weights.rule", "--depth-noise-block",
 	  "noise of the frame halves where it explains the fit's residuals (at most 1.5 times their expectation), else equal" },
 	{ "bleaching correction", "bleaching.correction", "--bleach|--bleach-factors", NULL },
-	{ "bleaching rate per frame", "bleaching.rate_per_frame", "--bleach-factors", "fitted to the slopes of the stacks' frame sums" },
+	{ "bleaching rate per frame", "bleaching.rate_per_frame", "--bleach-factors", "fitted to the slopes of the stacks' frame sums, at least 0" },
 	{ "acquisition", "bleaching.acquisition", "--acquisition", NULL },
 	{ "incidence angles (\u00b0)", "matirf.angles_deg", "--angles", NULL },
 	{ "n glass", "matirf.n_glass", "--n-glass", NULL },

@@ -81,7 +81,8 @@ int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double 
 	}
 	if (!(wsum > 0))
 		return c0_fail(C0_EINVAL, "bleaching: no stack has signal above its background to measure the fade from (set bleach off, or give bleach_factors)");
-	res->k = wk / wsum;
+	res->k_fit = wk / wsum;
+	res->k = fmax(0, res->k_fit);   /* the maximum likelihood under k >= 0 */
 	res->k_sd = 1 / sqrt(wsum);
 	return C0_OK;
 }
@@ -223,7 +224,7 @@ int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, co
 		st = c0_bleach_fit(n, (const double *const *)S, T, B, res);
 	if (!st)
 		c0_bleach_factors(c, n, T, res);
-	res->significant = fabs(res->k) >= C0_BLEACH_SIGNIF * res->k_sd;
+	res->significant = fabs(res->k_fit) >= C0_BLEACH_SIGNIF * res->k_sd;
 	for (int q = 0; q < n; q++)
 		free(S[q]);
 	return st;

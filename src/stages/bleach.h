@@ -8,7 +8,10 @@
  * with slope -k m_q, m_q the mean signal part (frame sum minus the
  * background's sum from the intensity step). Each stack gives a slope; k is
  * their inverse-variance weighted fit, its uncertainty from the fit
- * residuals. Stack q's intensity is then divided by its factor
+ * residuals, constrained to k >= 0: a population does not un-bleach, so a
+ * rising fit is noise (sparse blinking: the slopes' sd exceeds the paper's
+ * rate) or not bleaching, and factors above 1 would read it as depth
+ * (docs/parameters.md, "A fade cannot reverse"). Stack q's intensity is then divided by its factor
  *   F_q = mean over its frames t of e^{-k u_q(t)}   (time 0 reference)
  * with u_q(t) = start_q + t (stacks one after another, starts from the
  * acquisition order and the gaps) or t + pos_q / n (interleaved: frame t
@@ -41,11 +44,12 @@ struct c0_bleach_conf {
 
 struct c0_bleach_result {
 	double k, k_sd;               /* per frame, and its standard error */
+	double k_fit;                 /* the slopes' fit before the constraint: k = max(0, k_fit) */
 	double k_stack[C0_BLEACH_MAX];/* each stack's own estimate (NAN without signal) */
 	double factor[C0_BLEACH_MAX]; /* F_q */
 	double start[C0_BLEACH_MAX];  /* first frame's time on the acquisition clock (frames) */
 	double signal[C0_BLEACH_MAX]; /* m_q, mean signal part of a frame sum */
-	int significant;              /* 0: estimated, and |k| within C0_BLEACH_SIGNIF sds of zero */
+	int significant;              /* 0: estimated, and |k_fit| within C0_BLEACH_SIGNIF sds of zero */
 };
 
 /* The order is a permutation of the n stacks, the gap count 0, 1 or n - 1
@@ -53,7 +57,7 @@ struct c0_bleach_result {
  * parameter (acquisition_order, gaps_frames, bleach_factors). */
 int c0_bleach_check(const struct c0_bleach_conf *c, int n);
 /* k from the frame sums S[q] (T[q] values each) and the background's sum
- * per frame B[q] (n stacks). */
+ * per frame B[q] (n stacks): k_fit, and k = max(0, k_fit). */
 int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res);
 /* The acquisition's clock: stack q's first frame at start[q] (in frames;
  * frame t at start[q] + t), from the order, the gaps and the interleaving. */

@@ -163,6 +163,33 @@ def test_depth_weights(tmp):
     check(abs(sg) <= 5, "sparse blinking, 200 frames: |median signed depth error| %.1f <= 5 nm" % sg)
 
 
+def test_fade_clamp(tmp):
+    """a fade cannot reverse (issue 29): under sparse blinking at 200 frames the frame sums' slopes carry more
+    blinking noise (sd ~3.7e-5 per frame) than the simulated fade (2.2e-5), and on this seed the fit comes out
+    negative (-8.9e-5): the rate is held at 0 and the factors at 1, which reads +0.5 nm signed where the fit's own
+    factors (above 1) read +6.2 (docs/parameters.md, "A fade cannot reverse")"""
+    data, sim, stacks = simulate(tmp, "rise", "--seed", "23", "--pairs", "--tau-on", "10", "--tau-off", "120",
+                                 "--frames", "200")
+    rep, d = run(tmp, "rise_run", data, sim, stacks)
+    if rep is None:
+        return
+    b, T = rep["bleaching"], sim["parameters"]["frames"]
+    k = b["rate_fit_per_frame"]
+    check(k < 0 and b["rate_per_frame"] == 0 and all(f == 1 for f in b["factors"]),
+          "a negative fit (%.3g) gives rate 0 and factors 1 (%s)" % (k, b["factors"]))
+    check("cannot reverse" in b.get("warning", ""), "the report says the rate was held at 0 (%r)" % b.get("warning"))
+    fit = [np.exp(-k * T * q) * np.expm1(-k * T) / np.expm1(-k) / T for q in range(len(stacks))]
+    rep0, d0 = run(tmp, "rise_fit", data, sim, stacks, "--bleach-factors", ",".join("%.9f" % f for f in fit))
+    if rep0 is None:
+        return
+    sg, sg0 = d["median_signed_error_nm"], d0["median_signed_error_nm"]
+    print("sparse blinking, 200 frames, seed 23: fitted rate %.3g +- %.2g (simulated %.3g); signed depth error %+.1f nm "
+          "with the rate at 0, %+.1f with the fit's factors" % (k, b["rate_sd_per_frame"],
+                                                               sim["estimates"]["bleaching"]["rate_per_frame"], sg, sg0),
+          file=sys.stderr)
+    check(abs(sg) <= 2 and sg0 >= 4, "|signed| %.1f <= 2 nm with the rate at 0; the fit's factors read %+.1f >= 4" % (sg, sg0))
+
+
 def test_close_pairs(tmp):
     """filament partners 90 nm away and 100 nm deeper: the guided depth pooling
     keeps each pixel's window to its own structure, the plain window (range 0)
@@ -363,6 +390,7 @@ with tempfile.TemporaryDirectory() as tmp:
         test_close_pairs(tmp)
         test_sparse_blinking(tmp)
         test_depth_weights(tmp)
+        test_fade_clamp(tmp)
         test_drift_bleaching(tmp)
         test_noisy_pixels(tmp)
 done()
