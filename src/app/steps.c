@@ -884,17 +884,14 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 	}
 	/* a fade the stacks cannot show (sparse or fast blinking: the frame sums
 	 * carry more blinking noise than fade) leaves the factors near 1 and the
-	 * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth bias") */
-	char msg[400];
+	 * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth bias");
+	 * a fit below 0 is held at 0 ("A fade cannot reverse") */
+	char msg[512];
 	const char *advice = "record a repeat of the first angle at the end and run with bleach repeat, or give bleach_factors measured otherwise";
-	if (br.k_fit < 0 && br.significant)
-		snprintf(msg, sizeof msg, "the stacks' frame sums rise (fitted rate %.3g +- %.2g per frame): not a fade, which cannot "
-			 "reverse, but a change of focus, illumination or field; the rate is taken as 0 and the factors as 1; %s",
-			 br.k_fit, br.k_sd, advice);
-	else if (br.k_fit < 0)
-		snprintf(msg, sizeof msg, "the fitted fade rate %.3g +- %.2g per frame is negative and within %g sds of zero: the "
-			 "stacks do not show the fade; as a fade cannot reverse, the rate is taken as 0 and the factors as 1; %s",
-			 br.k_fit, br.k_sd, (double)C0_BLEACH_SIGNIF, advice);
+	if (br.k_fit < 0)
+		snprintf(msg, sizeof msg, "the stacks' frame sums rise (fitted fade rate %.3g +- %.2g per frame): a fade cannot "
+			 "reverse, so the rate is taken as 0 and the factors as 1; the rise is blinking noise (sparse or fast "
+			 "blinking) or a change of focus, illumination or field; %s", br.k_fit, br.k_sd, advice);
 	else
 		snprintf(msg, sizeof msg, "the fade rate %.3g +- %.2g per frame is within %g sds of zero: the stacks do not show the "
 			 "fade, and their factors may be off; %s", br.k, br.k_sd, (double)C0_BLEACH_SIGNIF, advice);
