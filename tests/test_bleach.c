@@ -218,8 +218,44 @@ static void test_rise(void)
 		free(S[q]);
 }
 
+/* frame sums whose noise spans frames (AR(1), rho 0.5, as a blink lasting
+ * a frame or two): the reported sd matches the scatter of the fits over
+ * many draws, where the independent-frames formula reads sqrt(3)x small */
+static void test_sd_correlated(void)
+{
+	enum { n = 3, T = 300, DRAWS = 400 };
+	const int64_t Ts[n] = { T, T, T };
+	const double k = 1e-4, A = 3e4, B[n] = { 1e5, 1e5, 1e5 }, rho = 0.5, sd = 600;
+	struct c0_rng r;
+	c0_rng_init(&r, 11, 0);
+	double *S[n], sum = 0, sum2 = 0, sdsum = 0, rhosum = 0;
+	for (int q = 0; q < n; q++)
+		S[q] = malloc(sizeof(double) * T);
+	for (int d = 0; d < DRAWS; d++) {
+		for (int q = 0; q < n; q++) {
+			double e = sd * c0_rng_normal(&r);
+			for (int t = 0; t < T; t++) {
+				e = rho * e + sd * sqrt(1 - rho * rho) * c0_rng_normal(&r);
+				S[q][t] = B[q] + A * exp(-k * (300.0 * q + t)) + e;
+			}
+		}
+		struct c0_bleach_result res;
+		memset(&res, 0, sizeof res);
+		CHECK(c0_bleach_fit(n, (const double *const *)S, Ts, B, &res) == C0_OK);
+		sum += res.k_fit, sum2 += res.k_fit * res.k_fit, sdsum += res.k_sd, rhosum += res.rho;
+	}
+	const double mean = sum / DRAWS, scatter = sqrt(sum2 / DRAWS - mean * mean);
+	printf("AR(1) rho 0.5: fits' scatter %.3g, reported sd %.3g (mean), rho %.3f\n", scatter, sdsum / DRAWS, rhosum / DRAWS);
+	CHECK(fabs(mean - k) < 3 * scatter / sqrt(DRAWS));   /* unbiased */
+	CHECK(fabs(sdsum / DRAWS / scatter - 1) < 0.15);
+	CHECK(fabs(rhosum / DRAWS - rho) < 0.05);
+	for (int q = 0; q < n; q++)
+		free(S[q]);
+}
+
 int main(void)
 {
+	RUN(test_sd_correlated);
 	RUN(test_rise);
 	RUN(test_repeat);
 	RUN(test_fit);

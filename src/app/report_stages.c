@@ -189,6 +189,7 @@ void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct 
 		cJSON_AddNumberToObject(o, "rate_per_frame", br->k);
 		cJSON_AddNumberToObject(o, "rate_sd_per_frame", br->k_sd);
 		cJSON_AddNumberToObject(o, "rate_fit_per_frame", br->k_fit);   /* before k >= 0 */
+		cJSON_AddNumberToObject(o, "residual_autocorrelation", br->rho);
 		for (int q = 0; q < n; q++)
 			v[q] = br->k_stack[q] == br->k_stack[q] ? br->k_stack[q] : 0;
 		c0_report_add_array(o, "rate_per_frame_by_stack", v, n);

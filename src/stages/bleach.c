@@ -49,41 +49,55 @@ int c0_bleach_check(const struct c0_bleach_conf *c, int n)
 	return C0_OK;
 }
 
+/* one stack's least-squares slope c of S(t): k = -c / m with variance
+ * s^2 / (m^2 sum (t - tbar)^2), s^2 the residual variance; rho the residuals'
+ * lag-1 autocorrelation (a blink spans frames); NAN k without signal */
+static void stack_rate(const double *S, int64_t T, double B, double *m, double *k, double *var, double *rho)
+{
+	const double Tq = (double)T, tbar = (Tq - 1) / 2;
+	double mean = 0, stt = 0, sty = 0;
+	for (int64_t t = 0; t < T; t++)
+		mean += S[t];
+	mean /= Tq;
+	for (int64_t t = 0; t < T; t++)
+		stt += (t - tbar) * (t - tbar), sty += (t - tbar) * (S[t] - mean);
+	const double slope = stt > 0 ? sty / stt : 0;
+	double rss = 0, lag = 0, prev = 0;
+	for (int64_t t = 0; t < T; t++) {
+		const double r = S[t] - mean - slope * (t - tbar);
+		rss += r * r, lag += t ? r * prev : 0, prev = r;
+	}
+	*m = mean - B;
+	*k = *var = *rho = NAN;
+	if (!(*m > 0) || T < 3 || !(stt > 0))
+		return;
+	*k = -slope / *m;
+	*var = rss / (Tq - 2) / (*m * *m * stt);
+	*rho = rss > 0 ? lag / rss : 0;
+}
+
 int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res)
 {
-	/* per stack: least-squares slope c_q of S_q(t), k_q = -c_q / m_q with
-	 * variance s_q^2 / (m_q^2 sum (t - tbar)^2), s_q^2 the residual variance */
-	double wsum = 0, wk = 0;
+	double wsum = 0, wk = 0, rho = 0, nrho = 0;
 	for (int q = 0; q < n; q++) {
-		const double Tq = (double)T[q], tbar = (Tq - 1) / 2;
-		double mean = 0, stt = 0, sty = 0;
-		for (int64_t t = 0; t < T[q]; t++)
-			mean += S[q][t];
-		mean /= Tq;
-		for (int64_t t = 0; t < T[q]; t++)
-			stt += (t - tbar) * (t - tbar), sty += (t - tbar) * (S[q][t] - mean);
-		const double slope = stt > 0 ? sty / stt : 0, m = mean - B[q];
-		double rss = 0;
-		for (int64_t t = 0; t < T[q]; t++) {
-			double r = S[q][t] - mean - slope * (t - tbar);
-			rss += r * r;
-		}
-		res->signal[q] = m;
-		res->k_stack[q] = NAN;
-		if (!(m > 0) || T[q] < 3 || !(stt > 0))
-			continue;
-		res->k_stack[q] = -slope / m;
-		const double var = rss / (Tq - 2) / (m * m * stt);
+		double var, r;
+		stack_rate(S[q], T[q], B[q], &res->signal[q], &res->k_stack[q], &var, &r);
 		if (var > 0) {
 			wsum += 1 / var;
 			wk += res->k_stack[q] / var;
+			rho += r * (double)T[q], nrho += (double)T[q];
 		}
 	}
 	if (!(wsum > 0))
 		return c0_fail(C0_EINVAL, "bleaching: no stack has signal above its background to measure the fade from (set bleach off, or give bleach_factors)");
 	res->k_fit = wk / wsum;
 	res->k = fmax(0, res->k_fit);   /* the maximum likelihood under k >= 0 */
-	res->k_sd = 1 / sqrt(wsum);
+	/* the slopes' variance assumes independent frames; residuals correlated
+	 * from frame to frame (lag-1 rho, pooled over the stacks) carry fewer
+	 * independent values: the AR(1) factor (1 + rho) / (1 - rho) */
+	rho = fmin(0.9, fmax(0, rho / nrho));
+	res->k_sd = sqrt((1 + rho) / (1 - rho) / wsum);
+	res->rho = rho;
 	return C0_OK;
 }
 

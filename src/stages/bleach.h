@@ -44,6 +44,7 @@ struct c0_bleach_conf {
 
 struct c0_bleach_result {
 	double k, k_sd;               /* per frame, and its standard error */
+	double rho;                   /* the frame sums' residuals' lag-1 autocorrelation (in k_sd) */
 	double k_fit;                 /* the slopes' fit before the constraint: k = max(0, k_fit) */
 	double k_stack[C0_BLEACH_MAX];/* each stack's own estimate (NAN without signal) */
 	double factor[C0_BLEACH_MAX]; /* F_q */
