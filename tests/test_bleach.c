@@ -184,6 +184,10 @@ static void test_repeat(void)
 	CHECK_REL(res.k, k, 1e-9);
 	for (int q = 0; q < n; q++)
 		CHECK_REL(res.factor[q], F[q], 1e-9);
+	c.repeat_ratio = F[0] / F[3];   /* brighter at the end: held at 0 */
+	CHECK(c0_bleach_repeat(&c, n, T, &res) == C0_OK);
+	CHECK_REL(res.k_fit, -k, 1e-9);
+	CHECK(res.k == 0 && res.factor[0] == 1 && res.factor[3] == 1);
 	c.repeat_ratio = 0;
 	CHECK(c0_bleach_repeat(&c, n, T, &res) == C0_EINVAL && strstr(c0_errmsg(), "repeat"));
 	struct c0_bleach_conf o = { .mode = C0_BLEACH_REPEAT, .norder = 3, .order = { 0, 2, 1 } };

@@ -202,6 +202,7 @@ void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct 
 					"its intensity total on the support over the first stack's, e^{-k dt}, dt between their midpoints");
 		cJSON_AddNumberToObject(o, "repeat_ratio", bc->repeat_ratio);
 		cJSON_AddNumberToObject(o, "rate_per_frame", br->k);
+		cJSON_AddNumberToObject(o, "rate_fit_per_frame", br->k_fit);   /* before k >= 0 */
 		c0_report_add_array(o, "start_frame", br->start, n);
 	} else if (bc->mode == C0_BLEACH_ESTIMATE)
 		cJSON_AddStringToObject(o, "source", "slope");

@@ -850,6 +850,32 @@ static int bleach_window(const struct c0_result *r, const struct c0_frames *f, s
 	return w->x1 - w->x0 >= 1 && w->y1 - w->y0 >= 1;
 }
 
+/* a fade the stacks cannot show (sparse or fast blinking: the frame sums
+ * carry more blinking noise than fade) leaves the factors near 1 and the
+ * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth
+ * bias"); a fit below 0 is held at 0 ("A fade cannot reverse"). Said in the
+ * report's bleaching object and its warnings (the CLI prints those). */
+static void bleach_warning(struct c0_result *r, const struct c0_bleach_conf *bc, const struct c0_bleach_result *br)
+{
+	char msg[512];
+	const char *advice = "record a repeat of the first angle at the end and run with bleach repeat, or give bleach_factors measured otherwise";
+	if (br->significant && br->k_fit >= 0)
+		return;
+	if (br->k_fit < 0 && bc->mode == C0_BLEACH_REPEAT)
+		snprintf(msg, sizeof msg, "the repeat of the first angle reads brighter than the first stack (ratio %.4g): a fade "
+			 "cannot reverse, so the rate is taken as 0 and the factors as 1; the ratio carries the blinking noise of two "
+			 "stacks, or the focus or illumination changed between them", bc->repeat_ratio);
+	else if (br->k_fit < 0)
+		snprintf(msg, sizeof msg, "the stacks' frame sums rise (fitted fade rate %.3g +- %.2g per frame): a fade cannot "
+			 "reverse, so the rate is taken as 0 and the factors as 1; the rise is blinking noise (sparse or fast "
+			 "blinking) or a change of focus, illumination or field; %s", br->k_fit, br->k_sd, advice);
+	else
+		snprintf(msg, sizeof msg, "the fade rate %.3g +- %.2g per frame is within %g sds of zero: the stacks do not show the "
+			 "fade, and their factors may be off; %s", br->k, br->k_sd, (double)C0_BLEACH_SIGNIF, advice);
+	cJSON_AddStringToObject(cJSON_GetObjectItem(r->rep, "bleaching"), "warning", msg);
+	c0_result_warn(r, "bleaching: %s", msg);
+}
+
 int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_frames *f)
 {
 	const int n = r->n;
@@ -882,23 +908,7 @@ int c0_step_bleach(struct c0_result *r, const struct c0_run_conf *c, struct c0_f
 		const double wv[4] = { win.x0, win.x1, win.y0, win.y1 };
 		cJSON_AddItemToObject(cJSON_GetObjectItem(r->rep, "bleaching"), "window_x0_x1_y0_y1_px", cJSON_CreateDoubleArray(wv, 4));
 	}
-	/* a fade the stacks cannot show (sparse or fast blinking: the frame sums
-	 * carry more blinking noise than fade) leaves the factors near 1 and the
-	 * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth bias");
-	 * a fit below 0 is held at 0 ("A fade cannot reverse") */
-	char msg[512];
-	const char *advice = "record a repeat of the first angle at the end and run with bleach repeat, or give bleach_factors measured otherwise";
-	if (br.k_fit < 0)
-		snprintf(msg, sizeof msg, "the stacks' frame sums rise (fitted fade rate %.3g +- %.2g per frame): a fade cannot "
-			 "reverse, so the rate is taken as 0 and the factors as 1; the rise is blinking noise (sparse or fast "
-			 "blinking) or a change of focus, illumination or field; %s", br.k_fit, br.k_sd, advice);
-	else
-		snprintf(msg, sizeof msg, "the fade rate %.3g +- %.2g per frame is within %g sds of zero: the stacks do not show the "
-			 "fade, and their factors may be off; %s", br.k, br.k_sd, (double)C0_BLEACH_SIGNIF, advice);
-	if (!br.significant || br.k_fit < 0) {   /* in the report and its warnings (the CLI prints those) */
-		cJSON_AddStringToObject(cJSON_GetObjectItem(r->rep, "bleaching"), "warning", msg);
-		c0_result_warn(r, "bleaching: %s", msg);
-	}
+	bleach_warning(r, &bc, &br);
 	c0_step_end(r, &t);
 	return C0_OK;
 }

@@ -136,7 +136,8 @@ int c0_bleach_repeat(const struct c0_bleach_conf *c, int n, const int64_t *T, st
 	const double dt = res->start[n - 1] + 0.5 * (double)(T[n - 1] - 1) - res->start[first] - 0.5 * (double)(T[first] - 1);
 	if (!(dt > 0))
 		return c0_fail(C0_EINVAL, "bleach repeat: the repeat is not recorded after the first stack");
-	res->k = -log(c->repeat_ratio) / dt;
+	res->k_fit = -log(c->repeat_ratio) / dt;
+	res->k = fmax(0, res->k_fit);   /* a repeat brighter than the first: noise, as in c0_bleach_fit */
 	res->k_sd = NAN;
 	for (int q = 0; q < n; q++)
 		res->k_stack[q] = NAN;

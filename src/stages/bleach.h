@@ -65,9 +65,9 @@ int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double 
 void c0_bleach_clock(const struct c0_bleach_conf *c, int n, const int64_t *T, double *start);
 /* res->start and res->factor for rate k (res->k) and the frame counts. */
 void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
-/* Mode repeat: k from c->repeat_ratio and the time between the midpoints of
- * the first and the last recorded stack (T their frame counts), then the
- * factors; k_sd is NAN (one ratio). */
+/* Mode repeat: k_fit from c->repeat_ratio and the time between the midpoints
+ * of the first and the last recorded stack (T their frame counts), k =
+ * max(0, k_fit), then the factors; k_sd is NAN (one ratio). */
 int c0_bleach_repeat(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
 /* Frame sums over a window that moves with the sample, where a drift was
  * corrected: light that drifts across the field's edge would otherwise read
