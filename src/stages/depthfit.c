@@ -105,8 +105,8 @@ int c0_depth_fit_y(const struct c0_tirf *t, int nq, const double *angles, const 
 				fail = 1;
 #pragma omp for schedule(static)
 			for (size_t p = 0; p < np; p++) {
-				for (int q = 0; q < nq; q++)
-					iv[q] = var ? 1 / (double)var[(size_t)q * np + p] : 1;
+				for (int q = 0; var && q < nq; q++)
+					iv[q] = 1 / (double)var[(size_t)q * np + p];
 				const int best = score && pixel_y(y, nq, p, yv) ? scores(&c, yv, var ? iv : NULL, score, &amp) : -1;
 				depth[p] = best < 0 ? 0 : refine(&c, score, best);
 			}
@@ -165,7 +165,6 @@ struct nsums {
 	double m4[MAXQ_FIT], m2[MAXQ_FIT], n[MAXQ_FIT], dm2[MAXQ_FIT], d2[MAXQ_FIT];   /* the random part's regression */
 	double rx, xx, r2, pred;                                                          /* the systematic part */
 };
-
 
 /* The residual's expectation through the weighted fit's projector R = I - H,
  * H = J (J' V^-1 J)^-1 J' V^-1, J = [m, -p m] (amplitude, depth): for each q,
