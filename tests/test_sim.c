@@ -259,8 +259,47 @@ static void test_bad_params(void)
 	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "z_min_nm"));
 }
 
+/* Emitters on a labelled tube: on one straight filament at a fixed depth
+ * each lies at the tube's radius from the axis (the in-plane offset across
+ * the filament and the depth offset on a circle), their spread across is
+ * R / sqrt 2, and without a tube they lie on the axis. */
+static void test_label_tube(void)
+{
+	for (int k = 0; k < 2; k++) {
+		struct c0_sim_conf c;
+		c0_sim_defaults(&c);
+		c.filaments = 1, c.persistence_nm = 1e12, c.density_per_um = 2000;
+		c.z_min_nm = c.z_max_nm = 200, c.label_radius_nm = k ? 20 : 0;
+		CHECK(c0_sim_check(&c) == C0_OK);
+		struct c0_emitter *e;
+		int n;
+		CHECK(c0_sim_structure(&c, &e, &n) == C0_OK && n > 1000);
+		/* the axis: the principal direction of the emitters' positions */
+		double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
+		for (int i = 0; i < n; i++)
+			mx += e[i].x / n, my += e[i].y / n;
+		for (int i = 0; i < n; i++)
+			sxx += (e[i].x - mx) * (e[i].x - mx), syy += (e[i].y - my) * (e[i].y - my), sxy += (e[i].x - mx) * (e[i].y - my);
+		const double th = 0.5 * atan2(2 * sxy, sxx - syy), nx = -sin(th), ny = cos(th);
+		double worst = 0, v = 0;
+		for (int i = 0; i < n; i++) {
+			const double d = (e[i].x - mx) * nx + (e[i].y - my) * ny, dz = e[i].z - 200;
+			worst = fmax(worst, fabs(sqrt(d * d + dz * dz) - c.label_radius_nm));
+			v += d * d / n;
+		}
+		CHECK(worst < 0.5);
+		CHECK_CLOSE(sqrt(v), c.label_radius_nm / sqrt(2), 0.6);
+		free(e);
+	}
+	struct c0_sim_conf c;
+	c0_sim_defaults(&c);
+	c.label_radius_nm = -1;
+	CHECK(c0_sim_check(&c) == C0_EINVAL && strstr(c0_errmsg(), "label_radius_nm"));
+}
+
 int main(void)
 {
+	RUN(test_label_tube);
 	RUN(test_onfraction);
 	RUN(test_bleach_rate);
 	RUN(test_tirf_closed_forms);

@@ -53,6 +53,7 @@ static void report_parameters(const struct c0_sim_conf *c, cJSON *rep)
 			cJSON_AddNumberToObject(p, "pair_sep_nm", c->pair_sep_nm);
 			cJSON_AddNumberToObject(p, "pair_dz_nm", c->pair_dz_nm);
 		}
+		cJSON_AddNumberToObject(p, "label_radius_nm", c->label_radius_nm);
 	}
 	cJSON_AddNumberToObject(p, "z_min_nm", c->z_min_nm);
 	cJSON_AddNumberToObject(p, "z_max_nm", c->z_max_nm);

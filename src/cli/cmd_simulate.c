@@ -14,7 +14,7 @@
 static const struct c0_cli_name NAMES[] = {
 	{ "width", "--width" }, { "height", "--height" }, { "frames", "--frames" }, { "angles", "--angles" },
 	{ "bleach_order", "--bleach-order" }, { "gaps_s", "--gaps" }, { "pair_sep_nm", "--pair-sep" },
-	{ "pair_dz_nm", "--pair-dz" }, { "tau_on_ms", "--tau-on" }, { "tau_off_ms", "--tau-off" }, { "fps", "--fps" },
+	{ "pair_dz_nm", "--pair-dz" }, { "label_radius_nm", "--label-radius" }, { "tau_on_ms", "--tau-on" }, { "tau_off_ms", "--tau-off" }, { "fps", "--fps" },
 	{ "tau_bleach_s", "--tau-bleach" }, { "brightness", "--brightness" }, { "brightness_cv", "--brightness-cv" },
 	{ "background", "--background" }, { "gain", "--gain" }, { "read_noise", "--read-noise" }, { "offset", "--offset" },
 	{ "z_min_nm", "--z-range min" }, { "z_max_nm", "--z-range max" }, { "filaments", "--filaments" },
@@ -64,6 +64,9 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 		{ "pairs", 0, C0_OPT_FLAG, &c.pairs, NULL, "add a parallel partner to each filament, --pair-sep away and --pair-dz deeper", NULL, 0, NULL },
 		{ "pair-sep", 0, C0_OPT_DOUBLE, &c.pair_sep_nm, "NM", "lateral distance of a filament's partner", NULL, 0, NULL },
 		{ "pair-dz", 0, C0_OPT_DOUBLE, &c.pair_dz_nm, "NM", "how much deeper the partner runs", NULL, 0, NULL },
+		{ "label-radius", 0, C0_OPT_DOUBLE, &c.label_radius_nm, "NM",
+		  "emitters on a tube of this radius around each filament's axis (a labelled microtubule: 12.5 nm plus the label's reach; 0: on the axis)",
+		  NULL, 0, NULL },
 		{ "emitters", 0, C0_OPT_STRING, &c.emitters_csv, "CSV", "emitters x_nm,y_nm,z_nm[,brightness] instead of filaments", NULL, 0, NULL },
 		{ "tau-on", 0, C0_OPT_DOUBLE, &c.tau_on_ms, "MS", "mean on-state lifetime", NULL, 0, NULL },
 		{ "tau-off", 0, C0_OPT_DOUBLE, &c.tau_off_ms, "MS", "mean off-state lifetime", NULL, 0, NULL },

@@ -52,6 +52,8 @@ struct c0_sim_conf {
 	int pairs;                 /* 0; 1 adds a parallel partner pair_sep_nm away, pair_dz_nm deeper */
 	double pair_sep_nm;        /* 120: lateral distance of the partner */
 	double pair_dz_nm;         /* 100: how much deeper the partner runs */
+	double label_radius_nm;    /* 0: every emitter on its filament's axis; R: on a tube of radius R
+				    * around it (a labelled microtubule: 12.5 nm plus the label's reach) */
 	const char *emitters_csv;  /* x_nm,y_nm,z_nm[,brightness] instead of filaments */
 	/* photophysics */
 	double tau_on_ms, tau_off_ms;  /* 20, 40 */

@@ -115,6 +115,8 @@ int c0_sim_check(const struct c0_sim_conf *c)
 			       c->fwhm_nm / c->pixel_nm);
 	if (c->psf == C0_SIM_PSF_AIRY && (c->drift_nm[0] != 0 || c->drift_nm[1] != 0))
 		return c0_fail(C0_EINVAL, "psf airy: drift_nm is simulated with the gauss PSF only");
+	if (!(c->label_radius_nm >= 0) || c->label_radius_nm > 500)
+		return c0_fail(C0_EINVAL, "label_radius_nm %g: must be in [0, 500] nm", c->label_radius_nm);
 	if (!(c->z_min_nm >= 0) || !(c->z_max_nm >= c->z_min_nm))
 		return c0_fail(C0_EINVAL, "z_min_nm %g / z_max_nm %g: need 0 <= min <= max (nm)", c->z_min_nm, c->z_max_nm);
 	/* every real parameter finite: infinity passes the >= 0 tests above */
@@ -155,6 +157,19 @@ static double draw_brightness(const struct c0_sim_conf *c, struct c0_rng *r)
 	return c->brightness * exp(sqrt(s2) * c0_rng_normal(r) - s2 / 2);
 }
 
+/* A label on the tube of radius label_radius_nm around the axis point
+ * (x, y, z) running in direction th: a uniform angle around the axis, the
+ * tube's cross-section standing in the plane of the normal and z. Nothing is
+ * drawn without a tube, so the axis-only structures stay as they were. */
+static void label(const struct c0_sim_conf *c, struct c0_rng *r, double th, double *x, double *y, double *z)
+{
+	if (!(c->label_radius_nm > 0))
+		return;
+	const double phi = 2 * C0_PI * c0_rng_uniform(r), across = c->label_radius_nm * cos(phi);
+	*x -= across * sin(th), *y += across * cos(th);
+	*z = fmax(0, *z + c->label_radius_nm * sin(phi));
+}
+
 /* One filament: a WLC path through a random point, grown both ways until it
  * leaves the field; emitters as a Poisson process along it. */
 static int filament(const struct c0_sim_conf *c, struct c0_rng *r, struct elist *l)
@@ -178,9 +193,10 @@ static int filament(const struct c0_sim_conf *c, struct c0_rng *r, struct elist 
 				double z = zc + amp * sin(2 * C0_PI * arc / period + phase);
 				for (int k = 0; k <= (sep > 0); k++) {
 					/* the partner runs along the local normal */
-					double px = ex - k * sep * sin(th), py = ey + k * sep * cos(th);
+					double px = ex - k * sep * sin(th), py = ey + k * sep * cos(th), pz = z + k * dz;
+					label(c, r, th, &px, &py, &pz);
 					if (px >= 0 && px < W && py >= 0 && py < H) {
-						int st = push(l, px, py, z + k * dz, draw_brightness(c, r));
+						int st = push(l, px, py, pz, draw_brightness(c, r));
 						if (st)
 							return st;
 					}
