@@ -34,7 +34,7 @@ enum c0_status {
 
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_support_solver { C0_SUPPORT_FISTA, C0_SUPPORT_PRUNED };    /* "fista", "pruned" */
-enum c0_lambda_rule { C0_LAMBDA_PEAKS, C0_LAMBDA_CV };    /* "peaks", "cv" */
+enum c0_lambda_rule { C0_LAMBDA_PEAKS, C0_LAMBDA_CV, C0_LAMBDA_NOISE };    /* "peaks", "cv", "noise" */
 enum c0_fwhm_rule { C0_FWHM_STATED, C0_FWHM_DATA };     /* "stated", "data" */
 enum c0_background { C0_BG_NONE, C0_BG_CONSTANT, C0_BG_SMOOTH };   /* "none", "constant", "smooth" */
 enum c0_reg { C0_REG_TV, C0_REG_HESSIAN };                         /* "tv", "hessian" */

@@ -101,6 +101,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 					       .solver = c->support_solver,
 					       .frc = c->frc, .tile = c->tile, .guard = c->pixel_guard,
 					       .lambda_cv = c->lambda_rule == C0_LAMBDA_CV,
+					       .lambda_noise = c->lambda_rule == C0_LAMBDA_NOISE,
 					       .fwhm_data = c->fwhm_rule == C0_FWHM_DATA };
 	s->intensity = (struct c0_intensity_conf){ .grid = grid,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
@@ -119,7 +120,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	    (unsigned)c->acquisition > C0_ACQ_INTERLEAVED)
 		return c0_fail(C0_EINVAL, "discrepancy %d / bleach %d / acquisition %d: out of range", (int)c->discrepancy,
 			       (int)c->bleach, (int)c->acquisition);
-	if ((unsigned)c->lambda_rule > C0_LAMBDA_CV)
+	if ((unsigned)c->lambda_rule > C0_LAMBDA_NOISE)
 		return c0_fail(C0_EINVAL, "lambda_rule %d: out of range", (int)c->lambda_rule);
 	if ((unsigned)c->fwhm_rule > C0_FWHM_DATA)
 		return c0_fail(C0_EINVAL, "fwhm_rule %d: out of range", (int)c->fwhm_rule);

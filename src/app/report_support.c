@@ -34,6 +34,10 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 	cJSON_AddStringToObject(l, "rule", v->cv
 				? "cross-validation of the interleaved frame halves along a path of lambda (cross_validation); "
 				  "rho, q90, kappa and sigma_C below are the peaks rule's first step, for reference"
+				: v->noise
+				? "kappa sigma_C; sigma_C: noise sd of the correlation image, from the lower quartile "
+				  "of the interleaved frame halves' difference (rho and q90 below: the peaks rule's "
+				  "first step, for reference)"
 				: v->second
 				? "max(share median peak, kappa sigma_C) from a first solve at max(rho q90, kappa "
 				  "sigma_C); peak: x ||a||^2 at the first support's local maxima; sigma_C: noise "

@@ -61,7 +61,9 @@ static void choose(const struct c0_support_conf *c, double sig, double sq, doubl
 	out->noise_rel = sig / lmax, out->signal_rel = sq / lmax, out->rho = RHO, out->kappa = KAPPA;
 	out->noise_bound = KAPPA * sig >= RHO * sq;
 	const double t = fmax(RHO * sq, KAPPA * sig);
-	if (c->penalty == C0_PENALTY_L1)
+	if (c->penalty == C0_PENALTY_L1 && c->lambda_noise && !c->lambda_cv)
+		out->noise = out->noise_bound = 1, out->chosen_rel = KAPPA * sig / lmax;
+	else if (c->penalty == C0_PENALTY_L1)
 		out->chosen_rel = t / lmax;
 	else
 		out->chosen_rel = fmin(CEL0_GAMMA * t * t / (2 * nm * nm) / lmax0, 0.5);

@@ -38,6 +38,7 @@ struct c0_lambda_result {
 	double signal_rel;    /* q90 / lambda_max (l1 scale) */
 	double rho, kappa;
 	int noise_bound;      /* 1 when kappa sigma_C set the threshold */
+	int noise;            /* 1: the noise rule, lambda = kappa sigma_C (l1, lambda_noise) */
 	int noise_tiles;      /* tiles whose interiors gave sigma_C (0: the whole image, one tile) */
 	int second;           /* 1: chosen_rel is the second step's (l1) */
 	double first_rel;     /* the rule's lambda / lambda_max, at which the first solve ran */

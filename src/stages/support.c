@@ -228,7 +228,7 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 	if (!st && automatic && c->penalty == C0_PENALTY_L1 && c->lambda_cv &&
 	    !(st = c0_lambda_cv(&cc, &half[0], &half[1], &res->cv)))
 		cc.lambda_rel = res->cv.chosen_rel;
-	else if (!st && automatic && c->penalty == C0_PENALTY_L1)
+	else if (!st && automatic && c->penalty == C0_PENALTY_L1 && !c->lambda_noise)
 		st = second_step(&cc, &cov, res);
 	if (fwd > 0)
 		res->cv.fwhm_data_nm = fwd;   /* the lambda rules clear their result */
@@ -407,7 +407,7 @@ static int stack_lambda(struct stack *k, struct c0_support_result *res)
 	}
 	free(k->lm), free(k->hist);
 	k->lm = k->hist = NULL;
-	if (!st && k->automatic && c->penalty == C0_PENALTY_L1) {
+	if (!st && k->automatic && c->penalty == C0_PENALTY_L1 && (c->lambda_cv || !c->lambda_noise)) {
 		tn = c0_now();
 		if (c->lambda_cv)
 			st = c0_support_tiles_cv(c, &k->s, k->norm, l1, res);
