@@ -60,8 +60,8 @@ for d, _, files in os.walk(os.path.join(src, "src")):
                 fails.append("%s cites docs/%s, which does not exist" % (f, doc))
             elif a not in anchors(p):
                 fails.append("%s cites docs/%s#%s, which has no such anchor" % (f, doc, a))
-        if "docs/parameters.md" in text:
-            fails.append("%s cites docs/parameters.md, which is now docs/defaults.md and docs/history/" % f)
+        if "docs/" + "parameters.md" in text:   # split so that the citation script leaves it alone
+            fails.append("%s cites docs/" "parameters.md, which is now docs/defaults.md and docs/history/" % f)
 
 # links between the docs: [text](path#anchor) relative to the linking file
 for doc in ["README.md"] + ["docs/" + f for f in sorted(os.listdir(docs)) if f.endswith(".md")]:
