@@ -3,7 +3,8 @@
     /usr/bin/python3 scripts/docs_figures.py [SOURCE_DIR]            rewrite the marked block of docs/design.md
     /usr/bin/python3 scripts/docs_figures.py [SOURCE_DIR] --check    exit 1 if the block differs from the tree
     /usr/bin/python3 scripts/docs_figures.py [SOURCE_DIR] --screenshot RUN_DIR
-        docs/report.png from RUN_DIR/report.html (chromium --headless), e.g. after
+        docs/report.png from RUN_DIR/report.html (chromium --headless, then 256
+        colours with python3-pil), e.g. after
         `bash scripts/demo.sh` with RUN_DIR build/demo/run
 
 The block of docs/design.md between the markers below holds the house's limits
@@ -114,6 +115,8 @@ def screenshot(src, run):
                         "--user-data-dir=" + profile, "--window-size=1200,1400",
                         "--screenshot=" + out, "file://" + html],
                        check=True, capture_output=True)
+    from PIL import Image   # python3-pil: 256 colours, a third of the size, the same to the eye
+    Image.open(out).convert("RGB").quantize(256).save(out, optimize=True)
     print("wrote", out)
 
 
