@@ -6,6 +6,10 @@
         docs/report.png from RUN_DIR/report.html (chromium --headless, then 256
         colours with python3-pil), e.g. after
         `bash scripts/demo.sh` with RUN_DIR build/demo/run
+    /usr/bin/python3 scripts/docs_figures.py [SOURCE_DIR] --imagej BUILD_DIR
+        docs/imagej_dialog.png and docs/imagej_result.png: ImageJ (ij.jar) with the
+        built plugin (BUILD_DIR/imagej/col0rme_.jar) and BUILD_DIR/col0rme under Xvfb,
+        Demo data, the 3D-COL0RME dialog, then its run's windows tiled
 
 The block of docs/design.md between the markers below holds the house's limits
 as measured: the longest .c file and function in src/ and the share of src/ in
@@ -120,7 +124,148 @@ def screenshot(src, run):
     print("wrote", out)
 
 
+SHOT_JAVA = r"""
+import java.awt.*;
+import java.awt.event.KeyEvent;
+import java.awt.image.BufferedImage;
+import java.io.File;
+import javax.imageio.ImageIO;
+
+/** Screenshots for the docs, called from an ImageJ macro with call("DocShot...."). */
+public class DocShot {
+	static void shoot(Rectangle r, String path) throws Exception {
+		BufferedImage img = new Robot().createScreenCapture(r);
+		ImageIO.write(img, "png", new File(path));
+	}
+
+	/** Once a dialog shows: its picture into path, then Enter (OK, as filled in). */
+	public static String dialogLater(final String path) {
+		Thread t = new Thread(() -> {
+			try {
+				for (int i = 0; i < 1200; i++) {
+					Thread.sleep(100);
+					for (Window w : Window.getWindows())
+						if (w instanceof ij.gui.GenericDialog && w.isShowing()) {
+							Thread.sleep(2000);
+							shoot(w.getBounds(), path);
+							((java.awt.event.KeyListener) w).keyPressed(new KeyEvent(w, KeyEvent.KEY_PRESSED,
+								System.currentTimeMillis(), 0, KeyEvent.VK_ENTER, (char) 10));
+							return;
+						}
+				}
+			} catch (Exception e) {
+				e.printStackTrace();
+			}
+		});
+		t.setDaemon(true);
+		t.start();
+		return "";
+	}
+
+	/** The image windows of the titles given (comma-separated), in a row of
+	 *  columns two high from the screen's top left, as one picture; the
+	 *  other windows are hidden. */
+	public static String windows(String titles, String path) throws Exception {
+		java.util.List<String> want = java.util.Arrays.asList(titles.split(","));
+		Window[] shown = new Window[want.size()];
+		StringBuilder seen = new StringBuilder();
+		for (int t = 0; t < 100 && java.util.Arrays.asList(shown).contains(null); t++) {
+			Thread.sleep(200);
+			seen.setLength(0);
+			for (Window w : Window.getWindows())
+				if (w instanceof ij.gui.ImageWindow && w.isShowing()) {
+					String title = ((ij.gui.ImageWindow) w).getImagePlus().getTitle();
+					seen.append(title).append(' ');
+					int k = want.indexOf(title);
+					if (k >= 0)
+						shown[k] = w;
+				}
+		}
+		for (Window w : Window.getWindows())
+			if (w.isShowing() && !java.util.Arrays.asList(shown).contains(w))
+				w.setVisible(false);   /* ImageJ's own window, the stacks, the Log */
+		for (int k = 0; k < shown.length; k++)
+			if (shown[k] == null)
+				throw new IllegalStateException("no window " + want.get(k) + " among: " + seen);
+		int x = 0, y = 0, colw = 0;
+		Rectangle all = null;
+		for (int k = 0; k < shown.length; k++) {
+			if (k % 2 == 0 && k > 0) {
+				x += colw;
+				y = 0;
+				colw = 0;
+			}
+			shown[k].setLocation(x, y);
+			Rectangle r = shown[k].getBounds();
+			y += r.height;
+			colw = Math.max(colw, r.width);
+			all = all == null ? r : all.union(r);
+		}
+		Thread.sleep(3000);
+		shoot(all, path);
+		return path;
+	}
+
+	public static String quit() {
+		System.exit(0);
+		return "";
+	}
+}
+"""
+
+
+def imagej_shots(src, build):
+    """docs/imagej_dialog.png and docs/imagej_result.png, made under Xvfb."""
+    jar = os.path.abspath(os.path.join(build, "imagej", "col0rme_.jar"))
+    exe = os.path.abspath(os.path.join(build, "col0rme"))
+    ij_jar = next((j for j in ("/usr/share/java/ij.jar",) if os.path.exists(j)), None)
+    for what, ok in (("the plugin jar " + jar, os.path.exists(jar)), ("ImageJ's ij.jar (Debian imagej)", ij_jar),
+                     ("java", shutil.which("java")), ("javac", shutil.which("javac")), ("Xvfb", shutil.which("Xvfb"))):
+        if not ok:
+            sys.exit("docs_figures.py: %s not found" % what)
+    docs = os.path.abspath(os.path.join(src, "docs"))
+    with tempfile.TemporaryDirectory() as tmp:
+        for d in ("bin", "home", "ij/plugins", "shot"):
+            os.makedirs(os.path.join(tmp, d))
+        os.symlink(exe, os.path.join(tmp, "bin", "col0rme"))
+        shutil.copy(jar, os.path.join(tmp, "ij", "plugins"))
+        open(os.path.join(tmp, "shot", "DocShot.java"), "w").write(SHOT_JAVA)
+        subprocess.run(["javac", "-cp", ij_jar, "-d", os.path.join(tmp, "shot"), os.path.join(tmp, "shot", "DocShot.java")],
+                       check=True)
+        dialog, result = os.path.join(tmp, "dialog.png"), os.path.join(tmp, "result.png")
+        macro = os.path.join(tmp, "shots.ijm")
+        open(macro, "w").write("""run("Demo data");
+call("DocShot.dialogLater", "%s");
+run("3D-COL0RME...");
+selectImage("volume.tif");
+setSlice(6);
+call("DocShot.windows", "volume.tif,render.tif,depth.png,support.tif", "%s");
+call("DocShot.quit");
+""" % (dialog, result))
+        xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+        try:
+            env = dict(os.environ, DISPLAY=":" + xvfb.stdout.readline().decode().strip(), HOME=os.path.join(tmp, "home"),
+                       PATH=os.path.join(tmp, "bin") + ":/usr/bin:/bin")
+            r = subprocess.run(["timeout", "180", "java", "-Xmx1g", "-Duser.home=" + env["HOME"],
+                                "-Dplugins.dir=" + os.path.join(tmp, "ij"), "-Djava.io.tmpdir=" + tmp, "-cp", ij_jar + ":" + os.path.join(tmp, "shot"),
+                                "ij.ImageJ", "-macro", macro], env=env, capture_output=True, text=True)
+        finally:
+            xvfb.terminate()
+            xvfb.wait()
+        if not (os.path.exists(dialog) and os.path.exists(result)):
+            sys.exit("docs_figures.py: ImageJ made no screenshot (exit %d)\n%s%s" % (r.returncode, r.stdout, r.stderr))
+        from PIL import Image
+        for f, name in ((dialog, "imagej_dialog.png"), (result, "imagej_result.png")):
+            Image.open(f).convert("RGB").quantize(256).save(os.path.join(docs, name), optimize=True)
+            print("wrote", os.path.join(docs, name))
+
+
 def main(argv):
+    if "--imagej" in argv:
+        k = argv.index("--imagej")
+        rest = argv[:k] + argv[k + 2:]
+        return imagej_shots(rest[0] if rest else ".", argv[k + 1])
     run = None
     if "--screenshot" in argv:
         k = argv.index("--screenshot")
