@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """What limits a run's depth: the run's depth readout redone outside it with
-one input at a time swapped for the simulator's truth (docs/parameters.md,
+one input at a time swapped for the simulator's truth (docs/history/depth.md,
 "Sparse blinking: what limits the depth").
 
     /usr/bin/python3 bench/depth_ladder.py SIMDIR RUNDIR [INTENSITY_DIR [--true-support]] [--windows] [--gls]
@@ -9,7 +9,7 @@ one input at a time swapped for the simulator's truth (docs/parameters.md,
 SIMDIR: `col0rme simulate` output; RUNDIR: `col0rme run --angles` output on its
 stacks. The readout: each stack's intensity over its bleaching factor, summed
 over the guided strip (17 fine pixels along the structure, 2 either side of
-its line, pixels whose 5-pixel guess lies within 50 nm; docs/parameters.md,
+its line, pixels whose 5-pixel guess lies within 50 nm; docs/history/depth.md,
 "Depth pooling along the structure"; before it a 7-pixel square, which the
 docs' earlier tables used) and fitted with one depth (1 nm grid), as `run`
 does before and after its MA-TIRF solve; the solve itself is left out (it reproduces its input's
@@ -30,7 +30,7 @@ the run's intensities with other windows and ranges. With SIMDIRs alone: the
 true realised intensities on the true support (what the simulated blinking and
 bleaching leave to any readout), one line a simulation. --gls: also the
 readout whose last fit weights the angles by a noise covariance estimated from
-the data (docs/parameters.md, "Why 8 angles read worse than 5")."""
+the data (docs/history/grid.md, "Why 8 angles read worse than 5")."""
 import json
 import os
 import sys

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Defaults across a grid of acquisitions (docs/parameters.md, issue 29):
+"""Defaults across a grid of acquisitions (docs/history/grid.md):
 angle sets x cameras x blinking regimes x frame counts, every cell a 5- (or 3-,
 or 8-) angle simulation with close filament pairs and bleaching accumulated
 over the acquisition, run with the defaults and scored against its truth.

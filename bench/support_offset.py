@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""What a support a pixel off costs the depth (docs/parameters.md, "What the
+"""What a support a pixel off costs the depth (docs/history/depth.md, "What the
 200-frame runs add above the floor"): the intensity step alone (`col0rme
 intensity`, at the run's shared mu) on three supports, the true one, the true
 one moved one fine pixel down and the run's, each read out as the run does

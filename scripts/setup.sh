@@ -9,7 +9,7 @@ PKGS=(build-essential cmake pkg-config libtiff-dev libtiff-tools libcjson-dev li
       libopenmpi-dev openmpi-bin
       python3-venv python3-pip python3-setuptools python3-wheel python3-pytest binutils
       default-jdk-headless imagej xvfb
-      chromium)
+      chromium python3-pil)
 
 missing=()
 for p in "${PKGS[@]}"; do

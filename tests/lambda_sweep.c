@@ -1,7 +1,7 @@
 /* Measures the automatic lambda against a sweep: for a simulated stack
  * (DIR/stack_q01.tif with DIR/truth_support.tif), the Jaccard index of the
  * support for each fixed lambda and for the automatic choice.
- *   lambda_sweep DIR FWHM_NM [l1|cel0] [lambda ...]       (docs/parameters.md) */
+ *   lambda_sweep DIR FWHM_NM [l1|cel0] [lambda ...]       (docs/history/lambda-drift.md) */
 #include "stages/support.h"
 #include "ops/covpool.h"
 #include "eval/metrics.h"

@@ -451,7 +451,7 @@ static void test_drift(void)
 }
 
 /* the automatic lambda against a third and three times itself, on the dim
- * member of the panel (docs/parameters.md has the whole panel and sweep) */
+ * member of the panel (docs/history/lambda-drift.md has the whole panel and sweep) */
 static void test_auto_lambda(void)
 {
 	if (quick)
@@ -557,7 +557,7 @@ static double best_of_sweep(const char *sub)
 /* The panel's sparse member (seed 5): the first step's lambda follows the
  * few emitters under the PSF and is low; the second step, from the first
  * solve's peaks, raises it (0.408 -> 0.466 measured; the sweep's best 0.494
- * at 1e-2; docs/parameters.md) */
+ * at 1e-2; docs/history/lambda-drift.md) */
 static void test_auto_lambda_sparse(void)
 {
 	if (quick)
@@ -579,7 +579,7 @@ static void test_auto_lambda_sparse(void)
 /* The issue's panel members sparse, dense, dim, 200 frames and bright (drift:
  * test_drift), each within 0.03 of the best of the sweep's 6 lambdas, the
  * Jaccard indices averaged over seeds 5-7 as in the panel of
- * docs/parameters.md (which runs with drift correction and the FRC halves;
+ * docs/history/lambda-drift.md (which runs with drift correction and the FRC halves;
  * these solves have neither). One seed's index moves by up to 0.02 between
  * nearly equal lambdas: dense seed 5 alone is 0.030 short here. */
 static void test_auto_lambda_panel(void)

@@ -585,7 +585,7 @@ static void test_offset_background(void)
 		"(mean %.1f, mean abs error %.1f; %d iterations, %s)\n", bmean, e0, e1, e2, r2.background_mean, be, r2.iters,
 		r2.converged ? "converged" : "not converged");
 	/* the estimate takes some signal as background (measured +14 %, 11.6 nm
-	 * here, against 5.4 nm with the background left in: docs/parameters.md) */
+	 * here, against 5.4 nm with the background left in: docs/defaults.md#estimate_background) */
 	CHECK(quick || (r2.converged && fabs(r2.background_mean - bmean) < 0.25 * bmean && be < 0.3 * bmean));
 	CHECK(quick || (e0 < 10 && e1 < 15 && e2 < 20));
 	c0_matirf_result_free(&r0), c0_matirf_result_free(&r1), c0_matirf_result_free(&r2);

@@ -51,16 +51,16 @@ void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
 	m->tirf = (struct c0_tirf){ c->n_glass, c->n_sample, c->wavelength_nm, c->s_fraction };
 	m->z0_nm = c->z_range_nm[0], m->z1_nm = c->z_range_nm[1], m->dz_nm = c->z_range_nm[2];
 	m->reg = c->reg, m->wz = c->axial_weight, m->sparsity = c->sparsity;
-	/* -1: the default of the mode, measured per mode (docs/parameters.md);
+	/* -1: the default of the mode, measured per mode (docs/defaults.md#kappa);
 	 * any other negative value is refused by c0_run_conf_matirf_check */
 	m->kappa = c->kappa != -1 ? c->kappa : c->psf_fwhm_nm > 0 ? C0_MATIRF_KAPPA_DECONV : m->kappa;
 	m->pdhg.maxit = c->matirf_iterations, m->pdhg.tol = c->matirf_tol;
 	/* measured: apg takes half the CPU of exact and diag on the 350x350 phantom
-	 * and less in the pipeline, with the same depths (docs/parameters.md) */
+	 * and less in the pipeline, with the same depths (docs/defaults.md#matirf_solver) */
 	m->solver = c->matirf_solver != C0_MATIRF_AUTO ? c->matirf_solver : C0_MATIRF_APG;
 	/* measured: 2 levels take apg from 343 to 71 full-grid iterations on the
 	 * 350x350 phantom (2.3x less CPU), depths 0.45 nm from the cold start's
-	 * (docs/parameters.md) */
+	 * (docs/defaults.md#matirf_coarse) */
 	m->coarse = c->matirf_coarse >= 0 ? c->matirf_coarse : m->solver == C0_MATIRF_APG ? 2 : 0;
 }
 
@@ -110,7 +110,7 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 						   .tile = c->tile > 0 ? c->tile : C0_SUPPORT_TILE,
 						   .common_pattern = c->common_pattern };
 	c0_run_conf_matirf(c, &s->matirf);
-	if (c->kappa == -1)   /* run's MA-TIRF step does not deconvolve (docs/parameters.md): the plain default */
+	if (c->kappa == -1)   /* run's MA-TIRF step does not deconvolve (docs/defaults.md#psf_fwhm_nm): the plain default */
 		s->matirf.kappa = ((struct c0_matirf_conf)C0_MATIRF_DEFAULTS).kappa;
 	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
 	s->pool_range_nm = c->depth_pool_range_nm < 0 ? C0_DEPTH_POOL_RANGE_NM : c->depth_pool_range_nm;

@@ -275,7 +275,7 @@ void c0_report_depth_noise(cJSON *j, const struct c0_depth_noise *ns, int used, 
 				"1 / (s_q m_q^2 + c_q + systematic), the random part from the intensity of the difference of "
 				"two halves of the frames (blocks of block_frames frames), the systematic part from the fit's residuals "
 				"beyond it; used where the residuals are at most max_ratio times the random part's "
-				"expectation. equal: the volume's projections fitted with equal weights (docs/parameters.md)");
+				"expectation. equal: the volume's projections fitted with equal weights (docs/defaults.md#depth_noise_block)");
 	cJSON_AddNumberToObject(w, "block_frames", block);
 	cJSON_AddNumberToObject(w, "max_ratio", C0_DEPTH_NOISE_RATIO);
 	if (!ns)

@@ -192,13 +192,13 @@ static void psf_width(struct c0_result *r, int k, struct c0_support_conf *cc)
 		r->fwhm_stated_nm = stated, r->fwhm_data_nm = fw, r->fwhm_nm = r->sres[0].fwhm_nm;
 	if (k == 0 && r->fwhm_nm != stated) {
 		c0_result_warn(r, "%s: the covariance's lags say a Gaussian PSF of FWHM %.0f nm, not the given %g nm: "
-			       "the solves use %.0f nm (fwhm_rule stated keeps the given one; docs/parameters.md, lambda under "
+			       "the solves use %.0f nm (fwhm_rule stated keeps the given one; docs/defaults.md#fwhm_rule, lambda under "
 			       "model mismatch)", r->names[r->sup[0]], fw, stated, fw);
 		c0_support_set_width(cc, r->fwhm_nm);
 		cc->fwhm_data = 0;
 	} else if (fw > 0 && fabs(fw / stated - 1) > C0_LAMBDA_PSF_WARN && !cc->fwhm_data && r->fwhm_nm == stated)
 		c0_result_warn(r, "%s: the covariance's lags say a Gaussian PSF of FWHM %.0f nm, not the given %g nm "
-			       "(the automatic lambda and the support assume the given one; docs/parameters.md, lambda "
+			       "(the automatic lambda and the support assume the given one; docs/defaults.md#fwhm_rule, lambda "
 			       "under model mismatch)", r->names[r->sup[k]], fw, stated);
 	cc->fwhm_data = 0;   /* later stacks: the first's decision */
 }
@@ -225,7 +225,7 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		psf_width(r, k, &cc);
 	}
 	c0_report_support_params(r->rep, &cc);
-	cJSON *w = cJSON_AddObjectToObject(r->rep, "psf_width");   /* fwhm_rule (docs/parameters.md) */
+	cJSON *w = cJSON_AddObjectToObject(r->rep, "psf_width");   /* docs/defaults.md#fwhm_rule */
 	cJSON_AddStringToObject(w, "rule", c0->fwhm_data ? "data" : "stated");
 	cJSON_AddNumberToObject(w, "stated_nm", r->fwhm_stated_nm);
 	if (r->fwhm_data_nm > 0)
@@ -343,14 +343,14 @@ static int intensity_compact(struct c0_result *r, int i)
  * from the ratios between angles, and a mu per angle smooths each angle's
  * intensities differently along the support: on sparse blinking (mu 0.1 at
  * the first angle, 1.7 at the steepest) the median depth error was 0.4-4 nm
- * larger (docs/parameters.md, "Sparse blinking"). The shared one is the
+ * larger (docs/defaults.md#mu). The shared one is the
  * geometric mean of theirs: the largest, the one the weakest stack needs,
  * over-smooths the others where the steepest angle is dim and noisy (EMCCD
  * sparse blinking, 200 frames: 26 against 21 nm). largest: the camera's
  * fixed pattern is in the means (an offset map given, or the stacks'
  * common pattern found), and intensities smoothed less would take in more
- * of what stays in every frame (docs/parameters.md, "Which mu the stacks
- * share"). The stacks are solved again at that mu; the discrepancy
+ * of what stays in every frame
+ * (docs/defaults.md#mu). The stacks are solved again at that mu; the discrepancy
  * figures of their own solve stay in the report beside their own mu
  * (mu_own). */
 static void share_mu(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, const double *const *mean,
@@ -458,7 +458,7 @@ static int pattern_less(const struct c0_result *r, int i, const double *ybar, co
  * camera's pixels and the pattern estimated again there. That one is kept
  * when the camera's frame shares at least twice the variance the sample's
  * does (the camera's part is then the larger; sCMOS stacks with 2-5 px of
- * drift 2.1-6.1x, CCD and EMCCD stacks 0.9-1.2x, docs/parameters.md). res
+ * drift 2.1-6.1x, CCD and EMCCD stacks 0.9-1.2x, docs/defaults.md#common_pattern). res
  * is left in the camera's frame. */
 static int camera_frame(const struct c0_result *r, const struct c0_grid *g, const int *idx, int m, double **res, int H,
 			int W, float *pat, struct c0_pattern_stats *ps)
@@ -545,7 +545,7 @@ static void solve_again(struct c0_result *r, const struct c0_intensity_conf *ic,
 
 /* The noise draw's CG tolerance: it feeds variances fitted over the
  * support's thousands of pixels, whose sampling error is far above 1 % of
- * the draw (docs/parameters.md) */
+ * the draw (docs/defaults.md#depth_noise_block) */
 #define C0_NOISE_DRAW_TOL 1e-2
 
 /* Stack i's noise draw (r->xnoise[i]): the difference of its two block
@@ -716,8 +716,8 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
  * intensities' noise known, the fit weighs the angles by it and reads the
  * pooled intensities themselves: the solve's projections are fitted to
  * them with equal weights and smoothed across pixels, which takes back most
- * of what the weights gain (docs/parameters.md, "Weighting the angles by
- * the noise of frame halves"). */
+ * of what the weights gain
+ * (docs/defaults.md#depth_noise_block). */
 static int depth_fit_cols(const struct c0_matirf_conf *m, const struct c0_run_conf *c, int nq, const struct c0_pooled *pool,
 			  struct c0_matirf_result *res)
 {
@@ -852,8 +852,8 @@ static int bleach_window(const struct c0_result *r, const struct c0_frames *f, s
 
 /* a fade the stacks cannot show (sparse or fast blinking: the frame sums
  * carry more blinking noise than fade) leaves the factors near 1 and the
- * later, steeper angles too dim: deeper depths (docs/parameters.md, "Depth
- * bias"); a fit below 0 is held at 0 ("A fade cannot reverse"). Said in the
+ * later, steeper angles too dim: deeper depths
+ * (docs/defaults.md#bleach); a fit below 0 is held at 0. Said in the
  * report's bleaching object and its warnings (the CLI prints those). */
 static void bleach_warning(struct c0_result *r, const struct c0_bleach_conf *bc, const struct c0_bleach_result *br)
 {

@@ -6,6 +6,17 @@
 
 #include <stdio.h>
 
+/* The anchor of a parameter's section in docs/defaults.md: its name, lower
+ * case, anything but letters, digits and '_' as '-' (test_docs.py checks
+ * that every one exists). */
+static void slug(const char *s)
+{
+	for (; *s; s++) {
+		char c = *s >= 'A' && *s <= 'Z' ? (char)(*s - 'A' + 'a') : *s;
+		putchar((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ? c : '-');
+	}
+}
+
 /* s with Markdown's cell separator escaped */
 static void cell(const char *s)
 {
@@ -29,11 +40,12 @@ int cmd_params(int argc, char **argv)
 	printf("# Parameters\n\n"
 	       "Made by `col0rme params` from the library's table (`src/app/params.c`): the\n"
 	       "command-line help and `col0rme.parameters()` in Python come from the same rows.\n"
-	       "How to choose them: `docs/guide.md`; the measurements behind the defaults:\n"
-	       "`docs/parameters.md`.\n\n"
+	       "Each name links to its section of `docs/defaults.md`: the default, why, and the\n"
+	       "measurement that decided it. How to choose them: `docs/guide.md`.\n\n"
 	       "| parameter | option | value | default | what it does |\n|---|---|---|---|---|\n");
 	for (int i = 0; i < n; i++) {
-		printf("| `%s` | `--%s` | ", t[i].name, t[i].flag);
+		printf("| [`%s`](defaults.md#", t[i].name), slug(t[i].name);
+		printf(") | `--%s` | ", t[i].flag);
 		if (t[i].metavar)
 			fputs("`", stdout), cell(t[i].metavar), fputs("`", stdout);
 		else

@@ -11,8 +11,8 @@
  * residuals (widened for residuals correlated from frame to frame),
  * constrained to k >= 0: a population does not un-bleach, so a rising fit is
  * noise (sparse blinking: the slopes' sd exceeds the paper's rate) or not
- * bleaching, and factors above 1 would read it as depth (docs/parameters.md,
- * "A fade cannot reverse"). Stack q's intensity is then divided by its factor
+ * bleaching, and factors above 1 would read it as depth
+ * (docs/defaults.md#bleach). Stack q's intensity is then divided by its factor
  *   F_q = mean over its frames t of e^{-k u_q(t)}   (time 0 reference)
  * with u_q(t) = start_q + t (stacks one after another, starts from the
  * acquisition order and the gaps) or t + pos_q / n (interleaved: frame t

@@ -3,7 +3,7 @@
  * the directions that spread a column's mass over neighbouring depths
  * (0.2 % of the objective), and a smeared mix of exponentials has a deeper
  * mean than its single depth (+3.3 nm on noise-free intensities, +4 nm on
- * the 5-angle simulations; docs/parameters.md, "Depth bias"). The column's
+ * the 5-angle simulations; docs/method.md#the-depth-readout). The column's
  * projections W f are what the data fix, and they barely move along those
  * directions, so each pixel's depth is the single depth whose exponential
  * fits them best. */
@@ -28,7 +28,7 @@ int c0_depth_fit_y(const struct c0_tirf *t, int nq, const double *angles, const 
 		   const float *const *y, size_t np, const float *var, float *depth);
 
 /* The noise of pooled intensities, for a fit that weighs the angles by it
- * (docs/parameters.md, "Weighting the angles by the noise of frame halves").
+ * (docs/defaults.md#depth_noise_block).
  * Under sparse blinking a pooled intensity's error is mostly the blinking's,
  * a share of the signal that differs from angle to angle; the plain fit
  * weighs every angle by its intensity squared. y[q] (np values each): the
@@ -49,8 +49,8 @@ int c0_depth_fit_y(const struct c0_tirf *t, int nq, const double *angles, const 
  * two thirds of them noise or more, as under sparse blinking at 1.1-1.5);
  * where the misfit is the larger part (dense or standard blinking at 500
  * frames: 2.5-8.5) the weights are near equal and the MA-TIRF volume's
- * projections, smoothed across pixels, read better (docs/parameters.md,
- * "Weighting the angles by the noise of frame halves"). */
+ * projections, smoothed across pixels, read better
+ * (docs/defaults.md#depth_noise_block). */
 #define C0_DEPTH_NOISE_RATIO 1.5
 #define C0_DEPTH_MAXQ 64     /* angles a depth fit takes */
 struct c0_depth_noise {

@@ -5,7 +5,7 @@
  * reconstructed from the intensities summed over a window around it (on the
  * support only), and the volume is then rescaled pixel by pixel to the
  * pixel's own intensity. On the default simulation this halves the median
- * depth error (docs/parameters.md). */
+ * depth error (docs/defaults.md#depth_pool_nm). */
 #pragma once
 #include <stddef.h>
 #include <stdint.h>
@@ -74,18 +74,18 @@ void c0_pool_rescale_at(float *f, int nz, const int *pixel, size_t M, int nq, co
 
 /* Default window of run's depth pooling, as a multiple of the PSF FWHM:
  * its length along the structure (the guided pool is a strip), long enough
- * to average the blinking's and the splitting's noise (docs/parameters.md). */
+ * to average the blinking's and the splitting's noise (docs/defaults.md#depth_pool_nm). */
 #define C0_DEPTH_POOL_FWHM 1.75
 /* The guided pool's strip: pixels within this many fine pixels of the line
  * along the structure, whose direction comes from the support's pixels
- * within C0_DEPTH_NORMAL_PX (docs/parameters.md, "Depth pooling along the
- * structure"). */
+ * within C0_DEPTH_NORMAL_PX
+ * (docs/defaults.md#depth_pool_nm). */
 #define C0_DEPTH_POOL_WIDTH_PX 2.0
 #define C0_DEPTH_NORMAL_PX 3
 /* Within the window, only the pixels whose guide depth is within this many
  * nm of the centre's are summed, the guide being each pixel's single-depth
  * fit to its intensities summed over C0_DEPTH_GUIDE_FWHM: filaments 90 nm
  * apart and 100 nm apart in depth were pulled together by the plain window
- * (median depth error 29-32 nm, 15-20 guided; docs/parameters.md). */
+ * (median depth error 29-32 nm, 15-20 guided; docs/defaults.md#depth_pool_range_nm). */
 #define C0_DEPTH_POOL_RANGE_NM 50
 #define C0_DEPTH_GUIDE_FWHM 0.55

@@ -6,14 +6,14 @@
  * including the camera offset. grad_Omega couples the support pixels closer
  * than graph_radius fine pixels, each difference weighted by 1/distance: with
  * only 4-neighbours a diagonal filament falls apart into single pixels that
- * nothing smooths (docs/parameters.md). With graph_orient, a difference
+ * nothing smooths (docs/defaults.md#graph_radius). With graph_orient, a difference
  * across the structure weighs less than one along it (ops/psi_omega.h), so
  * that the smoothness does not pull a filament toward a neighbour at
  * another depth. L is the coarse grid's Laplacian
  * (ops/neumann.h): a curvature penalty, under which a dip in b as narrow as
  * the PSF costs (length / PSF)^2 more than a broad one, so b cannot trade
  * against x along a structure; the gradient's cost is the same at every
- * width in 2-D (docs/parameters.md, "The background's smoothness").
+ * width in 2-D (docs/defaults.md#beta).
  * mu by the discrepancy principle:
  *   ||Psi x + b - ybar||^2 = nu^2 H W sigma2 / T. */
 #pragma once
@@ -28,11 +28,11 @@ struct c0_intensity_conf {
 	struct c0_grid grid;       /* pixel_nm, fwhm_nm required; srf 4 */
 	enum c0_background background; /* smooth */
 	double beta;               /* 100: background curvature weight (coarse grid; smoothing length beta^(1/4) pixels) */
-	double nu;                 /* 1; 0 means sqrt(T), the reference's choice (docs/parameters.md) */
+	double nu;                 /* 1; 0 means sqrt(T), the reference's choice (docs/defaults.md#nu) */
 	double mu;                 /* 0: discrepancy principle; > 0: fixed */
-	double tol;                /* 1e-3: CG relative residual, from x = 0, b = the mean (docs/parameters.md) */
+	double tol;                /* 1e-3: CG relative residual, from x = 0, b = the mean (docs/defaults.md#cg_tol) */
 	int maxit;                 /* 500 CG steps per active-set round */
-	double graph_radius;       /* 6 fine pixels: smoothness neighbourhood (docs/parameters.md) */
+	double graph_radius;       /* 6 fine pixels: smoothness neighbourhood (docs/defaults.md#graph_radius) */
 	double graph_orient;       /* 20: an edge's weight times (1 - cos^2 with the pixels' normals)^(graph_orient/2); 0: none */
 	int relative;              /* 1: residual^2 = floor^2 + target^2, floor = the residual at the smallest mu */
 	int tile;                  /* 0: one solve on the whole image; else tiles of this side (camera

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* docs/parameters.md: the first step's threshold is RHO times the QUANT
+/* docs/defaults.md#lambda: the first step's threshold is RHO times the QUANT
  * quantile of the correlation image over the pixels above the noise floor
  * (the bright structure's typical level, which one very bright spot does
  * not move as it moves lambda_max), never below KAPPA noise sds. It follows
@@ -166,7 +166,7 @@ static double hquantile_above(const double *h, double tau, double q)
  * quartile (0.3186 sigma) reads sigma from the background while the
  * structure, whose own sampling noise is larger, covers under 3/4 of the
  * field; the median (0.6745 sigma), read before, took the structure's on
- * dense fields (docs/parameters.md) */
+ * dense fields (docs/defaults.md#lambda) */
 static double noise_sd(const double *noise)
 {
 	return hquantile_above(noise, 0, 0.25) / 0.3186;

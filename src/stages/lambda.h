@@ -15,7 +15,7 @@
  * first step: the solve then runs at the second step's lambda (below). CEL0
  * gets the first step's threshold on its l0 scale, lowered as measured:
  * lambda = gamma t^2 / (2 ||a||^2) (median column norm).
- * Measured in docs/parameters.md, with why held-out cross-validation and
+ * Measured in docs/defaults.md#lambda, with why held-out cross-validation and
  * the discrepancy principle were not kept. */
 #pragma once
 #include "ops/covariance.h"
@@ -74,7 +74,7 @@ int c0_lambda_psf_fwhm_sums(const double s[2], double pixel_nm, double *fwhm_nm)
 void c0_lambda_psf_row_sums(const struct c0_cov *cov, int y, double s[2]);
 /* The run's warning when the data's FWHM and the given one differ by more
  * than this share (the simulator's Gaussian stacks read within 2 %, its Airy
- * disk of the same FWHM 7 % narrower; docs/parameters.md) */
+ * disk of the same FWHM 7 % narrower; docs/defaults.md#fwhm_rule) */
 #define C0_LAMBDA_PSF_WARN 0.05
 
 struct c0_support_conf;
@@ -85,7 +85,7 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 /* The second step (l1): the rule's threshold is a fraction of the
  * structure's correlation, which sums the emitters under the PSF, so it
  * follows their density; the best lambda follows one emitter's variance
- * (docs/parameters.md). A first solve at the rule's lambda resolves the
+ * (docs/defaults.md#lambda). A first solve at the rule's lambda resolves the
  * structure into peaks: fine pixels with x > 0 and no larger x among their
  * 8 neighbours. At a peak, x ||a||^2 is the correlation an emitter of
  * variance x gives, and lambda = C0_LAMBDA_PEAK_SHARE times its median over

@@ -1,5 +1,5 @@
 /* The automatic l1 lambda by symmetric covariance cross-validation
- * (stages/lambda.h, c0_lambda_cv; measured in docs/parameters.md). */
+ * (stages/lambda.h, c0_lambda_cv; measured in docs/defaults.md#lambda_rule). */
 #include "stages/lambda.h"
 #include "stages/support_parts.h"
 #include "ops/covfit.h"

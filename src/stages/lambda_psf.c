@@ -1,5 +1,5 @@
 /* The PSF width the data's covariance says, to check the stated one
- * (docs/parameters.md, "lambda under model mismatch"). Summed over all
+ * (docs/defaults.md#fwhm_rule). Summed over all
  * pixels, the covariance at lag d is sum_e v_e (psi * psi)(d): every
  * emitter's PSF autocorrelation, whatever the emitters' places. For a
  * Gaussian of sd sigma integrated over the pixels it is h(dy) h(dx) with

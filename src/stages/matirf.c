@@ -390,7 +390,7 @@ static int level_run(struct level *L, const struct c0_matirf_conf *c, const stru
 	ctx->pr = &pr;
 	struct c0_pdhg_conf pc = c->pdhg;
 	/* each solver's default; apg with TV: at 1e-3 the pipeline's demo depths
-	 * were 1.4 nm worse than diag's, at 5e-4 as good (docs/parameters.md) */
+	 * were 1.4 nm worse than diag's, at 5e-4 as good (docs/defaults.md#matirf_tol) */
 	if (pc.tol == 0)
 		pc.tol = ctx->apg && c->reg == C0_REG_TV ? 5e-4 : ctx->exact ? 1e-3 : 1e-4;
 	int st = c0_pdhg_solve(pb, &pc, L->u, L->y, info);

@@ -4,7 +4,7 @@
  * R = isotropic TV (lateral weight 1, axial weight wz) or the Schatten-1
  * (nuclear) norm of the Hessian. The l1 term s sum f (f >= 0) favours few
  * depths per pixel: without it TV spreads each emitter over depth and the
- * mean depth drifts towards the middle of the range (docs/parameters.md).
+ * mean depth drifts towards the middle of the range (docs/defaults.md#sparsity).
  * As in the reference: the images are scaled
  * by one global maximum (never per angle), W's columns are normalised and the
  * solver works on u = c f. */
@@ -54,7 +54,7 @@ struct c0_matirf_conf {
 /* kappa where the run conf deconvolves (psf_fwhm_nm > 0) and gives none:
  * measured with the blur modelled, 1e-3 halves the depth error of 3e-2 and
  * doubles the sum-over-depth image's fine detail, short of the truth's
- * (3e-4 overshoots it: noise) (docs/parameters.md) */
+ * (3e-4 overshoots it: noise) (docs/defaults.md#kappa) */
 #define C0_MATIRF_KAPPA_DECONV 1e-3
 #define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0, 0, 0 }
 

@@ -86,7 +86,7 @@ void matirf_primal_step_exact(void *vc, float *x, float *t, float rho, double su
  * iteration, so a few steps keep up with it, and at a fixed point of PDHG
  * the warm start is already the prox: the solution is the exact solver's.
  * 6 steps: 4 left the depths 1.4 nm from diag's on the 350x350 phantom, 6
- * and 8 0.7 nm (docs/parameters.md). */
+ * and 8 0.7 nm (docs/defaults.md#matirf_solver). */
 #define APG_CHUNK 256
 #define APG_ITS 6
 

@@ -12,7 +12,7 @@
  * over the class): the Wiener factor of a pattern of variance c seen through
  * the class's noise and misfit. Used only where the support's k >= 1/2 (the
  * estimate's error is then smaller than the pattern it removes; on CCD and
- * EMCCD stacks k is 0.1-0.2 on the support, docs/parameters.md). */
+ * EMCCD stacks k is 0.1-0.2 on the support, docs/defaults.md#common_pattern). */
 #pragma once
 #include "optics/grid.h"
 #include "col0rme.h"   /* C0_MAX_STACKS */

@@ -177,8 +177,8 @@ static int second_step(struct c0_support_conf *cc, const struct c0_cov *cov, str
 
 /* With fwhm_data: the PSF width the data say (before any operator is
  * built) replaces the stated one where they differ by more than the
- * estimator's measured error allows (docs/parameters.md, lambda under model
- * mismatch); 1 when it did. The covariance's lag stays the stated width's. */
+ * estimator's measured error allows
+ * (docs/defaults.md#fwhm_rule); 1 when it did. The covariance's lag stays the stated width's. */
 static int adopt_width(struct c0_support_conf *cc, double fw)
 {
 	if (!(fabs(fw / cc->grid.fwhm_nm - 1) > C0_LAMBDA_PSF_WARN))

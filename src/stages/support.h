@@ -50,18 +50,18 @@ struct c0_support_conf {
  * over positions in and around the pixel (0.6 at 229 nm / 100 nm). */
 double c0_support_guard_ratio(const struct c0_support_conf *c);
 /* The iteration caps: fista's is part of the estimator (its capped iterate
- * matched the simulated truth better than the minimiser, docs/parameters.md);
+ * matched the simulated truth better than the minimiser, docs/defaults.md#support_solver);
  * pruned's is a safety net (it stops on converging, 3300-5300 at 256 tiles). */
 #define C0_FISTA_MAXIT 2000
 #define C0_PRUNED_MAXIT 10000
 /* The tolerance a solve uses: c->fista.tol, or when that is -1 the
  * solver's own: 0 for fista on l1 (every iteration up to the cap: a stop on
  * the relative change came at 1100-1800 iterations and moved with lambda by
- * 20 % of the support, docs/parameters.md), C0_SUPPORT_TOL for pruned and
+ * 20 % of the support, docs/defaults.md#tol), C0_SUPPORT_TOL for pruned and
  * CEL0, which stop on converging (and for c0_support_noise_solve). */
 #define C0_SUPPORT_TOL 1e-5
 double c0_support_tol(const struct c0_support_conf *c);
-/* Default tile side (docs/parameters.md): tiles are solved side by side and
+/* Default tile side (docs/defaults.md#tile): tiles are solved side by side and
  * overlap by two covariance lags on each side. */
 #define C0_SUPPORT_TILE 256
 
@@ -94,7 +94,7 @@ int c0_support_lag(const struct c0_support_conf *c);
 /* Solve at the PSF width fwhm_nm from now on, the covariance keeping the
  * lag of the width c had (the data's width replacing the stated one). */
 void c0_support_set_width(struct c0_support_conf *c, double fwhm_nm);
-/* Measured on simulated filaments (docs/parameters.md): l1 1e-2, cel0 3e-5.
+/* Measured on simulated filaments (docs/history/support.md): l1 1e-2, cel0 3e-5.
  * The two differ because CEL0's lambda_max is on the l0 scale. */
 double c0_support_default_lambda(enum c0_penalty p);
 /* Streams the stack once for the covariance of every tile and its two
@@ -124,7 +124,7 @@ int c0_stack_mean(const struct c0_support_conf *c, struct c0_frames *f, double *
 /* The means of a stack's two block halves: the frames whose block of
  * `block` frames has an even number (t / block even) into half 0, the
  * others into half 1. Blocks longer than a blink keep the halves' blinking
- * apart, which alternate frames share (docs/parameters.md). Summed by a
+ * apart, which alternate frames share (docs/defaults.md#depth_noise_block). Summed by a
  * frame hook that wraps another (fn, ctx; NULL: none), so that a pass made
  * for something else sums them too: set c0_block_halves_fn with the struct
  * as the conf's hook; finish gives the means (allocated, float), both NULL

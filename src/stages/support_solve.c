@@ -36,7 +36,7 @@ static int ws_update(const struct c0_covfit *ctx, const double *x, const double 
  * is carried across. The set shrinks from the warm-up's blur (~5x the
  * support) towards the support, so the iterations get cheaper: at 512x512
  * the capped iterate's duality gap is 25x smaller, in 35 % less time, than
- * with a set kept until FISTA converged on it (docs/parameters.md).
+ * with a set kept until FISTA converged on it (docs/defaults.md#support_solver).
  * fista (the default) takes the whole grid's step; pruned, on each piece,
  * the longest step safe on its set (longer, as the set shrinks). */
 #define WARMUP 30

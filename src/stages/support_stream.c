@@ -292,7 +292,7 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 	if (!st && (!s2 || !*mean))
 		st = C0_ENOMEM;
 	struct c0_support_conf cc = *c;
-	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/parameters.md) */
+	cc.fista.maxit = 100;   /* sigma2 within 0.1 % of 1000 iterations (docs/defaults.md#noise_variance) */
 	struct c0_first_fail fail = { 0 };
 #pragma omp parallel for schedule(dynamic, 1) if (tl.n > 1)
 	for (int k = 0; k < (st ? 0 : tl.n); k++)

@@ -299,7 +299,7 @@ int c0_support_tiles_lambda(const struct c0_support_conf *c, struct c0_support_s
  * halves' FRC on one tile), on part of the noise subset (PRECISION_PX). The
  * halves are solved side by side, one per thread, as the tiles are. No FRC:
  * its ring sums added over Hann-windowed tiles disagreed with the one-tile
- * value (docs/parameters.md). */
+ * value (docs/defaults.md#tile). */
 #define PRECISION_PX (256 * 256)
 /* which of the noise subset: spread evenly, interiors up to PRECISION_PX
  * (all of them up to 256x256 images; each half solve costs as much as a

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The PSF width rule (fwhm_rule, docs/parameters.md "lambda under model
+"""The PSF width rule (fwhm_rule, docs/defaults.md#fwhm_rule "lambda under model
 mismatch"): the default (data) against --fwhm-rule stated.
     fwhm_rule.py COL0RME WORKDIR [support|depth]
 support: single-angle 64x64 stacks of the mismatch panel (Airy members, the

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The automatic support lambda under model mismatch (issue 29; docs/parameters.md,
+"""The automatic support lambda under model mismatch (docs/history/lambda-drift.md,
 "lambda under model mismatch"): single-angle stacks whose PSF, stated FWHM,
 pixel size, photon budget or structure differ from what the default rule's
 constants were measured on, each swept over a fixed lambda / lambda_max grid.

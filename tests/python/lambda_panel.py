@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The automatic support lambda against a sweep on a panel of simulated
-single-angle stacks (docs/parameters.md):
+single-angle stacks (docs/history/lambda-drift.md):
     lambda_panel.py COL0RME WORKDIR [l1|cel0 [SUPPORT OPTIONS...]]
 Prints a markdown table: the Jaccard index (40 nm, 3 camera pixels of margin)
 for each fixed lambda and for the defaults (automatic lambda, drift correction).
@@ -39,7 +39,7 @@ PANEL = {
     "spread 1, sparse": ["--brightness-cv", "1.0", "--density", "15", "--filaments", "3"],
     "short blinks": ["--tau-on", "10", "--tau-off", "300"],
     "background 200": ["--background", "200"],
-    # added after the fcf8527 table (docs/parameters.md, *Off the panel*)
+    # added after the fcf8527 table (docs/history/lambda-drift.md, *Off the panel*)
     "slow blinks": ["--tau-on", "100", "--tau-off", "1000"],
     "pixel 160, fwhm 300": ["--pixel-size", "160", "--fwhm", "300"],
     "gain 3, offset 500, snr 5": ["--gain", "3", "--offset", "500", "--snr", "5"],

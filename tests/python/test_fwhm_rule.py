@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The PSF width rule (fwhm_rule, docs/parameters.md "lambda under model
+"""The PSF width rule (fwhm_rule, docs/defaults.md#fwhm_rule "lambda under model
 mismatch"):
 - an Airy stack (simulate --psf airy, FWHM 229 nm) given --fwhm 260 reads
   210 nm from its covariance; by default the support uses that width

@@ -1,6 +1,6 @@
 """The cross-validated support lambda (--lambda-rule cv, stages/lambda_cv.c).
 
-- on two members of the grid panel (docs/parameters.md, *Cross-validated
+- on two members of the grid panel (docs/history/lambda-drift.md, *Cross-validated
   lambda*) the chosen lambda's Jaccard index is within 0.02 of the best of
   an 11-point sweep (ratio sqrt 2, 2e-2 ... 6.25e-4), stored here with the
   command that measured it; "fast" is a member where the default rule

@@ -59,7 +59,7 @@ def test_depth(tmp):
               % (seed, med, bias, k, kt, rep["bleaching"]["rate_sd_per_frame"]), file=sys.stderr)
         # the strip along the structure: 11.1 and 9.0 nm (13.3 and 10.1 with the 7-pixel square)
         check(med <= 13, "seed %d: median depth error %.1f <= 13 nm" % (seed, med))
-        # issue 29: measured -1.6 and -0.6 nm; the columns' mean depth read +3.0 and +3.9 (docs/parameters.md, "Depth bias")
+        # issue 29: measured -1.6 and -0.6 nm; the columns' mean depth read +3.0 and +3.9 (docs/history/depth.md, "Depth bias")
         check(abs(bias) <= 3, "seed %d: |median signed error| %.1f <= 3 nm" % (seed, bias))
         check(abs(k / kt - 1) <= 0.15, "seed %d: bleaching rate %.3g within 15%% of the simulated %.3g" % (seed, k, kt))
         fade = sim["estimates"]["bleaching"]["fade_last_vs_first"]
@@ -81,7 +81,7 @@ def test_depth(tmp):
 def test_drift_bleaching(tmp):
     """400,-300 nm of drift (seed 1): filaments drift out of the field, and whole frames' sums read that
     as a fade (rate 1.37x the simulated, signed depth error -6.8 nm); the sums over the window that follows
-    the sample read 0.85x and +0.1 nm (docs/parameters.md, "Bleaching under drift")"""
+    the sample read 0.85x and +0.1 nm (docs/history/depth.md, "Bleaching under drift")"""
     data, sim, stacks = simulate(tmp, "drift1", "--seed", "1", "--pairs", "--drift-nm", "400,-300")
     rep, d = run(tmp, "drift1_run", data, sim, stacks)
     if rep is None:
@@ -106,7 +106,7 @@ def test_sparse_blinking(tmp):
     dipping under the dim deep structures: with the gradient penalty it sat 0.4-0.8 ADU low there at angles
     1-4 and the structures deeper than 250 nm read 17.0 nm shallow; then 0.0-0.4 ADU, -4.2 nm, and the whole
     stack 13.1 nm, signed -0.0; with the geometric mean 13.3 nm, +0.2, the deep ones -1.8 nm
-    (docs/parameters.md, "Sparse blinking", "The background's smoothness", "Which mu the stacks share").
+    (docs/history/depth.md, "Sparse blinking", "The background's smoothness", "Which mu the stacks share").
     With the intensity's smoothness along the structure 12.3 -> 10.9 nm, the deep ones (about 250
     pixels) -5.5 -> -8.2 nm, within the seeds' spread: on the grid's CCD sparse-fast 500 stacks they
     read -4.2 / -8.2 / -1.2 nm before and -3.1 / -6.4 / +1.7 after (seeds 1-3); the bar stays far
@@ -142,7 +142,7 @@ def test_depth_weights(tmp):
     """sparse fast blinking at 200 frames an angle (issue 29; like the grid's CCD sparse-fast 200 cell of seed 1,
     which reads 16.1 -> 13.9 nm): the depth fit weighs the angles by the noise of the frames' two block halves,
     which under sparse blinking explains the fit's residuals (1.07 times its expectation here); with equal
-    weights (--depth-noise-block 0) the volume's readout of before: 17.1 -> 14.6 nm (docs/parameters.md,
+    weights (--depth-noise-block 0) the volume's readout of before: 17.1 -> 14.6 nm (docs/history/depth.md,
     "Weighting the angles by the noise of frame halves")"""
     data, sim, stacks = simulate(tmp, "sparse200", "--seed", "1", "--pairs", "--tau-on", "10", "--tau-off", "120",
                                  "--frames", "200")
@@ -167,7 +167,7 @@ def test_fade_clamp(tmp):
     """a fade cannot reverse (issue 29): under sparse blinking at 200 frames the frame sums' slopes carry more
     blinking noise (sd ~3.7e-5 per frame) than the simulated fade (2.2e-5), and on this seed the fit comes out
     negative (-8.9e-5): the rate is held at 0 and the factors at 1, which reads +0.5 nm signed where the fit's own
-    factors (above 1) read +6.2 (docs/parameters.md, "A fade cannot reverse")"""
+    factors (above 1) read +6.2 (docs/history/depth.md, "A fade cannot reverse")"""
     data, sim, stacks = simulate(tmp, "rise", "--seed", "23", "--pairs", "--tau-on", "10", "--tau-off", "120",
                                  "--frames", "200")
     rep, d = run(tmp, "rise_run", data, sim, stacks)
@@ -193,7 +193,7 @@ def test_fade_clamp(tmp):
 def test_close_pairs(tmp):
     """filament partners 90 nm away and 100 nm deeper: the guided depth pooling
     keeps each pixel's window to its own structure, the plain window (range 0)
-    pulls the two depths together (docs/parameters.md)"""
+    pulls the two depths together (docs/defaults.md#depth_pool_range_nm)"""
     data, sim, stacks = simulate(tmp, "close3", "--seed", "3", "--pairs", "--pair-sep", "90")
     _, d = run(tmp, "close3_run", data, sim, stacks)
     _, d0 = run(tmp, "close3_plain", data, sim, stacks, "--depth-pool-range", "0")
@@ -211,7 +211,7 @@ def test_close_pairs(tmp):
 def test_noisy_pixels(tmp):
     """3 % of the pixels with noise of their own (sCMOS, sd 40 ADU): the pixel
     guard keeps the support near the clean stack's; without it the noisy
-    pixels' variance reads as emitters (docs/parameters.md)"""
+    pixels' variance reads as emitters (docs/defaults.md#pixel_guard)"""
     one = ["--seed", "6", "--angles", "65", "--z-range", "0,200"]
     clean, _, cs = simulate(tmp, "clean6", *one)
     data, sim, stacks = simulate(tmp, "hot6", *one, "--hot-pixels", "0.03,40")
@@ -287,7 +287,7 @@ def test_repeat(tmp):
     """bleach repeat (issue 29): the fade from a repeat of the first angle at the end. Under sparse fast
     blinking the frame sums' slope misses the rate (here +41 %); the repeat's intensity ratio finds it.
     Smaller stacks (48x48, 300 frames) do not separate the two: the ratio's blinking noise is then as large
-    as the fade (docs/parameters.md, "Depth bias")"""
+    as the fade (docs/history/depth.md, "Depth bias")"""
     small = ["--width", "64", "--height", "64", "--frames", "500"] if MODE == "full" else \
         ["--width", "24", "--height", "24", "--frames", "60"]
     data, sim, stacks = simulate(tmp, "rep", "--seed", "2", "--pairs", "--tau-on", "10", "--tau-off", "120", "--repeat-first", *small)

@@ -89,7 +89,7 @@ def test_accuracy(tmp):
         sg, sb = e["depth"]["median_signed_error_nm"], e["baseline_depth"]["median_signed_error_nm"]
         print("seed %d: Jaccard %.3f, median depth error %.1f nm, signed %+.1f nm (baseline %.1f nm, signed %+.1f nm), coverage %.2f"
               % (seed, j, d, sg, b, sb, e["depth"]["coverage"]), file=sys.stderr)
-        # measured -2.2 and +1.1 nm (seeds 1, 2); the columns' mean depth read +2..+5 (docs/parameters.md, "Depth bias")
+        # measured -2.2 and +1.1 nm (seeds 1, 2); the columns' mean depth read +2..+5 (docs/history/depth.md, "Depth bias")
         check(abs(sg) <= 4, "seed %d: |median signed depth error| %.1f <= 4 nm" % (seed, sg))
         check(j >= 0.5, "seed %d: Jaccard %.3f >= 0.5" % (seed, j))
         check(d <= 30, "seed %d: median depth error %.1f <= 30 nm" % (seed, d))

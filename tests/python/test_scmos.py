@@ -110,7 +110,7 @@ def evaluate(out, truth):
 def test_accuracy(tmp):
     """the sCMOS condition (5 angles, --pairs, 300 frames, seed 1): the maps bring the median depth
     error from 15.6 nm (no maps, --common-pattern off) to 12.0 nm; without maps the common pattern
-    (the default) reads 13.6 nm (docs/parameters.md); ignoring the maps or the pattern fails the bars"""
+    (the default) reads 13.6 nm (docs/defaults.md#common_pattern); ignoring the maps or the pattern fails the bars"""
     d = simulate(tmp, "acc", "--camera", "scmos", "--pairs", "--frames", "300", "--dark-frames", "0")
     ang = ",".join("%.6g" % a for a in json.load(open(os.path.join(d, "sim.json")))["parameters"]["angles_deg"])
     stacks = [os.path.join(d, "stack_q%02d.tif" % q) for q in range(1, 6)]
@@ -137,7 +137,7 @@ def test_accuracy(tmp):
     check(res["plain"][0] == res["off"][0], "common pattern: the support is not touched (Jaccard %.3f, %.3f)" % (res["plain"][0], res["off"][0]))
     check("common_pattern" not in rep["maps"] and "common_pattern" not in rep["off"], "common pattern: not evaluated with an offset map or off")
     # the shared mu: the largest own where the camera's fixed pattern is in the means (the pattern found,
-    # or an offset map given), else their geometric mean (docs/parameters.md, "Which mu the stacks share")
+    # or an offset map given), else their geometric mean (docs/history/depth.md, "Which mu the stacks share")
     for name, rule in (("plain", max), ("maps", max), ("off", lambda v: math.exp(sum(map(math.log, v)) / len(v)))):
         mus, own = [i["mu"] for i in rep[name]["intensity"]], [i["mu_own"] for i in rep[name]["intensity"]]
         check(all(abs(m / rule(own) - 1) < 1e-9 for m in mus), "shared mu (%s): %s, own %s" % (name, mus, own))
