@@ -59,6 +59,8 @@ int c0_cli_open(struct c0_cli *k)
 	if (!st && c0_comm_rank() == 0)
 		st = c0_outdir_open(&k->out, k->outdir, k->force);
 	k->opened = !st && c0_comm_rank() == 0;
+	if (k->opened)
+		c0_cli_guard(&k->out);
 	return c0_comm_status(st);
 }
 
@@ -73,6 +75,7 @@ int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, i
 	}
 	if (k->opened)
 		st = c0_outdir_finish(&k->out, st);
+	c0_cli_unguard();
 	c0_result_free(r);
 	c0_frames_expand_free(k->names, k->n);
 	k->names = NULL;
