@@ -9,6 +9,7 @@
 #include "core/err.h"
 #include "core/comm.h"
 #include "core/mem.h"
+#include "core/progress.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -265,15 +266,15 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
 		share[tirf[i]] = 1;
 	if (three_d && c->bleach == C0_BLEACHING_REPEAT)
 		share[r->n - 1] = 1;   /* the repeat's total is compared with the first's */
-	if (!st)
+	if (!st && !(st = c0_progress_stage("intensity")))
 		st = c0_step_intensity(r, &s->intensity, &s->support, f, NULL, c->baseline && three_d, three_d ? share : NULL);
-	if (!st)
+	if (!st && !(st = c0_progress_stage("render")))
 		st = c0_step_render(r);
 	for (int q = 0; q < r->n; q++)
 		r->bleach_factor[q] = 1;
-	if (!st && three_d)
+	if (!st && three_d && !(st = c0_progress_stage("bleaching")))
 		st = c0_step_bleach(r, c, f);
-	if (!st && three_d)
+	if (!st && three_d && !(st = c0_progress_stage("matirf")))
 		st = volume(r, ct, tirf, s);
 	return st;
 }
@@ -312,9 +313,9 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	c0_run_conf_bleach(c, &bc);
 	for (int q = 0; !st && c->drift && c->nangles > 0 && bc.mode == C0_BLEACH_ESTIMATE && q < n; q++)
 		st = c0_frames_keep_profiles(&f[q]);
-	if (!st && c->drift)
+	if (!st && c->drift && !(st = c0_progress_stage("drift")))
 		st = c0_step_drift(r, c, &s.support.grid, f, n);
-	if (!st)
+	if (!st && !(st = c0_progress_stage("support")))
 		st = c0_step_support(r, &s.support, f);
 	if (!st && r->fwhm_nm > 0 && r->fwhm_nm != s.support.grid.fwhm_nm)
 		data_width(c, &s, r->fwhm_nm);

@@ -5,6 +5,7 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/progress.h"
 
 #include <stdlib.h>
 
@@ -39,7 +40,7 @@ static int intensity(const struct c0_run_conf *c, const struct c0_stage_confs *s
 {
 	(void)n;
 	int st = load_mask(support, &f[0], c->srf, &r->mask, &r->Ly, &r->Lx);
-	return st ? st : c0_step_intensity(r, &sc->intensity, &sc->support, f, c->nnoise_variance ? c->noise_variance : NULL, 0, NULL);
+	return st || (st = c0_progress_stage("intensity")) ? st : c0_step_intensity(r, &sc->intensity, &sc->support, f, c->nnoise_variance ? c->noise_variance : NULL, 0, NULL);
 }
 
 int c0_run_intensity_files(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, const char *support,

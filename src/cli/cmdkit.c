@@ -2,6 +2,8 @@
 #include "cli/commands.h"
 #include "core/err.h"
 #include "core/comm.h"
+#include "core/clock.h"
+#include "core/progress.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -18,6 +20,20 @@ int c0_cli_error_names(const char *cmd, const struct c0_cli_name *names)
 	if (c0_comm_rank() == 0)      /* under MPI every rank has the message */
 		fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
 	return 1;
+}
+
+/* The run's progress line on a terminal (or with --verbose), from the
+ * library's progress callback: one line per stage, its percent and time. */
+static int progress_line(const char *stage, double fraction, void *user)
+{
+	double *t0 = user, now = c0_now();
+	if (fraction == 0)
+		*t0 = now;
+	fprintf(stderr, "\r%-12s %3.0f%%  %6.1fs", stage, 100 * fraction, now - *t0);
+	if (fraction >= 1)
+		fputc('\n', stderr);
+	fflush(stderr);
+	return 0;
 }
 
 int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
@@ -49,6 +65,8 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	}
 	for (int i = 0; i < k->n; i++)
 		k->stacks[i].path = k->paths[i] = k->names[i];
+	if (c0_progress_enabled() && c0_comm_rank() == 0)
+		c0_run_conf_set_progress(&k->m.c, progress_line, &k->t0);
 	return 0;
 }
 

@@ -17,6 +17,7 @@ struct c0_cli {
 	int n;
 	struct c0_outdir out;
 	int opened;
+	double t0;                   /* the progress line's stage start */
 };
 
 /* Parses argv with spec (whose opts are filled here from params and the
