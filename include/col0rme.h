@@ -147,9 +147,13 @@ struct c0_run_conf {
 	/* the depth fit weighs the angles by the intensities' noise, measured on two halves of each
 	 * stack's frames in blocks of this many frames (20, longer than a blink; 0: equal weights) */
 	int depth_noise_block;
-	/* not a parameter: the run's progress callback and its argument (NULL: none) */
+	/* not parameters: the run's progress callback and its argument (NULL: none); */
 	c0_progress_fn progress;
 	void *progress_user;
+	/* which parameters c0_run_conf_set set (bit i: the i-th of c0_run_conf_param), so that a
+	 * run can say which physical values it assumed (a field set directly counts as given
+	 * when it differs from its default) */
+	uint32_t given[4];
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \

@@ -76,6 +76,7 @@ int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n
 	struct c0_result *r;
 	if ((st = c0_result_new("matirf", n, np, is_file, &r)))
 		return st;
+	c0_warn_assumed_optics(r, c);
 	struct c0_progress_sink ps;
 	c0_progress_attach(&ps, c->progress, c->progress_user);
 	if (!(st = c0_progress_stage("matirf")))

@@ -42,7 +42,10 @@ int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value)
 	const struct c0_param *p = c0_param_find(name);
 	if (!p)
 		return c0_fail(C0_EINVAL, "%s: unknown parameter", name ? name : "(null)");
-	return c0_param_set(p, c, name, value);
+	int st = c0_param_set(p, c, name, value);
+	if (!st)
+		c0_param_mark_given(c, p);
+	return st;
 }
 
 void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)

@@ -73,6 +73,8 @@ int c0_run_matirf_files(const struct c0_run_conf *c, char *const *paths, int n, 
 	if (!st)
 		st = c0_result_new("matirf", n, (const char *const *)paths, is_file, &r);
 	if (!st)
+		c0_warn_assumed_optics(r, c);
+	if (!st)
 		st = c0_step_matirf_raw(r, c, &mc, (const float *const *)data, (int)in[0].height, (int)in[0].width,
 					c->pixel_nm > 0 ? c->pixel_nm : in[0].pixel_size_nm);
 	for (int q = 0; q < n; q++)
