@@ -172,6 +172,12 @@ int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value);
 /* The parameters in order (i = 0, 1, ... until NULL): name, and its help
  * line with the default. */
 const char *c0_run_conf_param(int i, const char **doc);
+/* Parameter i's name (NULL past the last), the kind of its value ("number",
+ * "integer", "flag" (0 or 1), "numbers", "integers" (comma lists),
+ * "choice", "file"), its choices for a choice ("l1|cel0", else NULL), its
+ * help line and its default as text: what a language binding needs for
+ * its keywords and their documentation. */
+const char *c0_run_conf_param_info(int i, const char **kind, const char **choices, const char **help, const char **def);
 /* A conf on the heap with the defaults (NULL: out of memory), for callers
  * that cannot hold the struct itself (language bindings). */
 struct c0_run_conf *c0_run_conf_new(void);
