@@ -66,8 +66,9 @@ class Result:
     def _calibrate(self, pixel_nm):
         p = self.report.get("parameters") or self.report.get("support_parameters") or {}
         self.pixel_size_nm = p.get("pixel_size_nm", pixel_nm or None)
-        self.fine_pixel_nm = p.get("fine_pixel_nm", pixel_nm or None)
         self.srf = p.get("srf", 1 if pixel_nm else None)
+        fine = self.pixel_size_nm / self.srf if self.pixel_size_nm and self.srf else None
+        self.fine_pixel_nm = p.get("fine_pixel_nm", fine)
 
     def _volume(self, name):
         """The whole volume, copied on first use: the run holds only the

@@ -205,6 +205,11 @@ def test_result_calibration_and_read_round_trip(sim, tmp_path):
     assert col0rme.read(tmp_path / "m").fine_pixel_nm == pytest.approx(25)
     with pytest.raises(col0rme.Error, match="report.json"):
         col0rme.read(tmp_path)
+    s = col0rme.support(sim.stacks[0], pixel_size_nm=100, fwhm_nm=229)
+    assert (s.pixel_size_nm, s.fine_pixel_nm, s.srf) == (100, 25, 4)
+    s.write(tmp_path / "s")
+    b = col0rme.read(tmp_path / "s")
+    assert (b.pixel_size_nm, b.fine_pixel_nm, b.srf) == (100, 25, 4) and np.array_equal(b.support, s.support)
 
 
 def test_keywords_match_the_commands(cli):
