@@ -26,10 +26,13 @@ int c0_cli_error_names(const char *cmd, const struct c0_cli_name *names)
  * library's progress callback: one line per stage, its percent and time. */
 static int progress_line(const char *stage, double fraction, void *user)
 {
-	double *t0 = user, now = c0_now();
+	double *t0 = user, now = c0_now(), el = now - *t0;
 	if (fraction == 0)
-		*t0 = now;
-	fprintf(stderr, "\r%-12s %3.0f%%  %6.1fs", stage, 100 * fraction, now - *t0);
+		*t0 = now, el = 0;
+	if (fraction > 0.01 && fraction < 1)
+		fprintf(stderr, "\r%-12s %3.0f%%  %6.1fs  ETA %6.1fs ", stage, 100 * fraction, el, el * (1 - fraction) / fraction);
+	else
+		fprintf(stderr, "\r%-12s %3.0f%%  %6.1fs%16s", stage, 100 * fraction, el, "");
 	if (fraction >= 1)
 		fputc('\n', stderr);
 	fflush(stderr);
