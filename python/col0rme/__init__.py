@@ -254,8 +254,9 @@ def _document():
     for name, f in (("run", run), ("support", support), ("matirf", matirf)):
         kw = _params.keywords(table, _TAKES[name])
         _KW[name] = kw
+        arrays = typing.Union[typing.Sequence[typing.Any], np.ndarray]
         first = P(_FIRST[name], P.POSITIONAL_OR_KEYWORD,
-                  annotation=typing.Union[typing.Sequence[typing.Any], np.ndarray, str, os.PathLike])
+                  annotation=arrays if name == "matirf" else typing.Union[arrays, str, os.PathLike])
         prog = P("progress", P.KEYWORD_ONLY, default=None,
                  annotation=typing.Union[typing.Callable[[str, float], typing.Any], bool, None])
         f.__signature__ = _params.signature([first], kw, [prog])
