@@ -30,7 +30,17 @@ enum c0_status {
 	C0_EFORMAT,      /* a file is not what it claims or is damaged */
 	C0_EUNSUPPORTED, /* a valid file we do not handle (RGB, complex, ...) */
 	C0_ENOMEM,
+	C0_ECANCELED,    /* the progress callback asked the run to stop; nothing was kept */
 };
+
+/* A run's progress (c0_run_conf_set_progress): called on the calling
+ * thread with the stage now working ("drift", "support", "intensity",
+ * "render", "bleaching", "matirf"; "matirf" alone in c0_run_matirf) and
+ * its fraction done: 0 when it starts, 1 when it ends, and in between at
+ * most ten times a second where the stage can tell (never decreasing
+ * within a stage). Return 0 to go on; nonzero asks the run to stop: it
+ * ends at its next stage with C0_ECANCELED and returns no result. */
+typedef int (*c0_progress_fn)(const char *stage, double fraction, void *user);
 
 enum c0_penalty { C0_PENALTY_L1, C0_PENALTY_CEL0 };                /* "l1", "cel0" */
 enum c0_support_solver { C0_SUPPORT_FISTA, C0_SUPPORT_PRUNED };    /* "fista", "pruned" */
@@ -137,6 +147,13 @@ struct c0_run_conf {
 	/* the depth fit weighs the angles by the intensities' noise, measured on two halves of each
 	 * stack's frames in blocks of this many frames (20, longer than a blink; 0: equal weights) */
 	int depth_noise_block;
+	/* not parameters: the run's progress callback and its argument (NULL: none); */
+	c0_progress_fn progress;
+	void *progress_user;
+	/* which parameters c0_run_conf_set set (bit i: the i-th of c0_run_conf_param), so that a
+	 * run can say which physical values it assumed (a field set directly counts as given
+	 * when it differs from its default) */
+	uint32_t given[4];
 };
 
 #define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
@@ -155,9 +172,17 @@ int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value);
 /* The parameters in order (i = 0, 1, ... until NULL): name, and its help
  * line with the default. */
 const char *c0_run_conf_param(int i, const char **doc);
+/* Parameter i's name (NULL past the last), the kind of its value ("number",
+ * "integer", "flag" (0 or 1), "numbers", "integers" (comma lists),
+ * "choice", "file"), its choices for a choice ("l1|cel0", else NULL), its
+ * help line and its default as text: what a language binding needs for
+ * its keywords and their documentation. */
+const char *c0_run_conf_param_info(int i, const char **kind, const char **choices, const char **help, const char **def);
 /* A conf on the heap with the defaults (NULL: out of memory), for callers
  * that cannot hold the struct itself (language bindings). */
 struct c0_run_conf *c0_run_conf_new(void);
+/* Sets c's progress callback and its argument (fn NULL: none). */
+void c0_run_conf_set_progress(struct c0_run_conf *c, c0_progress_fn fn, void *user);
 void c0_run_conf_free(struct c0_run_conf *c);
 
 /* One stack: a TIFF file (path) or float32 frames in memory (data, frames x

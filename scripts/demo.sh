@@ -15,11 +15,12 @@ t0=$(date +%s.%N)
 ./build/col0rme simulate --seed "$SEED" --pairs -o "$OUT/data" >/dev/null
 t1=$(date +%s.%N)
 ANGLES=$(/usr/bin/python3 -c "import json,sys; print(','.join('%.6g' % a for a in json.load(open(sys.argv[1]))['parameters']['angles_deg']))" "$OUT/data/sim.json")
-./build/col0rme run --fwhm 229 --angles "$ANGLES" --baseline -o "$OUT/run" "$OUT"/data/stack_q0?.tif
+OPTICS=(--fwhm 229 --wavelength 488 --n-sample 1.33)   # the simulator's: give them, as for any acquisition
+./build/col0rme run "${OPTICS[@]}" --angles "$ANGLES" --baseline -o "$OUT/run" "$OUT"/data/stack_q0?.tif
 t2=$(date +%s.%N)
 ./build/col0rme eval --run "$OUT/run" --truth "$OUT/data" -o "$OUT/eval.json" >/dev/null
 t3=$(date +%s.%N)
-./build/col0rme run --fwhm 229 --angles "$ANGLES" --bleach off -o "$OUT/run_nobleach" "$OUT"/data/stack_q0?.tif
+./build/col0rme run "${OPTICS[@]}" --angles "$ANGLES" --bleach off -o "$OUT/run_nobleach" "$OUT"/data/stack_q0?.tif
 ./build/col0rme eval --run "$OUT/run_nobleach" --truth "$OUT/data" -o "$OUT/eval_nobleach.json" >/dev/null
 /usr/bin/python3 - "$OUT" "$t0" "$t1" "$t2" "$t3" <<'PY'
 import json, sys

@@ -6,6 +6,7 @@
 #include "check.h"
 #include "col0rme.h"
 
+#include <stdio.h>
 #include <string.h>
 
 static void expect_einval(int st, const char *name)
@@ -105,9 +106,95 @@ static void test_steps(void)
 	c0_simulation_free(sim);
 }
 
+/* What the progress callback heard, and where it asks to stop. */
+struct heard {
+	char stages[16][16];
+	int nstages, calls, bad_fraction, backwards;
+	double last;
+	const char *stop_at;
+};
+
+static int listen(const char *stage, double fraction, void *user)
+{
+	struct heard *h = user;
+	h->calls++;
+	h->bad_fraction |= !(fraction >= 0 && fraction <= 1);
+	if (!h->nstages || strcmp(h->stages[h->nstages - 1], stage)) {
+		if (h->nstages < 16)
+			snprintf(h->stages[h->nstages++], sizeof h->stages[0], "%s", stage);
+		h->last = 0;
+	}
+	h->backwards |= fraction < h->last;
+	h->last = fraction;
+	return h->stop_at && !strcmp(stage, h->stop_at);
+}
+
+static int heard(const struct heard *h, const char *stage)
+{
+	for (int i = 0; i < h->nstages; i++)
+		if (!strcmp(h->stages[i], stage))
+			return 1;
+	return 0;
+}
+
+/* Every stage of a run is heard, in order, fractions in [0, 1] and never
+ * back within a stage; a callback that asks to stop gets C0_ECANCELED and
+ * no result, and nothing was written. */
+static void test_progress_cancel(void)
+{
+	struct c0_simulation *sim = simulate();
+	struct c0_stack st[3] = { { 0 } };
+	for (int q = 0; q < 3; q++)
+		st[q].data = c0_simulation_stack(sim, q, &st[q].frames, &st[q].height, &st[q].width);
+	struct c0_run_conf *c = c0_run_conf_new();
+	CHECK(c && c0_run_conf_set(c, "angles", "62,65,68") == C0_OK && c0_run_conf_set(c, "pixel_nm", "100") == C0_OK &&
+	      c0_run_conf_set(c, "fwhm_nm", "229") == C0_OK);
+	struct heard h = { 0 };
+	c0_run_conf_set_progress(c, listen, &h);
+	struct c0_result *r = NULL;
+	CHECK(c0_run(c, st, 3, &r) == C0_OK && r);
+	const char *want[] = { "drift", "support", "intensity", "render", "bleaching", "matirf" };
+	CHECK_MSG(h.nstages == 6, "%d stages heard", h.nstages);
+	for (int i = 0; i < 6 && i < h.nstages; i++)
+		CHECK_MSG(!strcmp(h.stages[i], want[i]), "stage %d: %s, expected %s", i, h.stages[i], want[i]);
+	CHECK(h.calls >= 12 && !h.bad_fraction && !h.backwards && h.last == 1);
+	c0_result_free(r);
+
+	const char *stops[] = { "drift", "support", "matirf" };
+	for (int i = 0; i < 3; i++) {
+		struct heard s = { .stop_at = stops[i] };
+		c0_run_conf_set_progress(c, listen, &s);
+		r = (struct c0_result *)&s;   /* overwritten with NULL */
+		int rc = c0_run(c, st, 3, &r);
+		CHECK_MSG(rc == C0_ECANCELED && !r && strstr(c0_last_error(), stops[i]), "stop at %s: status %d, '%s'",
+			  stops[i], rc, c0_last_error());
+		CHECK(!heard(&s, "matirf") || !strcmp(stops[i], "matirf"));
+	}
+	struct heard s = { .stop_at = "support" };
+	c0_run_conf_set_progress(c, listen, &s);
+	r = NULL;
+	CHECK(c0_run_support(c, st, 1, &r) == C0_ECANCELED && !r);
+	int h2, w2;
+	const float *img[3];
+	struct c0_run_conf *m = c0_run_conf_new();
+	CHECK(m && c0_run_conf_set(m, "angles", "62,65,68") == C0_OK);
+	for (int q = 0; q < 3; q++)
+		img[q] = c0_simulation_stack(sim, q, &st[q].frames, &h2, &w2);   /* first frames as images */
+	struct heard mh = { .stop_at = "matirf" };
+	c0_run_conf_set_progress(m, listen, &mh);
+	CHECK(c0_run_matirf(m, img, 3, h2, w2, &r) == C0_ECANCELED && !r && mh.calls == 1);
+	c0_run_conf_set_progress(m, NULL, NULL);
+	CHECK(c0_run_matirf(m, img, 3, h2, w2, &r) == C0_OK && r);
+	c0_result_free(r);
+	c0_run_conf_free(m);
+	c0_run_conf_free(c);
+	c0_simulation_free(sim);
+}
+
 int main(void)
 {
 	RUN(test_simulation);
 	RUN(test_steps);
+	RUN(test_progress_cancel);
 	return CHECK_DONE();
 }

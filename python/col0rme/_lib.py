@@ -68,6 +68,8 @@ def _declare(lib):
         "c0_run_conf_free": (None, [P]),
         "c0_run_conf_set": (I, [P, S, S]),
         "c0_run_conf_param": (S, [I, ctypes.POINTER(S)]),
+        "c0_run_conf_param_info": (S, [I, ctypes.POINTER(S), ctypes.POINTER(S), ctypes.POINTER(S), ctypes.POINTER(S)]),
+        "c0_run_conf_set_progress": (None, [P, P, P]),
         "c0_run": (I, [P, ctypes.POINTER(Stack), I, ctypes.POINTER(P)]),
         "c0_run_support": (I, [P, ctypes.POINTER(Stack), I, ctypes.POINTER(P)]),
         "c0_run_matirf": (I, [P, ctypes.POINTER(FP), I, I, I, ctypes.POINTER(P)]),

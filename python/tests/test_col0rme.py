@@ -19,17 +19,6 @@ ANGLES = [62.0, 65.0, 68.0]
 SIM = ["--width", "24", "--height", "24", "--frames", "200", "--filaments", "2", "--seed", "5"]
 
 
-@pytest.fixture(scope="session")
-def cli(request):
-    exe = request.config.getoption("--cli")
-
-    def call(*args):
-        r = subprocess.run([exe, *map(str, args)], capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        return r
-    return call
-
-
 @pytest.fixture(scope="module")
 def data(tmp_path_factory, cli):
     d = tmp_path_factory.mktemp("data")
@@ -145,10 +134,12 @@ def test_parameters_listed():
 
 def test_bad_input_raises(data):
     _, _, stacks = data
-    with pytest.raises(col0rme.Error, match="no_such_parameter"):
+    with pytest.raises(TypeError, match="no_such_parameter"):
         col0rme.run(stacks, angles=ANGLES, fwhm=229, no_such_parameter=1)
-    with pytest.raises(col0rme.Error, match="lambda"):
+    with pytest.raises(TypeError, match="lambda"):
         col0rme.run(stacks, angles=ANGLES, fwhm=229, **{"lambda": "abc"})
+    with pytest.raises(col0rme.Error, match="lambda_"):   # a TypeError is a col0rme.Error too
+        col0rme.run(stacks, angles=ANGLES, fwhm=229, lambda_="abc")
     with pytest.raises(col0rme.Error, match="angles"):
         col0rme.run(stacks[:2], angles=ANGLES, pixel_size=100, fwhm=229)
     with pytest.raises(col0rme.Error, match="T x H x W"):

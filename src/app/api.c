@@ -6,6 +6,7 @@
 #include "sim/sim.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/progress.h"
 
 #include <errno.h>
 #include <math.h>
@@ -22,6 +23,11 @@ struct c0_run_conf *c0_run_conf_new(void)
 	return c;
 }
 
+void c0_run_conf_set_progress(struct c0_run_conf *c, c0_progress_fn fn, void *user)
+{
+	c->progress = fn, c->progress_user = user;
+}
+
 void c0_run_conf_free(struct c0_run_conf *c)
 {
 	free(c);
@@ -35,7 +41,11 @@ static int support(const struct c0_run_conf *c, const struct c0_stage_confs *sc,
 	for (int i = 0; i < n; i++)
 		r->sup[i] = i;
 	r->pixel_nm = sc->support.grid.pixel_nm, r->srf = sc->support.grid.srf;
-	int st = c->drift ? c0_step_drift(r, c, &sc->support.grid, f, n) : C0_OK;
+	int st = c->drift ? c0_progress_stage("drift") : C0_OK;
+	if (!st && c->drift)
+		st = c0_step_drift(r, c, &sc->support.grid, f, n);
+	if (!st)
+		st = c0_progress_stage("support");
 	return st ? st : c0_step_support(r, &sc->support, f);
 }
 
@@ -66,7 +76,12 @@ int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n
 	struct c0_result *r;
 	if ((st = c0_result_new("matirf", n, np, is_file, &r)))
 		return st;
-	if ((st = c0_step_matirf_raw(r, c, &mc, images, h, w, c->pixel_nm))) {
+	c0_warn_assumed_optics(r, c);
+	struct c0_progress_sink ps;
+	c0_progress_attach(&ps, c->progress, c->progress_user);
+	if (!(st = c0_progress_stage("matirf")))
+		st = c0_step_matirf_raw(r, c, &mc, images, h, w, c->pixel_nm);
+	if ((st = c0_progress_detach(&ps, st))) {
 		c0_result_free(r);
 		return st;
 	}

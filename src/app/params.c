@@ -98,6 +98,24 @@ static const struct c0_param table[] = {
 	ROW(common_pattern, C0_P_ENUM, 0, 0, "off|on", "common-pattern", "on|off", "without --offset-map: estimate the pixels' fixed pattern the angles' intensity fits share (sCMOS dark levels) and take it out of their means where it shows", "on"),
 };
 enum { NPARAMS = sizeof table / sizeof *table };
+_Static_assert(NPARAMS <= 32 * sizeof ((struct c0_run_conf *)0)->given / sizeof(uint32_t), "c0_run_conf.given: too few bits");
+
+void c0_param_mark_given(struct c0_run_conf *c, const struct c0_param *p)
+{
+	const int i = (int)(p - table);
+	c->given[i / 32] |= 1u << (i % 32);
+}
+
+int c0_param_assumed(const struct c0_run_conf *c, const char *name)
+{
+	const struct c0_param *p = c0_param_find(name);
+	const struct c0_run_conf d = C0_RUN_CONF_DEFAULTS;
+	if (!p || p->type != C0_P_DOUBLE)
+		return 0;
+	const int i = (int)(p - table);
+	return !(c->given[i / 32] >> (i % 32) & 1) && *(const double *)((const char *)c + p->off) ==
+	       *(const double *)((const char *)&d + p->off);
+}
 
 const struct c0_param *c0_params(int *n)
 {

@@ -31,3 +31,7 @@ const struct c0_param *c0_param_find(const char *name);
 /* Sets p's field of c from text (c0_run_conf_set without the look-up);
  * messages name the parameter as shown (its name, or the caller's flag). */
 int c0_param_set(const struct c0_param *p, struct c0_run_conf *c, const char *shown, const char *value);
+/* Notes p as given in c (c0_param_set does; the CLI for the numbers it parses itself). */
+void c0_param_mark_given(struct c0_run_conf *c, const struct c0_param *p);
+/* 1 when the number parameter name was neither set by name nor moved from its default. */
+int c0_param_assumed(const struct c0_run_conf *c, const char *name);

@@ -4,11 +4,13 @@
  * MA-TIRF baseline from the background-corrected means when asked. */
 #include "app/pipeline.h"
 #include "app/report_steps.h"
+#include "app/params.h"
 #include "stages/depthfit.h"
 #include "stages/depthpool.h"
 #include "core/err.h"
 #include "core/comm.h"
 #include "core/mem.h"
+#include "core/progress.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -265,15 +267,15 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
 		share[tirf[i]] = 1;
 	if (three_d && c->bleach == C0_BLEACHING_REPEAT)
 		share[r->n - 1] = 1;   /* the repeat's total is compared with the first's */
-	if (!st)
+	if (!st && !(st = c0_progress_stage("intensity")))
 		st = c0_step_intensity(r, &s->intensity, &s->support, f, NULL, c->baseline && three_d, three_d ? share : NULL);
-	if (!st)
+	if (!st && !(st = c0_progress_stage("render")))
 		st = c0_step_render(r);
 	for (int q = 0; q < r->n; q++)
 		r->bleach_factor[q] = 1;
-	if (!st && three_d)
+	if (!st && three_d && !(st = c0_progress_stage("bleaching")))
 		st = c0_step_bleach(r, c, f);
-	if (!st && three_d)
+	if (!st && three_d && !(st = c0_progress_stage("matirf")))
 		st = volume(r, ct, tirf, s);
 	return st;
 }
@@ -289,6 +291,25 @@ static void data_width(const struct c0_run_conf *c, struct c0_stage_confs *s, do
 	s->intensity.grid.fwhm_nm = fwhm;
 }
 
+void c0_warn_assumed_optics(struct c0_result *r, const struct c0_run_conf *c)
+{
+	const int wl = c0_param_assumed(c, "wavelength_nm"), ns = c0_param_assumed(c, "n_sample");
+	const double cell = 1.37, crit = asin(c->n_sample / c->n_glass) * 180 / acos(-1.0),
+		     crit_cell = asin(cell / c->n_glass) * 180 / acos(-1.0);
+	if (wl && ns)
+		c0_result_warn(r, "wavelength_nm %g and n_sample %g (water) assumed, the defaults: every penetration depth "
+			       "scales with the excitation wavelength (561 or 640 nm changes them all), and a cell's index "
+			       "(about 1.36-1.38) moves the critical angle from %.1f to about %.1f deg; give both",
+			       c->wavelength_nm, c->n_sample, crit, crit_cell);
+	else if (wl)
+		c0_result_warn(r, "wavelength_nm %g assumed, the default: every penetration depth scales with the excitation "
+			       "wavelength (561 or 640 nm changes them all); give the laser's", c->wavelength_nm);
+	else if (ns)
+		c0_result_warn(r, "n_sample %g (water) assumed, the default: a cell's index (about 1.36-1.38) moves the critical "
+			       "angle from %.1f to about %.1f deg and every penetration depth; give the sample's",
+			       c->n_sample, crit, crit_cell);
+}
+
 static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
 	       struct c0_result *r, const void *arg)
 {
@@ -297,6 +318,8 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	int only[C0_MAX_STACKS] = { 0 }, tirf[C0_MAX_STACKS];
 	struct c0_run_conf ct;
 	int st = run_check(c, &s, n, only, tirf, &ct);
+	if (!st && c->nangles)
+		c0_warn_assumed_optics(r, c);
 	const double crit = c0_tirf_critical_deg(&s.matirf.tirf);
 	for (int q = 0; !st && q < n; q++)
 		if (c->nangles && only[q])
@@ -312,9 +335,9 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	c0_run_conf_bleach(c, &bc);
 	for (int q = 0; !st && c->drift && c->nangles > 0 && bc.mode == C0_BLEACH_ESTIMATE && q < n; q++)
 		st = c0_frames_keep_profiles(&f[q]);
-	if (!st && c->drift)
+	if (!st && c->drift && !(st = c0_progress_stage("drift")))
 		st = c0_step_drift(r, c, &s.support.grid, f, n);
-	if (!st)
+	if (!st && !(st = c0_progress_stage("support")))
 		st = c0_step_support(r, &s.support, f);
 	if (!st && r->fwhm_nm > 0 && r->fwhm_nm != s.support.grid.fwhm_nm)
 		data_width(c, &s, r->fwhm_nm);

@@ -160,5 +160,7 @@ int c0_run_intensity_files(const struct c0_run_conf *c, const struct c0_stack *s
 			   struct c0_result **out);
 /* The standard MA-TIRF path on one 2D TIFF image per angle (paths[0..n)). */
 int c0_run_matirf_files(const struct c0_run_conf *c, char *const *paths, int n, struct c0_result **out);
+/* The one warning of an MA-TIRF run that left wavelength_nm or n_sample at its default. */
+void c0_warn_assumed_optics(struct c0_result *r, const struct c0_run_conf *c);
 /* Writes what r holds into an open output directory. */
 int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out);

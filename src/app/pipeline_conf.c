@@ -32,6 +32,25 @@ const char *c0_run_conf_param(int i, const char **doc)
 	return t[i].name;
 }
 
+const char *c0_run_conf_param_info(int i, const char **kind, const char **choices, const char **help, const char **def)
+{
+	static const char *const kinds[] = { [C0_P_DOUBLE] = "number", [C0_P_INT] = "integer", [C0_P_FLAG] = "flag",
+		[C0_P_DOUBLES] = "numbers", [C0_P_INTS] = "integers", [C0_P_ENUM] = "choice", [C0_P_STRING] = "file" };
+	int n;
+	const struct c0_param *t = c0_params(&n);
+	if (i < 0 || i >= n)
+		return NULL;
+	if (kind)
+		*kind = kinds[t[i].type];
+	if (choices)
+		*choices = t[i].choices;
+	if (help)
+		*help = t[i].help;
+	if (def)
+		*def = t[i].def;
+	return t[i].name;
+}
+
 const char *c0_version(void)
 {
 	return C0_VERSION;
@@ -42,7 +61,10 @@ int c0_run_conf_set(struct c0_run_conf *c, const char *name, const char *value)
 	const struct c0_param *p = c0_param_find(name);
 	if (!p)
 		return c0_fail(C0_EINVAL, "%s: unknown parameter", name ? name : "(null)");
-	return c0_param_set(p, c, name, value);
+	int st = c0_param_set(p, c, name, value);
+	if (!st)
+		c0_param_mark_given(c, p);
+	return st;
 }
 
 void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)

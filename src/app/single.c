@@ -5,6 +5,7 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/progress.h"
 
 #include <stdlib.h>
 
@@ -39,6 +40,8 @@ static int intensity(const struct c0_run_conf *c, const struct c0_stage_confs *s
 {
 	(void)n;
 	int st = load_mask(support, &f[0], c->srf, &r->mask, &r->Ly, &r->Lx);
+	if (!st)
+		st = c0_progress_stage("intensity");
 	return st ? st : c0_step_intensity(r, &sc->intensity, &sc->support, f, c->nnoise_variance ? c->noise_variance : NULL, 0, NULL);
 }
 
@@ -72,8 +75,13 @@ int c0_run_matirf_files(const struct c0_run_conf *c, char *const *paths, int n, 
 	if (!st)
 		st = c0_result_new("matirf", n, (const char *const *)paths, is_file, &r);
 	if (!st)
+		c0_warn_assumed_optics(r, c);
+	struct c0_progress_sink ps;
+	c0_progress_attach(&ps, c->progress, c->progress_user);
+	if (!st && !(st = c0_progress_stage("matirf")))
 		st = c0_step_matirf_raw(r, c, &mc, (const float *const *)data, (int)in[0].height, (int)in[0].width,
 					c->pixel_nm > 0 ? c->pixel_nm : in[0].pixel_size_nm);
+	st = c0_progress_detach(&ps, st);
 	for (int q = 0; q < n; q++)
 		free(data[q]);
 	if (st)

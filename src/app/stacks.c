@@ -3,6 +3,7 @@
 #include "app/pipeline.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/progress.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -96,17 +97,20 @@ int c0_pipe_run(const char *command, const struct c0_run_conf *c, const struct c
 	struct c0_result *r;
 	*out = NULL;
 	c0_mem_stage("opening");   /* each step names itself from here on */
+	struct c0_progress_sink ps;   /* the caller's progress callback, for the run's stages */
+	c0_progress_attach(&ps, c ? c->progress : NULL, c ? c->progress_user : NULL);
 	int st = c0_pipe_begin(command, c, stacks, n, f, &sc, &r);
 	if (!st) {
 		st = body(c, &sc, f, n, r, arg);
 		if (st == C0_ENOMEM && !strstr(c0_errmsg(), "out of memory"))
 			c0_mem_fail(0);   /* a plain malloc's failure: the step, without the size */
 		c0_stacks_close(f, n);
+		st = c0_progress_detach(&ps, st);
 		if (st)
 			c0_result_free(r);
 		else
 			*out = r;
 	}
 	c0_mem_stage(NULL);
-	return st;
+	return c0_progress_detach(&ps, st);
 }

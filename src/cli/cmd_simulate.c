@@ -2,6 +2,7 @@
 #include "cli/commands.h"
 #include "cli/opts.h"
 #include "cli/confopts.h"
+#include "cli/cmdkit.h"
 #include "app/sim_report.h"
 #include "io/outdir.h"
 #include "core/err.h"
@@ -144,7 +145,10 @@ int cmd_simulate(int argc, char **argv)
 	struct c0_sim_result res;
 	if (c0_sim_check(&c) || c0_outdir_open(&out, outdir, force))
 		return fail();
-	if (c0_outdir_finish(&out, c0_sim_write(&c, &out, argc, argv, &res))) {
+	c0_cli_guard(&out);
+	int st = c0_outdir_finish(&out, c0_sim_write(&c, &out, argc, argv, &res));
+	c0_cli_unguard();
+	if (st) {
 		c0_sim_result_free(&res);
 		return fail();
 	}

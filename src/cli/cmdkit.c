@@ -2,6 +2,8 @@
 #include "cli/commands.h"
 #include "core/err.h"
 #include "core/comm.h"
+#include "core/clock.h"
+#include "core/progress.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -18,6 +20,23 @@ int c0_cli_error_names(const char *cmd, const struct c0_cli_name *names)
 	if (c0_comm_rank() == 0)      /* under MPI every rank has the message */
 		fprintf(stderr, "col0rme %s: error: %s\n", cmd, msg);
 	return 1;
+}
+
+/* The run's progress line on a terminal (or with --verbose), from the
+ * library's progress callback: one line per stage, its percent and time. */
+static int progress_line(const char *stage, double fraction, void *user)
+{
+	double *t0 = user, now = c0_now(), el = now - *t0;
+	if (fraction == 0)
+		*t0 = now, el = 0;
+	if (fraction > 0.01 && fraction < 1)
+		fprintf(stderr, "\r%-12s %3.0f%%  %6.1fs  ETA %6.1fs ", stage, 100 * fraction, el, el * (1 - fraction) / fraction);
+	else
+		fprintf(stderr, "\r%-12s %3.0f%%  %6.1fs%16s", stage, 100 * fraction, el, "");
+	if (fraction >= 1)
+		fputc('\n', stderr);
+	fflush(stderr);
+	return 0;
 }
 
 int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
@@ -49,6 +68,8 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	}
 	for (int i = 0; i < k->n; i++)
 		k->stacks[i].path = k->paths[i] = k->names[i];
+	if (c0_progress_enabled() && c0_comm_rank() == 0)
+		c0_run_conf_set_progress(&k->m.c, progress_line, &k->t0);
 	return 0;
 }
 
@@ -59,6 +80,8 @@ int c0_cli_open(struct c0_cli *k)
 	if (!st && c0_comm_rank() == 0)
 		st = c0_outdir_open(&k->out, k->outdir, k->force);
 	k->opened = !st && c0_comm_rank() == 0;
+	if (k->opened)
+		c0_cli_guard(&k->out);
 	return c0_comm_status(st);
 }
 
@@ -73,6 +96,7 @@ int c0_cli_end(struct c0_cli *k, const char *cmd, struct c0_result *r, int st, i
 	}
 	if (k->opened)
 		st = c0_outdir_finish(&k->out, st);
+	c0_cli_unguard();
 	c0_result_free(r);
 	c0_frames_expand_free(k->names, k->n);
 	k->names = NULL;

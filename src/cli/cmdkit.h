@@ -17,6 +17,7 @@ struct c0_cli {
 	int n;
 	struct c0_outdir out;
 	int opened;
+	double t0;                   /* the progress line's stage start */
 };
 
 /* Parses argv with spec (whose opts are filled here from params and the
@@ -26,6 +27,10 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 		 int nextra, int argc, char **argv);
 /* The output directory: not an input's, empty unless --force. */
 int c0_cli_open(struct c0_cli *k);
+/* The CLI's own signal cleanup (cli/sigclean.c): until c0_cli_unguard, a
+ * signal or exit() removes o's staging directory. */
+void c0_cli_guard(const struct c0_outdir *o);
+void c0_cli_unguard(void);
 /* Writes r (with argv in its report) and moves the output directory into
  * place when st is 0, else rolls back; frees r; returns the exit code,
  * printing the error. */

@@ -94,6 +94,8 @@ int c0_conf_cli_finish(struct c0_conf_cli *m)
 	int n, st = C0_OK;
 	const struct c0_param *t = c0_params(&n);
 	for (int i = 0; i < n && !st; i++) {
+		if (m->given[i])   /* a number parsed straight into m->c */
+			c0_param_mark_given(&m->c, &t[i]);
 		if (t[i].type == C0_P_ENUM)
 			st = c0_param_set(&t[i], &m->c, t[i].name, m->choice[i]);
 		else if (t[i].type == C0_P_DOUBLE && m->given[i] && !strcmp(t[i].name, "pixel_nm") &&

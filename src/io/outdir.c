@@ -16,14 +16,10 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-/* The staging directory the signal handler removes (one per process). */
-static char g_stage[4200];
-static volatile sig_atomic_t g_active;
-
 /* Unlinks every entry of dir and the directory itself with system calls
  * only (no malloc, no stdio): callable from a signal handler. Only plain
  * entries are expected (outputs are files). */
-static void remove_flat(const char *dir)
+void c0_outdir_remove_flat(const char *dir)
 {
 	int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
 	if (fd >= 0) {
@@ -46,44 +42,6 @@ static void remove_flat(const char *dir)
 		close(fd);
 	}
 	rmdir(dir);
-}
-
-static void on_signal(int sig)
-{
-	if (g_active)
-		remove_flat(g_stage);
-	signal(sig, SIG_DFL);
-	raise(sig);
-}
-
-/* exit() in the middle of a run (a library's fatal error: libgomp's when a
- * thread cannot be made) leaves no partial output either */
-static void on_exit_clean(void)
-{
-	if (g_active)
-		remove_flat(g_stage);
-}
-
-static void guard(const char *stage)
-{
-	static int installed;
-	snprintf(g_stage, sizeof g_stage, "%s", stage);
-	g_active = 1;
-	if (installed)
-		return;
-	installed = 1;
-	atexit(on_exit_clean);
-	int sigs[] = { SIGINT, SIGTERM, SIGHUP, SIGABRT };   /* abort: a library's failed assertion (FFTW's malloc) */
-	for (int i = 0; i < 4; i++) {
-		struct sigaction sa, old;
-		memset(&sa, 0, sizeof sa);
-		sa.sa_handler = on_signal;
-		sigemptyset(&sa.sa_mask);
-		/* keep a caller's choice to ignore the signal (nohup) */
-		if (!sigaction(sigs[i], NULL, &old) && old.sa_handler == SIG_IGN)
-			continue;
-		sigaction(sigs[i], &sa, NULL);
-	}
 }
 
 /* Scans dir: empty, holds a subdirectory (its name in sub), or unreadable (-1 and errno). */
@@ -130,7 +88,7 @@ static void clean_stale(const char *parent, const char *base, const char *path)
 		snprintf(p, sizeof p, "%s/%s", parent, s);
 		if (!strncmp(s + bl, ".c0old-", 7) && lstat(path, &sb) && errno == ENOENT && !rename(p, path))
 			continue;
-		remove_flat(p);
+		c0_outdir_remove_flat(p);
 	}
 	closedir(d);
 }
@@ -180,11 +138,10 @@ int c0_outdir_open(struct c0_outdir *o, const char *path, int force)
 	if (access(parent, W_OK | X_OK))
 		return c0_fail(C0_EIO, "outdir %s: cannot write in %s: %s", path, parent, strerror(errno));
 	snprintf(o->stage, sizeof o->stage, "%s.c0tmp-%ld", o->path, (long)getpid());
-	remove_flat(o->stage);   /* ours from an earlier command in this process */
+	c0_outdir_remove_flat(o->stage);   /* ours from an earlier command in this process */
 	if (mkdir(o->stage, 0777))
 		return c0_fail(C0_EIO, "outdir %s: cannot create %s: %s", path, o->stage, strerror(errno));
 	o->open = 1;
-	guard(o->stage);
 	return C0_OK;
 }
 
@@ -199,8 +156,7 @@ void c0_outdir_rollback(struct c0_outdir *o)
 {
 	if (!o->open)
 		return;
-	g_active = 0;
-	remove_flat(o->stage);
+	c0_outdir_remove_flat(o->stage);
 	o->open = 0;
 }
 
@@ -218,7 +174,7 @@ int c0_outdir_commit(struct c0_outdir *o)
 	struct stat sb;
 	int st = C0_OK, moved = 0;
 	if (!lstat(o->path, &sb)) {
-		remove_flat(old);
+		c0_outdir_remove_flat(old);
 		if (rename(o->path, old))
 			st = c0_fail(C0_EIO, "outdir %s: cannot move the previous result aside: %s", o->path, strerror(errno));
 		moved = !st;
@@ -229,11 +185,10 @@ int c0_outdir_commit(struct c0_outdir *o)
 			rename(old, o->path);
 	}
 	if (st) {
-		remove_flat(o->stage);
+		c0_outdir_remove_flat(o->stage);
 	} else if (moved) {
-		remove_flat(old);
+		c0_outdir_remove_flat(old);
 	}
-	g_active = 0;
 	o->open = 0;
 	sigprocmask(SIG_SETMASK, &prev, NULL);
 	return st;

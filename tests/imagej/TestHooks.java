@@ -2,7 +2,16 @@ import ij.IJ;
 import ij.ImagePlus;
 import ij.ImageStack;
 import ij.WindowManager;
+import ij.gui.GenericDialog;
 import ij.plugin.frame.Recorder;
+
+import java.awt.Button;
+import java.awt.Component;
+import java.awt.EventQueue;
+import java.awt.Label;
+import java.awt.TextField;
+import java.awt.Window;
+import java.awt.event.ActionEvent;
 
 /** Test hooks for the ImageJ plugin's test, called from -batch macros with
  *  call("TestHooks...."): what a user's hands would do in ImageJ's window. */
@@ -81,5 +90,72 @@ public class TestHooks {
 	public static String saveTiff(String title, String path) {
 		ImagePlus copy = WindowManager.getImage(title).duplicate();   /* the image itself keeps no file */
 		return new ij.io.FileSaver(copy).saveAsTiffStack(path) ? path : "";
+	}
+
+	/** The opened depth map: its value unit, whether its lookup table is a
+	 *  colour one, its display range and whether it carries an overlay (the
+	 *  calibration bar). */
+	public static String depthInfo(String title) {
+		ImagePlus imp = WindowManager.getImage(title);
+		if (imp == null)
+			return "no image " + title;
+		return "unit " + imp.getCalibration().getValueUnit() + " colour " + imp.getProcessor().isColorLut()
+			+ " range " + imp.getDisplayRangeMin() + "-" + imp.getDisplayRangeMax()
+			+ " overlay " + (imp.getOverlay() != null && imp.getOverlay().size() > 0);
+	}
+
+	/** A script outside any macro (Groovy, Jython): a failed run is a
+	 *  RuntimeException it can catch, and Java goes on. */
+	public static void main(String[] args) {
+		try {
+			col0rme.Col0rme.run3d(args[0]);
+			System.out.println("no exception");
+		} catch (RuntimeException e) {
+			System.out.println("caught: " + e.getMessage());
+		}
+		System.out.println("java goes on");
+		System.exit(0);
+	}
+
+	private static volatile String seen = "";
+
+	/** A user at the next dialog titled title: notes the text field labelled
+	 *  label (seen()), types value into it (unless empty), presses OK. */
+	public static String answer(final String title, final String label, final String value) {
+		seen = "";
+		Thread t = new Thread(() -> {
+			try {
+				GenericDialog gd = null;
+				while (gd == null) {
+					for (Window w : Window.getWindows())
+						if (w instanceof GenericDialog && w.isShowing() && title.equals(((GenericDialog) w).getTitle()))
+							gd = (GenericDialog) w;
+					Thread.sleep(50);
+				}
+				TextField tf = null;
+				boolean next = false;
+				for (Component c : gd.getComponents()) {
+					if (c instanceof Label)
+						next = label.equals(((Label) c).getText());
+					else if (next && c instanceof TextField && tf == null)
+						tf = (TextField) c;
+				}
+				seen = tf == null ? "no field " + label : tf.getText();
+				if (tf != null && !value.isEmpty())
+					tf.setText(value);
+				final GenericDialog d = gd;
+				final Button ok = gd.getButtons()[0];
+				EventQueue.invokeLater(() -> d.actionPerformed(new ActionEvent(ok, ActionEvent.ACTION_PERFORMED, "OK")));
+			} catch (InterruptedException e) {
+				/* the test ends */
+			}
+		});
+		t.setDaemon(true);
+		t.start();
+		return "";
+	}
+
+	public static String seen() {
+		return seen;
 	}
 }

@@ -1,12 +1,16 @@
 #!/usr/bin/python3
 """The ImageJ plugin (imagej/): --help-json for every command, the plugin on
 the demo data with no display (call() from a -batch macro) and under Xvfb
-(run() and the Recorder), an unsaved hyperstack, bad inputs, Escape, and the
+(run() and the Recorder), depth.tif calibrated with its lookup table (and its
+calibration bar under Xvfb), a selection and a frame range, "other options",
+the dialog's remembered values, an unsaved hyperstack, bad inputs (the macro
+ends, Java does not; a script catches the failure), Escape, and the
 installed jar finding the installed col0rme.
 
 usage: test_imagej.py COL0RME PLUGIN_JAR IJ_JAR SOURCE_DIR BUILD_DIR SCRATCH
 Exits 77 (skipped) with the reason, after the --help-json checks, when java,
 the jar, ij.jar or Xvfb is missing."""
+import glob
 import json
 import os
 import re
@@ -69,7 +73,7 @@ for d in ("bin", "home", "tmp", "ij/plugins", "hooks", "nobin"):
     os.makedirs(os.path.join(scratch, d))
 os.symlink(exe, os.path.join(scratch, "bin", "col0rme"))
 shutil.copy(jar, os.path.join(scratch, "ij", "plugins", "col0rme_.jar"))
-subprocess.run(["javac", "-cp", ij_jar, "-d", os.path.join(scratch, "hooks"),
+subprocess.run(["javac", "-cp", ij_jar + ":" + jar, "-d", os.path.join(scratch, "hooks"),
                 os.path.join(src, "tests", "imagej", "TestHooks.java")], check=True, timeout=120)
 TMP = os.path.join(scratch, "tmp")
 BASE_PATH = "/usr/bin:/bin"
@@ -116,11 +120,14 @@ out1 = os.path.join(scratch, "run_headless")
 raw1 = os.path.join(scratch, "volume_headless.raw")
 rc, so, se = imagej(f"""
 d = call("col0rme.Col0rme.demo", "{demo}");
-out = call("col0rme.Col0rme.run3d", "angles={ANGLES} pixel=100 fwhm=229 output={out1}");
+out = call("col0rme.Col0rme.run3d", "angles={ANGLES} pixel=100 fwhm=229 output={out1} other=[--threads 2]");
 selectImage("volume.tif");
 getVoxelSize(w, h, d, unit);
 print("voxel " + w + " " + h + " " + d + " " + unit + " slices " + nSlices);
 call("TestHooks.saveRaw", "volume.tif", "{raw1}");
+selectImage("depth.tif");
+getVoxelSize(w, h, d, unit);
+print("depth voxel " + w + " " + unit + ", " + call("TestHooks.depthInfo", "depth.tif"));
 """, "headless", plugin_jar=jar)
 print(so, se)
 cli1 = os.path.join(scratch, "run_cli")
@@ -136,6 +143,9 @@ check(open(raw1, "rb").read() == volume_bytes(os.path.join(cli1, "volume.tif")),
 check("voxel 25 25 20 nm slices 20" in so, "headless: the opened volume is z-calibrated in nm (25 x 25 x 20 nm)")
 argv = json.load(open(os.path.join(out1, "report.json")))["argv"]
 check("--verbose" in argv and argv[argv.index("--angles") + 1] == ANGLES, "the plugin ran col0rme with --verbose and the angles")
+check(argv[argv.index("--threads") + 1] == "2", "other=[--threads 2] reached col0rme")
+check("depth voxel 25 nm, unit nm colour true range 0.0-400.0" in so,
+      "headless: depth.tif opened in nm, values in nm, a depth lookup table over 0-400 nm")
 
 # 2. Xvfb: Demo data, then 3D-COL0RME with only an output folder (the dialog
 # prefilled from the demo); the documented run() line, recorded as the menu
@@ -151,15 +161,30 @@ xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1280x1024x2
                         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
 try:
     display = ":" + xvfb.stdout.readline().decode().strip()
-    out0, out2, out3 = (os.path.join(scratch, n) for n in ("run_demo", "run_xvfb", "run_hyper"))
+    out0, out2, out3, out5 = (os.path.join(scratch, n) for n in ("run_demo", "run_xvfb", "run_hyper", "run_roi"))
     hyper_copy = os.path.join(scratch, "hyper_as_imagej_writes.tif")
     opts = doc_line.replace(DOC_OUT, out2)
     rc, so, se = imagej(f"""run("Demo data");
 run("3D-COL0RME...", "output={out0}");
-close("volume.tif"); close("depth.png"); close("support.tif"); close("render.tif");
+print("XDEPTH " + call("TestHooks.depthInfo", "depth.tif"));
+close("volume.tif"); close("depth.tif"); close("support.tif"); close("render.tif");
 line = call("TestHooks.record", "3D-COL0RME...", "{opts}");
 print("RECORDED " + line);
-close("volume.tif"); close("depth.png"); close("support.tif"); close("render.tif");
+close("volume.tif"); close("depth.tif"); close("support.tif"); close("render.tif");
+selectImage("stack_q02.tif");
+makeRectangle(8, 16, 32, 24);
+run("3D-COL0RME...", "stacks={STACKS} angles={ANGLES} pixel=100 fwhm=229 frames=101-400 output={out5} other=[--acquisition-order 1,2,3,4,5]");
+selectImage("stack_q02.tif");
+print("ROI kept " + selectionType());
+run("Select None");
+close("volume.tif"); close("depth.tif"); close("support.tif"); close("render.tif");
+call("TestHooks.answer", "3D-COL0RME", "Lambda", "0.0021");
+run("3D-COL0RME...");
+close("volume.tif"); close("depth.tif"); close("support.tif"); close("render.tif");
+call("TestHooks.answer", "3D-COL0RME", "Lambda", "");
+run("3D-COL0RME...");
+print("REMEMBERED lambda=" + call("TestHooks.seen"));
+close("volume.tif"); close("depth.tif"); close("support.tif"); close("render.tif");
 h = call("TestHooks.hyperstack", "{STACKS}", "angles as channels");
 call("TestHooks.saveTiff", "angles as channels", "{hyper_copy}");
 for (k = 1; k <= 5; k++) close("stack_q0" + k + ".tif");
@@ -174,6 +199,20 @@ cli_volume = open(os.path.join(cli1, "volume.tif"), "rb").read()
 check(rc == 0, "Xvfb: the macro ran (exit 0)")
 check(open(os.path.join(out0, "volume.tif"), "rb").read() == cli_volume,
       "Xvfb: Demo data, then OK in 3D-COL0RME... (only the output given) gives the CLI's volume.tif")
+check(re.search(r"^XDEPTH unit nm colour true range 0.0-400.0 overlay true$", so, re.M) is not None,
+      "Xvfb: depth.tif with its depth lookup table and calibration bar")
+sup5 = tifffile.imread(os.path.join(out5, "support.tif"))
+rep5 = json.load(open(os.path.join(out5, "report.json")))
+check(sup5.shape == (96, 128) and all(s["frames"] == 300 for s in rep5["support"]) and "ROI kept 0" in so
+      and rep5["argv"][rep5["argv"].index("--acquisition-order") + 1] == "1,2,3,4,5",
+      "Xvfb: a rectangular selection (32x24) and frames=101-400 honoured, other options passed, the selection kept")
+asked = sorted(glob.glob(os.path.join(TMP, "col0rme-demo*", "data", "col0rme_run*", "report.json")))
+argv_asked = [json.load(open(p))["argv"] for p in asked]
+check("REMEMBERED lambda=0.0021" in so and len(argv_asked) == 2
+      and all(a[a.index("--lambda") + 1] == "0.0021" for a in argv_asked if "--lambda" in a) and "--lambda" in argv_asked[0]
+      and "--lambda" in argv_asked[1],
+      "Xvfb: the dialog remembers its last values (lambda typed once, offered again: %s)"
+      % [a[a.index("--lambda") + 1] if "--lambda" in a else None for a in argv_asked])
 rec = re.search(r'^RECORDED (.*)$', so, re.M).group(1).strip()
 check(rec == 'run("3D-COL0RME...", "%s");' % opts, "Xvfb: the Recorder's line is the documented options string")
 check(open(os.path.join(out2, "volume.tif"), "rb").read() == cli_volume,
@@ -190,15 +229,18 @@ check(not [f for f in os.listdir(TMP) if f.startswith("col0rme-in")], "the tempo
 shutil.rmtree(TMP)
 os.makedirs(TMP)
 
-# 3. bad input: one line, exit status 1, nothing written
+# 3. bad input: one line, the macro ends there (a macro error) but Java does
+# not (ImageJ -batch then exits 0 as after any macro), nothing written
 def refused(name, macro, want, path=None):
     out = os.path.join(scratch, "bad_" + name)
     before = set(os.listdir(scratch))
-    rc, so, se = imagej(macro.replace("output=OUT", "output=" + out), "bad_" + name, path=path, plugin_jar=jar)
+    rc, so, se = imagej(macro.replace("output=OUT", "output=" + out) + '\nprint("MACRO WENT ON");', "bad_" + name,
+                        path=path, plugin_jar=jar)
     lines = [l for l in se.splitlines() if l.strip()]
     print("  " + name + ": " + " | ".join(lines))
-    check(rc == 1 and len(lines) == 1 and want in lines[0] and lines[0].startswith("col0rme"),
-          "bad input, %s: exit 1 and one line with '%s'" % (name, want))
+    check(rc == 0 and len(lines) == 1 and want in lines[0] and lines[0].startswith("col0rme")
+          and "MACRO WENT ON" not in so and "Exception" not in so,
+          "bad input, %s: one line with '%s', the macro ended, Java did not exit 1" % (name, want))
     check(not os.path.exists(out) and set(os.listdir(scratch)) - before == {"bad_" + name + ".ijm"}
           and not os.listdir(TMP), "bad input, %s: nothing written" % name)
 
@@ -223,6 +265,22 @@ refused("prefs_executable", 'call("ij.Prefs.set", "col0rme.executable", "%s/nobi
 refused("below_critical", RUN % (paths, "50,55,58,60,61"),
         "col0rme run: error: --angles: MA-TIRF needs at least 2 angles above the critical angle")
 refused("escape", 'call("TestHooks.escapeWhileRunning", "run");\n' + RUN % (paths, ANGLES), "cancelled; nothing was written")
+RUN_OTHER = 'call("col0rme.Col0rme.run3d", "stacks=[%s] angles=%s fwhm=229 output=OUT other=[%s]");'
+refused("other_unknown", RUN_OTHER % (paths, ANGLES, "--no-such-flag 1"), "--no-such-flag is not an option of col0rme run")
+refused("other_field", RUN_OTHER % (paths, ANGLES, "--fwhm 200"), "--fwhm is the dialog's field fwhm=")
+refused("other_value", RUN_OTHER % (paths, ANGLES, "--acquisition"), "--acquisition needs a value")
+refused("frames", 'call("col0rme.Col0rme.run3d", "stacks=[%s] angles=%s fwhm=229 frames=400-900 output=OUT");'
+        % (paths, ANGLES), "has frames 1-500")
+
+# a script outside any macro catches the failure as a RuntimeException; Java goes on
+r = subprocess.run(["java", "-Djava.awt.headless=true", "-Duser.home=" + os.path.join(scratch, "home"),
+                    "-cp", ij_jar + ":" + os.path.join(scratch, "hooks") + ":" + jar, "TestHooks",
+                    "stacks=[%s] angles=%s fwhm=229 output=%s" % (",".join(stacks[:4]), ANGLES,
+                                                                  os.path.join(scratch, "bad_script"))],
+                   capture_output=True, text=True, timeout=120, env=dict(os.environ, PATH=os.path.join(scratch, "bin") + ":" + BASE_PATH))
+check(r.returncode == 0 and "caught: col0rme: 5 angles but 4 stacks" in r.stdout and "java goes on" in r.stdout
+      and not os.path.exists(os.path.join(scratch, "bad_script")),
+      "a script's call that fails raises a RuntimeException it catches; Java goes on (%r)" % (r.stdout + r.stderr)[-300:])
 
 # 4. the installed jar finds the installed col0rme (no col0rme on PATH): Support only
 prefix = os.path.join(scratch, "prefix")

@@ -247,7 +247,8 @@ def test_outdir_messages(tmp, s16):
         print("skipped: cannot mount a small tmpfs to fill (needs root)", file=sys.stderr)
         return
     try:
-        p = fade_warning_off(cli("run", "--fwhm", "229", "--angles", "62,66", "-o", os.path.join(full, "out"), *s16))
+        p = fade_warning_off(cli("run", "--fwhm", "229", "--angles", "62,66", "--wavelength", "488", "--n-sample", "1.33",
+                                 "-o", os.path.join(full, "out"), *s16))
         check(refused(p, "No space left on device"), "(i) disk full says 'No space left on device'")
         check(os.listdir(full) == [], "(i) nothing left on the full disk: %s" % os.listdir(full))
     finally:
@@ -281,7 +282,7 @@ def test_subcritical(tmp):
     """issue 30: a stack at or below the critical angle gets one warning line; a typo far below is refused"""
     s3 = simulate(tmp, "d3", 16, 16, 40, "62,66,70")
     out = os.path.join(tmp, "sub_out")
-    fast = ["--fwhm", "229", "--matirf-iterations", "100", "--no-drift"]
+    fast = ["--fwhm", "229", "--matirf-iterations", "100", "--no-drift", "--wavelength", "488", "--n-sample", "1.33"]
     p = fade_warning_off(cli("run", *fast, "--angles", "60.5,66,70", "-o", out, *s3))   # critical angle 61.2 at 1.518/1.33
     warns = [l for l in p.stderr.splitlines() if "warning" in l]
     check(p.returncode == 0 and len(warns) == 1 and "60.5 deg" in warns[0] and "61.18 deg" in warns[0]

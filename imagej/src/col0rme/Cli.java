@@ -30,7 +30,7 @@ import java.util.regex.Pattern;
 final class Cli {
 	static final String PREF = "col0rme.executable";
 	private static final Map<String, Map<String, Map<String, Object>>> helpCache = new HashMap<String, Map<String, Map<String, Object>>>();
-	/* "stage   42%   1.3s  ETA   2.0s" (core/progress.c) */
+	/* "stage   42%   1.3s" (the library's progress callback as the CLI draws it, cli/cmdkit.c; an ETA may follow) */
 	private static final Pattern PROGRESS = Pattern.compile("^(.*?)\\s+(\\d+)%\\s+([0-9.]+)s(?:\\s+ETA\\s+([0-9.]+)s)?\\s*$");
 
 	final String exe;

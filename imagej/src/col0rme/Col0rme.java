@@ -6,6 +6,7 @@ import ij.Macro;
 import ij.Prefs;
 import ij.WindowManager;
 import ij.gui.GenericDialog;
+import ij.macro.Interpreter;
 import ij.plugin.PlugIn;
 
 import java.awt.GraphicsEnvironment;
@@ -19,8 +20,10 @@ import java.util.Map;
  *  col0rme executable... (plugins.config). The static methods run3d, support
  *  and demo are the same commands for macros with no display:
  *  call("col0rme.Col0rme.run3d", "angles=... pixel=100 fwhm=229 output=...").
- *  Every error is one line: IJ.error in ImageJ's window; in a batch process
- *  (no ImageJ window) it goes to stderr and ends the process with status 1. */
+ *  Every error is one line: IJ.error in ImageJ's window; with no window it
+ *  goes to stderr. Either way the macro that asked ends there (a macro
+ *  error), and a script that calls these methods outside a macro gets a
+ *  RuntimeException with the line: Java itself never ends. */
 public class Col0rme implements PlugIn {
 	static final String RUN = "3D-COL0RME", SUPPORT = "col0rme support";
 	/** The demo acquisition's incidence angles (degrees in the glass). */
@@ -69,9 +72,12 @@ public class Col0rme implements PlugIn {
 	static void fail(Failure e) {
 		String line = e.getMessage();
 		if (GraphicsEnvironment.isHeadless() || IJ.getInstance() == null) {
+			if (Interpreter.getInstance() == null)
+				throw new RuntimeException(line, e);   /* a script (Groovy, Jython...) catches it */
 			System.err.println(line);
 			System.err.flush();
-			System.exit(1);   /* ImageJ -batch exits 0 after a failed macro */
+			Interpreter.abort();   /* the macro ends here; ImageJ goes on */
+			return;
 		}
 		if (e.cancelled)
 			IJ.showStatus(line);
@@ -111,17 +117,28 @@ public class Col0rme implements PlugIn {
 			fs.option("Sample index", "--n-sample", null);
 			fs.option("Wavelength (nm, excitation)", "--wavelength", null);
 		}
-		fs.add(Fields.Kind.DIRECTORY, "Output folder (new)", defaultOutput(pre, cmd));
+		fs.add(Fields.Kind.STRING, "Frames (first-last; empty: all)", "").help =
+			"only these frames of every stack (1-based, e.g. 1-500); a rectangular selection on a stack crops them all";
+		fs.add(Fields.Kind.DIRECTORY, "Output folder (new)", defaultOutput(pre, cmd)).remembered = false;
 		fs.get("output").help = (String) cli.options(cmd).get("--output").get("help");
+		fs.get(whole ? "stacks" : "stack").remembered = false;
 		fs.add(Fields.Kind.MESSAGE, "Advanced", null);
 		fs.option("Lambda", "--lambda", null);
 		fs.option("Penalty", "--penalty", null);
 		fs.option("Drift correction", "--drift", null);
 		if (whole)
 			fs.option("Bleaching correction", "--bleach", null);
+		fs.add(Fields.Kind.STRING, "Other options (col0rme " + cmd + " flags)", "").help =
+			"any other option of col0rme " + cmd + ", as on its command line (e.g. --acquisition interleaved --gains 1,1.05,1.1); "
+			+ "checked against col0rme " + cmd + " --help-json";
 		if (options == null) {
+			String prefs = "col0rme." + cmd + ".";
+			if (Macro.getOptions() == null)
+				fs.recall(prefs);   /* a macro gives its own values: it stays reproducible */
 			if (!fs.ask(whole ? "3D-COL0RME" : "col0rme support"))
 				throw new Failure("col0rme: cancelled", true);
+			if (Macro.getOptions() == null)
+				fs.remember(prefs);
 		} else
 			fs.read(options);
 		return execute(cli, cmd, fs, whole);
@@ -150,7 +167,11 @@ public class Col0rme implements PlugIn {
 		args.add("-o");
 		args.add(outdir.getPath());
 		args.addAll(fs.args());
+		args.addAll(fs.other(fs.get("other").value, cmd));
 		try {
+			String cut = in.restrict(fs.get("frames").value);
+			if (!cut.isEmpty())
+				IJ.log("col0rme: the stacks restricted to " + cut);
 			in.write();
 			args.addAll(in.paths);
 			IJ.log("col0rme: " + cli.exe + " " + String.join(" ", args));

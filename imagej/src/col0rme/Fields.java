@@ -1,6 +1,7 @@
 package col0rme;
 
 import ij.Macro;
+import ij.Prefs;
 import ij.gui.GenericDialog;
 
 import java.util.ArrayList;
@@ -20,6 +21,8 @@ final class Fields {
 		Kind kind;
 		String key, label, value, flag, help, cliDefault;
 		String[] items;
+		boolean fromImage;   /* value taken from the open images (calibration, properties) */
+		boolean remembered = true;   /* its last value is kept in ImageJ's preferences */
 	}
 
 	private final Map<String, Map<String, Object>> cli;
@@ -43,6 +46,7 @@ final class Fields {
 			f.items = mv.split("\\|");
 		}
 		f.value = prefill != null ? prefill : isValue(f) ? f.cliDefault : "";
+		f.fromImage = prefill != null;
 		return f;
 	}
 
@@ -89,6 +93,58 @@ final class Fields {
 			default: break;
 			}
 		return true;
+	}
+
+	/** The dialog's last values (ImageJ's preferences, keys prefix + macro
+	 *  key) into the fields that hold neither a value from the images nor
+	 *  one of the fields not remembered (the stacks, a new output folder). */
+	void recall(String prefix) {
+		for (Field f : list) {
+			String v = f.kind == Kind.MESSAGE || f.fromImage || !f.remembered ? null : Prefs.get(prefix + f.key, null);
+			if (v != null && (f.kind != Kind.CHOICE || java.util.Arrays.asList(f.items).contains(v)))
+				f.value = v;
+		}
+	}
+
+	/** Keeps the fields' values for the next dialog. */
+	void remember(String prefix) {
+		for (Field f : list)
+			if (f.kind != Kind.MESSAGE && f.remembered && !f.fromImage)
+				Prefs.set(prefix + f.key, f.value);
+		Prefs.savePreferences();
+	}
+
+	/** The "other options" text as col0rme arguments: each flag checked
+	 *  against the command's options (--help-json); one the command does not
+	 *  have, one a field of the dialog gives, the output's and a value left
+	 *  out are refused. */
+	List<String> other(String text, String cmd) throws Failure {
+		List<String> a = new ArrayList<String>();
+		String[] t = text.trim().isEmpty() ? new String[0] : text.trim().split("\\s+");
+		for (int i = 0; i < t.length; i++) {
+			String flag = t[i].replaceAll("=.*", "");
+			Map<String, Object> o = cli.get(flag);
+			if (o == null)
+				for (Map<String, Object> r : cli.values())
+					if (flag.equals(r.get("short")))
+						o = r;
+			if (o == null || !flag.startsWith("-"))
+				throw new Failure("col0rme: other options: " + t[i] + " is not an option of col0rme " + cmd
+					+ " (col0rme " + cmd + " --help lists them)");
+			String f = (String) o.get("flag");
+			for (Field d : list)
+				if (f.equals(d.flag))
+					throw new Failure("col0rme: other options: " + f + " is the dialog's field " + d.key + "=: give it there");
+			if (f.equals("--output") || f.equals("--force") || f.equals("--verbose"))
+				throw new Failure("col0rme: other options: " + f + " is the plugin's own (the output folder is the dialog's field)");
+			a.add(t[i]);
+			if (!"flag".equals(o.get("type")) && !t[i].contains("=")) {
+				if (i + 1 == t.length)
+					throw new Failure("col0rme: other options: " + f + " needs a value (" + o.get("metavar") + ")");
+				a.add(t[++i]);
+			}
+		}
+		return a;
 	}
 
 	/** No display: the same keys read from a macro options string. */

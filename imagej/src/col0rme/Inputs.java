@@ -3,6 +3,8 @@ package col0rme;
 import ij.IJ;
 import ij.ImagePlus;
 import ij.WindowManager;
+import ij.gui.Roi;
+import ij.plugin.Duplicator;
 import ij.io.FileInfo;
 import ij.io.FileSaver;
 import ij.io.TiffEncoder;
@@ -70,6 +72,58 @@ final class Inputs implements AutoCloseable {
 				throw new Failure("col0rme: stack '" + b.getTitle() + "' is " + b.getWidth() + "x" + b.getHeight() + " pixels but '"
 					+ a.getTitle() + "' is " + a.getWidth() + "x" + a.getHeight() + ": the stacks must have the same size");
 		return in;
+	}
+
+	/** A rectangular selection and a frame range ("first-last", 1-based;
+	 *  empty: all) honoured: the stacks cropped to the selection (the first
+	 *  stack's that has one: the angles share one field of view) and cut to
+	 *  the frames, then handed to the CLI as temporary files. A selection
+	 *  that is not a rectangle, or a range outside the frames, is refused.
+	 *  Returns what was restricted, for the log (empty: nothing). */
+	String restrict(String frames) throws Failure {
+		Roi roi = null;
+		for (ImagePlus imp : images)
+			if (roi == null && imp.getRoi() != null && imp.getRoi().isArea())
+				roi = imp.getRoi();
+		if (roi != null && roi.getType() != Roi.RECTANGLE)
+			throw new Failure("col0rme: the selection on the stacks is not a rectangle: col0rme runs on rectangles "
+				+ "(draw one, or Edit > Selection > Select None)");
+		int n = frames(images.get(0)), f0 = 1, f1 = n;
+		if (!frames.trim().isEmpty()) {
+			java.util.regex.Matcher m = java.util.regex.Pattern.compile("\\s*(\\d+)\\s*-\\s*(\\d+)\\s*").matcher(frames);
+			if (!m.matches())
+				throw new Failure("col0rme: frames=" + frames + ": expected FIRST-LAST (1-based, e.g. 1-500)");
+			f0 = Integer.parseInt(m.group(1));
+			f1 = Integer.parseInt(m.group(2));
+			for (ImagePlus imp : images)
+				if (f0 < 1 || f1 < f0 || f1 > frames(imp))
+					throw new Failure("col0rme: frames=" + frames + ": stack '" + imp.getTitle() + "' has frames 1-" + frames(imp));
+		}
+		if (roi == null && f0 == 1 && f1 == n)
+			return "";
+		for (int i = 0; i < images.size(); i++) {
+			ImagePlus imp = images.get(i);
+			Roi own = imp.getRoi();
+			imp.setRoi(roi == null ? null : (Roi) roi.clone());
+			boolean hyper = imp.isHyperStack() || imp.getNChannels() > 1, inT = imp.getNFrames() > 1;
+			ImagePlus c = !hyper ? new Duplicator().run(imp, f0, f1)
+				: inT ? new Duplicator().run(imp, 1, imp.getNChannels(), 1, imp.getNSlices(), f0, f1)
+				: new Duplicator().run(imp, 1, imp.getNChannels(), f0, f1, 1, 1);
+			imp.setRoi(own);
+			c.setTitle(imp.getTitle());
+			images.set(i, c);
+			given.set(i, null);   /* written as a temporary file */
+		}
+		java.awt.Rectangle r = roi != null ? roi.getBounds() : null;
+		return (r != null ? "the selection x " + r.x + " y " + r.y + ", " + r.width + "x" + r.height + " pixels" : "")
+			+ (r != null && (f0 != 1 || f1 != n) ? ", " : "") + (f0 != 1 || f1 != n ? "frames " + f0 + "-" + f1 : "");
+	}
+
+	/* A stack's frames: a hyperstack's time points, else its planes. */
+	private static int frames(ImagePlus imp) {
+		if (!imp.isHyperStack() && imp.getNChannels() == 1)
+			return imp.getStackSize();
+		return imp.getNFrames() > 1 ? imp.getNFrames() : imp.getNSlices();
 	}
 
 	/** The number of stacks the CLI will see: a hyperstack's channels count one each. */
