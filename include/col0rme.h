@@ -162,7 +162,7 @@ struct c0_run_conf {
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = -1, .sparsity = 3e-2, \
 	.matirf_iterations = 3000, .matirf_solver = C0_MATIRF_AUTO, .matirf_coarse = -1, .background_smooth = 100, .depth_pool_nm = -1, \
 	.depth_pool_range_nm = -1, .fwhm_rule = C0_FWHM_DATA, .common_pattern = 1, .graph_orient = 20, \
-	.depth_noise_block = 20 }
+	.depth_noise_block = 20, .lambda_rule = C0_LAMBDA_NOISE }
 
 void c0_run_conf_init(struct c0_run_conf *c);
 /* Sets one parameter from text: numbers ("1e-3"), comma lists ("62,64,66"),

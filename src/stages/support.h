@@ -37,14 +37,14 @@ struct c0_support_conf {
 	const float *noise_map;    /* NULL, or the stack's H x W: subtracted from each pixel's variance before
 				    * the guard (c0_cov_acc_set_noise; the camera's read noise made even) */
 	int noise_map_w;           /* its width (the stack's) */
-	int lambda_cv;             /* automatic l1 lambda: 0 the rule's second step (peaks), 1 by
-				    * cross-validation of the frame halves (c0_lambda_cv) */
-	int lambda_noise;          /* automatic l1 lambda: 1 kappa sigma_C alone, without the peaks' solve
-				    * (stages/lambda.h) */
+	int lambda_cv;             /* automatic l1 lambda: 1 by cross-validation of the frame halves
+				    * (c0_lambda_cv), else: */
+	int lambda_noise;          /* 1: kappa sigma_C alone (stages/lambda.h); 0: the peaks of a first
+				    * solve (the second step) */
 	int fwhm_data;             /* 1: where the covariance's PSF width (c0_lambda_psf_fwhm) differs from
 				    * grid.fwhm_nm by more than C0_LAMBDA_PSF_WARN, the solves use it */
 };
-#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0, 0, 0 }
+#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0, 1, 0 }
 /* g of c0_cov_guard for this PSF: the smallest mean ratio of a point
  * source's signal in a pixel's 4 neighbours to its signal in the pixel,
  * over positions in and around the pixel (0.6 at 229 nm / 100 nm). */

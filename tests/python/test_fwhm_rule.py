@@ -28,8 +28,9 @@ def sh(args):
 
 
 def support(sim, out, rule, fwhm):
+    # lines one fine pixel wide: the lambda rule for them (docs/defaults.md#lambda_rule)
     p = sh([CLI, "support", "-o", out, "--force", "--fwhm", fwhm, "--threads", "1", "--fwhm-rule", rule,
-            os.path.join(sim, "stack_q01.tif")])
+            "--lambda-rule", "peaks", os.path.join(sim, "stack_q01.tif")])
     j = json.loads(sh([CLI, "eval", "--support", os.path.join(out, "support.tif"), "--support-truth",
                        os.path.join(sim, "truth_support.tif"), "--margin", "12"]).stdout)["support"]["jaccard"]
     return json.load(open(os.path.join(out, "report.json")))["psf_width"], j, p.stderr

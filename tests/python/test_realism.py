@@ -37,7 +37,9 @@ def simulate(tmp, name, *args):
 def run(tmp, name, data, sim, stacks, *args, angles=None):
     out = os.path.join(tmp, name)
     ang = ",".join("%.6g" % a for a in (angles or sim["parameters"]["angles_deg"]))
-    p = cli("run", "--fwhm", "229", "--angles", ang, "-o", out, *args, *stacks)
+    # the simulator's filaments are lines one fine pixel wide: the lambda rule for them
+    # (docs/defaults.md#lambda_rule)
+    p = cli("run", "--fwhm", "229", "--angles", ang, "--lambda-rule", "peaks", "-o", out, *args, *stacks)
     check(p.returncode == 0, "run %s: %s" % (name, p.stderr))
     if p.returncode:
         return None, None

@@ -119,7 +119,8 @@ def test_accuracy(tmp):
                        ("maps", ["--offset-map", os.path.join(d, "calib_offset.tif"),
                                  "--variance-map", os.path.join(d, "calib_variance.tif")])):
         out = os.path.join(tmp, "acc_" + name)
-        p = cli("run", "--fwhm", "229", "--angles", ang, "-o", out, *opts, *stacks)
+        # lines one fine pixel wide: the lambda rule for them (docs/defaults.md#lambda_rule)
+        p = cli("run", "--fwhm", "229", "--angles", ang, "--lambda-rule", "peaks", "-o", out, *opts, *stacks)
         check(p.returncode == 0, "run %s: %s" % (name, p.stderr))
         res[name] = evaluate(out, d)
         rep[name] = json.load(open(os.path.join(out, "report.json")))
