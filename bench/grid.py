@@ -5,7 +5,7 @@ or 8-) angle simulation with close filament pairs and bleaching accumulated
 over the acquisition, run with the defaults and scored against its truth.
 
     /usr/bin/python3 bench/grid.py COL0RME WORKDIR [--sweep] [--cells a,b,...]
-        [--seeds 1,2] [--jobs N] [--json FILE] [-- RUN OPTIONS...]
+        [--seeds 1,2] [--jobs N] [--json FILE] [--label-radius NM] [-- RUN OPTIONS...]
 
 Prints a Markdown table, one row per cell (the median over the seeds):
 Jaccard of the support (40 nm), median absolute and median SIGNED depth error
@@ -15,7 +15,9 @@ the automatic lambda, ratio about 1.4) and its gap to the automatic choice.
 With a camera "scmos" and a col0rme that accepts --offset-map/--variance-map,
 a "scmos+maps" row runs the same stacks with the simulator's calibration maps.
 Simulations are cached in WORKDIR (same cell, same seed: not simulated again).
---cells keeps the cells whose name contains any of the given words."""
+--cells keeps the cells whose name contains any of the given words. --label-radius puts
+the emitters on a tube of that radius around each filament (simulate --label-radius; the
+cells are then simulated in WORKDIR/sim_labelNM)."""
 import json
 import math
 import os
@@ -66,9 +68,10 @@ def cells(cli):
                     yield "%s %s %s %d" % (a, c, b, f), ANGLES[a], cams[c] + BLINKING[b] + ["--frames", str(f)]
 
 
-def one(cli, work, name, k, sim_opts, seed, sweep, run_opts, maps):
+def one(cli, work, name, k, sim_opts, seed, sweep, run_opts, maps, label=0):
     key = name.replace(" ", "_") + "_s%d" % seed
-    sim, res = os.path.join(work, "sim", key), []
+    sim, res = os.path.join(work, "sim_label%g" % label if label else "sim", key), []
+    sim_opts = sim_opts + (["--label-radius", "%g" % label] if label else [])
     ang = angles(k)
     if not os.path.exists(os.path.join(sim, "sim.json")):
         sh([cli, "simulate", "--seed", str(seed), "--pairs", "--angles", ang, "--threads", "1", "--force",
@@ -155,10 +158,11 @@ def main():
     maps = "--offset-map" in sh([cli, "run", "--help"])
     todo = [(n, k, o, s) for n, k, o in cells(cli) for s in seeds
             if not words or any(w in n for w in words)]
-    for d in ("sim", "run", "sweep"):
+    label = float(opt("--label-radius", "0"))
+    for d in ("sim", "run", "sweep") + (("sim_label%g" % label,) if label else ()):
         os.makedirs(os.path.join(work, d), exist_ok=True)
     with ThreadPoolExecutor(int(opt("--jobs", "2"))) as pool:
-        futs = [pool.submit(one, cli, work, n, k, o, s, sweep, run_opts, maps) for n, k, o, s in todo]
+        futs = [pool.submit(one, cli, work, n, k, o, s, sweep, run_opts, maps, label) for n, k, o, s in todo]
         rows = []
         for f in futs:
             rows += f.result()
