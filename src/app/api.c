@@ -2,7 +2,11 @@
  * heap, single steps, and the simulator in memory, for programs and the
  * Python package. Thin wrappers: the method lives in sim/ and stages/. */
 #include "col0rme.h"
-#include "app/pipeline.h"
+#include "app/result.h"
+#include "app/pipeline_conf.h"
+#include "app/steps.h"
+#include "app/steps_matirf.h"
+#include "app/stacks.h"
 #include "sim/sim.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -35,7 +39,7 @@ static int support(const struct c0_run_conf *c, const struct c0_stage_confs *sc,
 	for (int i = 0; i < n; i++)
 		r->sup[i] = i;
 	r->pixel_nm = sc->support.grid.pixel_nm, r->srf = sc->support.grid.srf;
-	int st = c->drift ? c0_step_drift(r, c, &sc->support.grid, f, n) : C0_OK;
+	int st = c->drift ? c0_step_drift(r, &sc->drift, c->nangles > 0 ? &sc->bleach : NULL, f, n) : C0_OK;
 	return st ? st : c0_step_support(r, &sc->support, f);
 }
 
@@ -66,7 +70,9 @@ int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n
 	struct c0_result *r;
 	if ((st = c0_result_new("matirf", n, np, is_file, &r)))
 		return st;
-	if ((st = c0_step_matirf_raw(r, c, &mc, images, h, w, c->pixel_nm))) {
+	struct c0_matirf_raw raw;
+	if ((st = c0_run_conf_matirf_raw(c, c->pixel_nm, &mc, &raw)) ||
+	    (st = c0_step_matirf_raw(r, &raw, &mc, images, h, w, c->pixel_nm))) {
 		c0_result_free(r);
 		return st;
 	}

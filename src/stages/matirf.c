@@ -377,7 +377,20 @@ static int level_warm(struct level *L, const struct c0_matirf_conf *c, int nq, c
 	if (!(coarse > 0 && ctx->exact && c->reg == C0_REG_TV && !ctx->bg && ny >= 16 && nx >= 16 && ctx->g.nc <= 2))
 		return C0_OK;
 	const struct matirf_cols cols = { ctx->g.pixel, ctx->M };
-	return matirf_coarse_start(c, nq, angles, gain, x, ny, nx, ctx->nz, L->mx, coarse, L->col, &cols, L->u, L->y, iters);
+	struct c0_matirf_conf cc;
+	const float *xc[MAXQ];
+	float *buf = matirf_coarse_bin(c, nq, x, ny, nx, xc, &cc), *yc = NULL;
+	if (!buf)
+		return C0_ENOMEM;
+	struct c0_matirf_result r;
+	int st = matirf_level(&cc, nq, angles, gain, xc, (ny + 1) / 2, (nx + 1) / 2, L->mx, coarse - 1, &yc, &r);
+	if (!st) {
+		*iters = r.iters + r.coarse_iters;
+		matirf_coarse_lift(&r, yc, ny, nx, ctx->nz, L->mx, L->col, &cols, L->u, L->y);
+		c0_matirf_result_free(&r);
+	}
+	free(buf), free(yc);
+	return st;
 }
 
 /* PDHG from u, y with the solver's default tolerance */

@@ -2,7 +2,7 @@
  * public ones (c0_support_lag, _tol, _check, ...) are declared in support.h. */
 #pragma once
 #include "stages/support.h"
-#include "stages/tiles.h"
+#include "core/tiles.h"
 
 /* lambda / lambda_max: c->lambda_rel, or the penalty's fixed default */
 double c0_support_lambda_rel(const struct c0_support_conf *c);
