@@ -281,17 +281,6 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
 	return st;
 }
 
-/* The data's PSF width (fwhm_rule data, app/steps.c) for the stages after
- * the support: the intensity, the default depth pool and the depth guide;
- * the noise covariances keep the stated width's lag, as the support's. */
-static void data_width(const struct c0_run_conf *c, struct c0_stage_confs *s, double fwhm)
-{
-	c0_support_set_width(&s->support, fwhm);
-	if (c->depth_pool_nm < 0)
-		s->pool_nm = C0_DEPTH_POOL_FWHM * fwhm;
-	s->intensity.grid.fwhm_nm = fwhm;
-}
-
 static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, struct c0_frames *f, int n,
 	       struct c0_result *r, const void *arg)
 {
@@ -318,7 +307,7 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	if (!st)
 		st = c0_step_support(r, &s.support, f);
 	if (!st && r->fwhm_nm > 0 && r->fwhm_nm != s.support.grid.fwhm_nm)
-		data_width(c, &s, r->fwhm_nm);
+		c0_stage_confs_width(&s, r->fwhm_nm);   /* the data's width (fwhm_rule data, app/steps.c) */
 	if (c0_comm_rank() != 0)
 		return st;      /* MPI: the other ranks share the support step; rank 0 has the result */
 	if (!st)

@@ -64,6 +64,14 @@ void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
 	m->coarse = c->matirf_coarse >= 0 ? c->matirf_coarse : m->solver == C0_MATIRF_APG ? 2 : 0;
 }
 
+/* matirf_coarse's range, for every run and for the matirf command */
+static int coarse_check(const struct c0_run_conf *c)
+{
+	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
+		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
+	return C0_OK;
+}
+
 int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_stage_confs *s)
 {
 	double fwhm = c->fwhm_nm;
@@ -111,7 +119,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	c0_run_conf_matirf(c, &s->matirf);
 	if (c->kappa == -1)   /* run's MA-TIRF step does not deconvolve (docs/parameters.md): the plain default */
 		s->matirf.kappa = ((struct c0_matirf_conf)C0_MATIRF_DEFAULTS).kappa;
-	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
+	s->pool_per_fwhm = c->depth_pool_nm < 0;
+	s->pool_nm = s->pool_per_fwhm ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
 	s->pool_range_nm = c->depth_pool_range_nm < 0 ? C0_DEPTH_POOL_RANGE_NM : c->depth_pool_range_nm;
 	/* the halves serve the guided pool's depth fit alone */
 	s->intensity.noise_block = c->nangles > 0 && s->pool_nm > 0 && s->pool_range_nm > 0 ? c->depth_noise_block : 0;
@@ -127,14 +136,15 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	    (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN || (unsigned)c->matirf_solver > C0_MATIRF_APG)
 		return c0_fail(C0_EINVAL, "penalty %d / support_solver %d / background %d / reg %d / matirf_solver %d: out of range",
 			       (int)c->penalty, (int)c->support_solver, (int)c->background, (int)c->reg, (int)c->matirf_solver);
-	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
-		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
+	int st = coarse_check(c);
+	if (st)
+		return st;
 	if (c->nangles < 0 || c->nangles > C0_MAX_STACKS || c->ngains < 0 || c->ngains > C0_MAX_STACKS ||
 	    c->nsupport_stacks < 0 || c->nsupport_stacks > C0_MAX_STACKS || c->nnoise_variance < 0 ||
 	    c->nnoise_variance > C0_MAX_STACKS)
 		return c0_fail(C0_EINVAL, "nangles %d / ngains %d / nsupport_stacks %d / nnoise_variance %d: must be 0..%d",
 			       c->nangles, c->ngains, c->nsupport_stacks, c->nnoise_variance, C0_MAX_STACKS);
-	int st = c0_grid_check(&grid);
+	st = c0_grid_check(&grid);
 	if (!st)
 		st = c0_intensity_check(&s->intensity);
 	c0_run_conf_bleach(c, &s->bleach);
@@ -161,8 +171,9 @@ static int matirf_params(const struct c0_run_conf *c)
 		return c0_fail(C0_EINVAL, "kappa %g: must be finite and >= 0 (-1: the default)", c->kappa);
 	if (!(c->axial_weight >= 0 && isfinite(c->axial_weight)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
 		return c0_fail(C0_EINVAL, "axial_weight %g, sparsity %g: must be finite and >= 0", c->axial_weight, c->sparsity);
-	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
-		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
+	int st = coarse_check(c);
+	if (st)
+		return st;
 	if (c->matirf_iterations < 1)
 		return c0_fail(C0_EINVAL, "matirf_iterations %d: must be at least 1", c->matirf_iterations);
 	if (!(c->matirf_tol >= 0 && isfinite(c->matirf_tol)))
@@ -205,6 +216,14 @@ void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
 		bc->gap_frames[i] = c->gaps_frames[i];
 	for (int i = 0; i < c->nbleach_factors && i < C0_BLEACH_MAX; i++)
 		bc->factor[i] = c->bleach_factors[i];
+}
+
+void c0_stage_confs_width(struct c0_stage_confs *s, double fwhm_nm)
+{
+	c0_support_set_width(&s->support, fwhm_nm);
+	if (s->pool_per_fwhm)
+		s->pool_nm = C0_DEPTH_POOL_FWHM * fwhm_nm;
+	s->intensity.grid.fwhm_nm = fwhm_nm;
 }
 
 void c0_run_conf_angles(const struct c0_run_conf *c, struct c0_angles *a)

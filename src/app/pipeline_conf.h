@@ -14,6 +14,7 @@ struct c0_stage_confs {
 	struct c0_matirf_conf matirf;
 	double pool_nm;              /* depth pooling window (nm), 0: off */
 	double pool_range_nm;        /* and its guide's depth range (nm), 0: the whole window */
+	int pool_per_fwhm;           /* 1: pool_nm is C0_DEPTH_POOL_FWHM times the PSF's FWHM (depth_pool_nm -1) */
 	struct c0_psf_fit psf;       /* with psf_fitted: the fit of psf_image */
 	double psf_pixel_nm;         /* its calibration, 0 when it has none */
 	int psf_fitted;
@@ -43,6 +44,10 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m);
 /* The bleaching step's config from c's acquisition options. */
 void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc);
+/* The stages after the support at the data's PSF width fwhm_nm (fwhm_rule
+ * data): the intensity grid, the default pool window and the support's
+ * grid, whose covariances keep the stated width's lag. */
+void c0_stage_confs_width(struct c0_stage_confs *s, double fwhm_nm);
 /* c's angles and gains. */
 void c0_run_conf_angles(const struct c0_run_conf *c, struct c0_angles *a);
 /* The raw MA-TIRF path's options of c at pixel_nm: raw, and into m the PSF's

@@ -16,6 +16,13 @@
 #include <stdint.h>
 #include <string.h>
 
+/* One level of the solve: mx0 > 0 fixes the data scale (a coarse level
+ * solves in the fine level's units); coarse: levels of warm start below it;
+ * yout, when not NULL, receives the final TV dual of the exact and apg
+ * solvers by columns (2 nz M floats, allocated; NULL for the others). */
+static int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
+			const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res);
+
 int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles)
 {
 	int st = c0_tirf_check(&c->tirf);
@@ -451,8 +458,8 @@ static void level_unpack(struct level *L, const struct c0_matirf_conf *c, const 
 	res->M = ctx->M, res->pixel = ctx->g.pixel, ctx->g.pixel = NULL;   /* handed over */
 }
 
-int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-		 const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res)
+static int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
+			const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res)
 {
 	memset(res, 0, sizeof *res);
 	double t0 = c0_now();

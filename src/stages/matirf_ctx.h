@@ -100,12 +100,6 @@ void matirf_exact_setup(struct matirf_ctx *x, const struct c0_matirf_conf *c, co
 /* their per-voxel c = W^T B b - l1 from the current data b */
 void matirf_exact_rhs(struct matirf_ctx *x);
 
-/* One level of the solve: mx0 > 0 fixes the data scale (a coarse level
- * solves in the fine level's units); coarse: levels of warm start below it;
- * yout, when not NULL, receives the final TV dual of the exact and apg
- * solvers by columns (2 nz M floats, allocated; NULL for the others). */
-int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-		 const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res);
 /* columns: M raster indices, increasing */
 struct matirf_cols { const int *pixel; size_t M; };
 /* The warm start from 2x2-binned images (matirf_coarse.c): x binned into
