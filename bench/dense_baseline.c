@@ -7,6 +7,7 @@
 #include "io/tiff.h"
 #include "core/clock.h"
 #include "core/err.h"
+#include "testkit/reference.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -5,7 +5,7 @@
 #pragma once
 #include "check.h"
 #include "core/rng.h"
-#include "ops/linop.h"
+#include "testkit/linop.h"
 
 #include <stdlib.h>
 

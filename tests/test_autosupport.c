@@ -12,13 +12,14 @@
 #include "eval/metrics.h"
 #include "stages/drift.h"
 #include "stages/support.h"
-#include "stages/splat.h"
+#include "ops/splat.h"
 #include "sim/sim.h"
 #include "io/outdir.h"
 #include "io/frames.h"
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/rng.h"
+#include "testkit/reference.h"
 
 #include <stdlib.h>
 #include <string.h>

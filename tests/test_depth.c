@@ -5,15 +5,16 @@
 #include "stages/depthpool.h"
 #include "stages/depthfit.h"
 #include "stages/matirf.h"
-#include "app/pipeline.h"
+#include "app/pipeline_conf.h"
 #include "optics/tirf.h"
 #include <stdio.h>
 #include "app/depthcode.h"
-#include "stages/splat.h"
+#include "ops/splat.h"
 #include "eval/metrics.h"
 #include "core/rng.h"
 #include "core/err.h"
 #include "core/c0math.h"
+#include "testkit/reference.h"
 
 #include <math.h>
 #include <stdint.h>

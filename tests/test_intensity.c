@@ -14,6 +14,7 @@
 #include "eval/metrics.h"
 #include "core/rng.h"
 #include "core/err.h"
+#include "testkit/reference.h"
 
 #include <math.h>
 #include <omp.h>

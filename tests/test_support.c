@@ -18,6 +18,7 @@
 #include "solve/fista.h"
 #include "core/rng.h"
 #include "core/err.h"
+#include "testkit/reference.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -2,6 +2,11 @@
  * heap, single steps, and the simulator in memory, for programs and the
  * Python package. Thin wrappers: the method lives in sim/ and stages/. */
 #include "col0rme.h"
+#include "app/result.h"
+#include "app/pipeline_conf.h"
+#include "app/steps.h"
+#include "app/steps_matirf.h"
+#include "app/stacks.h"
 #include "app/pipeline.h"
 #include "sim/sim.h"
 #include "core/err.h"
@@ -43,7 +48,7 @@ static int support(const struct c0_run_conf *c, const struct c0_stage_confs *sc,
 	r->pixel_nm = sc->support.grid.pixel_nm, r->srf = sc->support.grid.srf;
 	int st = c->drift ? c0_progress_stage("drift") : C0_OK;
 	if (!st && c->drift)
-		st = c0_step_drift(r, c, &sc->support.grid, f, n);
+		st = c0_step_drift(r, &sc->drift, c->nangles > 0 ? &sc->bleach : NULL, f, n);
 	if (!st)
 		st = c0_progress_stage("support");
 	return st ? st : c0_step_support(r, &sc->support, f);
@@ -79,8 +84,9 @@ int c0_run_matirf(const struct c0_run_conf *c, const float *const *images, int n
 	c0_warn_assumed_optics(r, c);
 	struct c0_progress_sink ps;
 	c0_progress_attach(&ps, c->progress, c->progress_user);
-	if (!(st = c0_progress_stage("matirf")))
-		st = c0_step_matirf_raw(r, c, &mc, images, h, w, c->pixel_nm);
+	struct c0_matirf_raw raw;
+	if (!(st = c0_progress_stage("matirf")) && !(st = c0_run_conf_matirf_raw(c, c->pixel_nm, &mc, &raw)))
+		st = c0_step_matirf_raw(r, &raw, &mc, images, h, w, c->pixel_nm);
 	if ((st = c0_progress_detach(&ps, st))) {
 		c0_result_free(r);
 		return st;

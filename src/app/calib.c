@@ -2,7 +2,9 @@
  * read, checked against the stacks before any heavy work, and attached to
  * the frame sources (offset and gain) and the support's covariance (the
  * read-noise variance). docs/guide.md: making the maps from dark frames. */
-#include "app/pipeline.h"
+#include "app/calib.h"
+#include "app/result.h"
+#include "app/pipeline_conf.h"
 #include "core/err.h"
 #include "core/mem.h"
 

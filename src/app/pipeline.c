@@ -3,8 +3,16 @@
  * the MA-TIRF volume from the (pooled) intensities, plus the standard
  * MA-TIRF baseline from the background-corrected means when asked. */
 #include "app/pipeline.h"
-#include "app/report_steps.h"
 #include "app/params.h"
+#include "app/result.h"
+#include "app/pipeline_conf.h"
+#include "app/steps.h"
+#include "app/steps_intensity.h"
+#include "app/steps_matirf.h"
+#include "app/stacks.h"
+#include "app/render.h"
+#include "app/report_json.h"
+#include "core/progress.h"
 #include "stages/depthfit.h"
 #include "stages/depthpool.h"
 #include "core/err.h"
@@ -170,8 +178,10 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 			img[i][pl->pix[k]] = (h > 0 ? pooled : own)[i][k];
 	}
 	const struct c0_pooled pin = { pl, (const float *const *)own, (const float *const *)pooled, var };
+	struct c0_angles a;
+	c0_run_conf_angles(ct, &a);
 	if (!st)
-		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)img, h > 0 ? &pin : NULL, Ly, Lx, fine, 0);
+		st = c0_step_matirf(r, &a, &s->matirf, (const float *const *)img, h > 0 ? &pin : NULL, Ly, Lx, fine, 0);
 	for (int i = 0; i < nq; i++)
 		free(img[i]), img[i] = NULL;
 	if (!st)
@@ -180,7 +190,7 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 	if (!st)
 		c0_report_depth_noise(cJSON_GetObjectItem(r->rep, "matirf"), ns.nq ? &ns : NULL, var != NULL, s->intensity.noise_block);
 	if (!st && ct->baseline)
-		st = c0_step_matirf(r, ct, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
+		st = c0_step_matirf(r, &a, &s->matirf, (const float *const *)base, NULL, r->ires[0].Ny, r->ires[0].Nx,
 				    s->support.grid.pixel_nm, 1);
 	for (int i = 0; i < nq; i++)
 		free(own[i]), free(pooled[i]), free(base[i]);
@@ -218,10 +228,8 @@ static int run_check(const struct c0_run_conf *c, const struct c0_stage_confs *s
 	const int three_d = c->nangles > 0;
 	int st = C0_OK, ntirf = 0;
 	*ct = *c;
-	if (three_d && c->nangles != n)
-		st = c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, n);
-	if (!st && three_d && c->ngains && c->ngains != n)
-		st = c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, n);
+	if (three_d)
+		st = c0_run_conf_angles_check(c, n);
 	const int repeat = c->bleach == C0_BLEACHING_REPEAT;
 	if (!st && repeat)
 		st = repeat_check(c, n);
@@ -241,11 +249,8 @@ static int run_check(const struct c0_run_conf *c, const struct c0_stage_confs *s
 			     crit, ntirf);
 	if (!st && three_d)
 		st = c0_run_conf_matirf_check(ct, &s->matirf, ntirf);
-	if (!st && three_d) {   /* the acquisition options, before any work */
-		struct c0_bleach_conf bc;
-		c0_run_conf_bleach(c, &bc);
-		st = c0_bleach_check(&bc, n);
-	}
+	if (!st && three_d)   /* the acquisition options, before any work */
+		st = c0_bleach_check(&s->bleach, n);
 	if (!st && c->nnoise_variance)
 		st = c0_fail(C0_EINVAL, "noise_variance: not used by the whole method (the support step estimates it)");
 	return st;
@@ -274,21 +279,10 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
 	for (int q = 0; q < r->n; q++)
 		r->bleach_factor[q] = 1;
 	if (!st && three_d && !(st = c0_progress_stage("bleaching")))
-		st = c0_step_bleach(r, c, f);
+		st = c0_step_bleach(r, &s->bleach, f);
 	if (!st && three_d && !(st = c0_progress_stage("matirf")))
 		st = volume(r, ct, tirf, s);
 	return st;
-}
-
-/* The data's PSF width (fwhm_rule data, app/steps.c) for the stages after
- * the support: the intensity, the default depth pool and the depth guide;
- * the noise covariances keep the stated width's lag, as the support's. */
-static void data_width(const struct c0_run_conf *c, struct c0_stage_confs *s, double fwhm)
-{
-	c0_support_set_width(&s->support, fwhm);
-	if (c->depth_pool_nm < 0)
-		s->pool_nm = C0_DEPTH_POOL_FWHM * fwhm;
-	s->intensity.grid.fwhm_nm = fwhm;
 }
 
 void c0_warn_assumed_optics(struct c0_result *r, const struct c0_run_conf *c)
@@ -331,16 +325,14 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	r->pixel_nm = s.support.grid.pixel_nm, r->srf = s.support.grid.srf;
 	/* the bleaching's sums over a window that follows the drift (app/steps.c)
 	 * need each frame's row and column sums, noted from the drift's pass on */
-	struct c0_bleach_conf bc;
-	c0_run_conf_bleach(c, &bc);
-	for (int q = 0; !st && c->drift && c->nangles > 0 && bc.mode == C0_BLEACH_ESTIMATE && q < n; q++)
+	for (int q = 0; !st && c->drift && c->nangles > 0 && s.bleach.mode == C0_BLEACH_ESTIMATE && q < n; q++)
 		st = c0_frames_keep_profiles(&f[q]);
 	if (!st && c->drift && !(st = c0_progress_stage("drift")))
-		st = c0_step_drift(r, c, &s.support.grid, f, n);
+		st = c0_step_drift(r, &s.drift, c->nangles > 0 ? &s.bleach : NULL, f, n);
 	if (!st && !(st = c0_progress_stage("support")))
 		st = c0_step_support(r, &s.support, f);
 	if (!st && r->fwhm_nm > 0 && r->fwhm_nm != s.support.grid.fwhm_nm)
-		data_width(c, &s, r->fwhm_nm);
+		c0_stage_confs_width(&s, r->fwhm_nm);   /* the data's width (fwhm_rule data, app/steps.c) */
 	if (c0_comm_rank() != 0)
 		return st;      /* MPI: the other ranks share the support step; rank 0 has the result */
 	if (!st)

@@ -1,6 +1,6 @@
 /* The run configuration: setting a parameter by name (app/params.h holds
  * the table), and turning the whole into the stages' configs. */
-#include "app/pipeline.h"
+#include "app/pipeline_conf.h"
 #include "app/params.h"
 #include "stages/depthpool.h"
 #include "app/psfimage.h"
@@ -86,6 +86,14 @@ void c0_run_conf_matirf(const struct c0_run_conf *c, struct c0_matirf_conf *m)
 	m->coarse = c->matirf_coarse >= 0 ? c->matirf_coarse : m->solver == C0_MATIRF_APG ? 2 : 0;
 }
 
+/* matirf_coarse's range, for every run and for the matirf command */
+static int coarse_check(const struct c0_run_conf *c)
+{
+	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
+		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
+	return C0_OK;
+}
+
 int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_stage_confs *s)
 {
 	double fwhm = c->fwhm_nm;
@@ -134,7 +142,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	c0_run_conf_matirf(c, &s->matirf);
 	if (c->kappa == -1)   /* run's MA-TIRF step does not deconvolve (docs/defaults.md#psf_fwhm_nm): the plain default */
 		s->matirf.kappa = ((struct c0_matirf_conf)C0_MATIRF_DEFAULTS).kappa;
-	s->pool_nm = c->depth_pool_nm < 0 ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
+	s->pool_per_fwhm = c->depth_pool_nm < 0;
+	s->pool_nm = s->pool_per_fwhm ? C0_DEPTH_POOL_FWHM * fwhm : c->depth_pool_nm;
 	s->pool_range_nm = c->depth_pool_range_nm < 0 ? C0_DEPTH_POOL_RANGE_NM : c->depth_pool_range_nm;
 	/* the halves serve the guided pool's depth fit alone */
 	s->intensity.noise_block = c->nangles > 0 && s->pool_nm > 0 && s->pool_range_nm > 0 ? c->depth_noise_block : 0;
@@ -150,15 +159,22 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 	    (unsigned)c->background > C0_BG_SMOOTH || (unsigned)c->reg > C0_REG_HESSIAN || (unsigned)c->matirf_solver > C0_MATIRF_APG)
 		return c0_fail(C0_EINVAL, "penalty %d / support_solver %d / background %d / reg %d / matirf_solver %d: out of range",
 			       (int)c->penalty, (int)c->support_solver, (int)c->background, (int)c->reg, (int)c->matirf_solver);
-	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
-		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
+	int st = coarse_check(c);
+	if (st)
+		return st;
 	if (c->nangles < 0 || c->nangles > C0_MAX_STACKS || c->ngains < 0 || c->ngains > C0_MAX_STACKS ||
 	    c->nsupport_stacks < 0 || c->nsupport_stacks > C0_MAX_STACKS || c->nnoise_variance < 0 ||
 	    c->nnoise_variance > C0_MAX_STACKS)
 		return c0_fail(C0_EINVAL, "nangles %d / ngains %d / nsupport_stacks %d / nnoise_variance %d: must be 0..%d",
 			       c->nangles, c->ngains, c->nsupport_stacks, c->nnoise_variance, C0_MAX_STACKS);
-	int st = c0_grid_check(&grid);
-	return st ? st : c0_intensity_check(&s->intensity);
+	st = c0_grid_check(&grid);
+	if (!st)
+		st = c0_intensity_check(&s->intensity);
+	c0_run_conf_bleach(c, &s->bleach);
+	s->drift = (struct c0_drift_conf)C0_DRIFT_DEFAULTS;
+	if (!st)
+		s->drift.psf_sigma_px = c0_grid_sigma_px(&grid);
+	return st;
 }
 
 /* The MA-TIRF parameters by their run names (the stage's own check names
@@ -178,8 +194,9 @@ static int matirf_params(const struct c0_run_conf *c)
 		return c0_fail(C0_EINVAL, "kappa %g: must be finite and >= 0 (-1: the default)", c->kappa);
 	if (!(c->axial_weight >= 0 && isfinite(c->axial_weight)) || !(c->sparsity >= 0 && isfinite(c->sparsity)))
 		return c0_fail(C0_EINVAL, "axial_weight %g, sparsity %g: must be finite and >= 0", c->axial_weight, c->sparsity);
-	if (c->matirf_coarse < -1 || c->matirf_coarse > 8)
-		return c0_fail(C0_EINVAL, "matirf_coarse %d: must be -1 (the solver's default) or 0..8", c->matirf_coarse);
+	int st = coarse_check(c);
+	if (st)
+		return st;
 	if (c->matirf_iterations < 1)
 		return c0_fail(C0_EINVAL, "matirf_iterations %d: must be at least 1", c->matirf_iterations);
 	if (!(c->matirf_tol >= 0 && isfinite(c->matirf_tol)))
@@ -187,17 +204,76 @@ static int matirf_params(const struct c0_run_conf *c)
 	return C0_OK;
 }
 
+int c0_run_conf_angles_check(const struct c0_run_conf *c, int n)
+{
+	if (c->nangles != n)
+		return c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, n);
+	if (c->ngains && c->ngains != n)
+		return c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, n);
+	return C0_OK;
+}
+
 int c0_run_conf_matirf_check(const struct c0_run_conf *c, const struct c0_matirf_conf *m, int nimages)
 {
 	int st = matirf_params(c);
+	if (!st)
+		st = c0_run_conf_angles_check(c, nimages);
 	if (st)
 		return st;
-	if (c->nangles != nimages)
-		return c0_fail(C0_EINVAL, "angles: %d angles for %d stacks (one per stack, same order)", c->nangles, nimages);
-	if (c->ngains && c->ngains != nimages)
-		return c0_fail(C0_EINVAL, "gains: %d gains for %d stacks", c->ngains, nimages);
 	for (int q = 0; q < c->ngains; q++)
 		if (!(c->gains[q] > 0 && isfinite(c->gains[q])))
 			return c0_fail(C0_EINVAL, "gains: gain %d is %g, must be > 0", q + 1, c->gains[q]);
 	return c0_matirf_check(m, c->nangles, c->angles);
+}
+
+void c0_run_conf_bleach(const struct c0_run_conf *c, struct c0_bleach_conf *bc)
+{
+	*bc = (struct c0_bleach_conf){ .mode = c->nbleach_factors ? C0_BLEACH_KNOWN
+					       : c->bleach == C0_BLEACHING_OFF ? C0_BLEACH_OFF
+					       : c->bleach == C0_BLEACHING_REPEAT ? C0_BLEACH_REPEAT : C0_BLEACH_ESTIMATE,
+				       .interleaved = c->acquisition == C0_ACQ_INTERLEAVED, .norder = c->nacquisition_order,
+				       .ngaps = c->ngaps_frames, .nfactors = c->nbleach_factors };
+	for (int i = 0; i < c->nacquisition_order && i < C0_BLEACH_MAX; i++)
+		bc->order[i] = c->acquisition_order[i] - 1;
+	for (int i = 0; i < c->ngaps_frames && i < C0_BLEACH_MAX; i++)
+		bc->gap_frames[i] = c->gaps_frames[i];
+	for (int i = 0; i < c->nbleach_factors && i < C0_BLEACH_MAX; i++)
+		bc->factor[i] = c->bleach_factors[i];
+}
+
+void c0_stage_confs_width(struct c0_stage_confs *s, double fwhm_nm)
+{
+	c0_support_set_width(&s->support, fwhm_nm);
+	if (s->pool_per_fwhm)
+		s->pool_nm = C0_DEPTH_POOL_FWHM * fwhm_nm;
+	s->intensity.grid.fwhm_nm = fwhm_nm;
+}
+
+void c0_run_conf_angles(const struct c0_run_conf *c, struct c0_angles *a)
+{
+	memset(a, 0, sizeof *a);
+	a->n = c->nangles, a->ngains = c->ngains;
+	for (int q = 0; q < c->nangles && q < C0_MAX_STACKS; q++)
+		a->deg[q] = c->angles[q];
+	for (int q = 0; q < c->ngains && q < C0_MAX_STACKS; q++)
+		a->gain[q] = c->gains[q];
+}
+
+int c0_run_conf_matirf_raw(const struct c0_run_conf *c, double pixel_nm, struct c0_matirf_conf *m, struct c0_matirf_raw *raw)
+{
+	if (c->psf_fwhm_nm != 0) {
+		if (!(c->psf_fwhm_nm > 0) || !(pixel_nm > 0))
+			return c0_fail(C0_EINVAL, "psf_fwhm_nm %g: needs a positive FWHM and the pixel size (pixel_nm or the TIFF calibration)",
+				       c->psf_fwhm_nm);
+		m->psf_sigma_px = c0_psf_sigma_px(c->psf_fwhm_nm, pixel_nm);
+	}
+	if (c->estimate_background) {
+		if (!(c->background_smooth > 0))
+			return c0_fail(C0_EINVAL, "background_smooth %g: must be > 0", c->background_smooth);
+		m->bg_smooth = c->background_smooth;
+	}
+	c0_run_conf_angles(c, &raw->angles);
+	raw->offset = c->offset, raw->background = c->matirf_background;
+	raw->psf_fwhm_nm = c->psf_fwhm_nm, raw->background_smooth = c->background_smooth;
+	return C0_OK;
 }

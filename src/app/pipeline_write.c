@@ -1,7 +1,9 @@
 /* Writing a result: the files of `col0rme run` (and of the single steps),
  * each calibrated, through an output directory that is rolled back on
  * failure. */
-#include "app/pipeline.h"
+#include "app/pipeline_write.h"
+#include "app/result.h"
+#include "app/render.h"
 #include "app/depthcode.h"
 #include "app/drift_out.h"
 #include "io/png.h"
@@ -56,7 +58,7 @@ static int render_plane(const void *r, int q, float *plane)
 	return c0_render_plane(r, q, plane);
 }
 
-/* render.tif plane by plane, each made as it is written (app/steps.c) */
+/* render.tif plane by plane, each made as it is written (app/render.c) */
 static int write_render(const struct c0_result *r, struct c0_outdir *out)
 {
 	struct c0_tiff_wopts o = { .width = r->Lx, .height = r->Ly, .slices = r->n, .dtype = C0_F32,
@@ -89,7 +91,7 @@ static int write_support(const struct c0_result *r, struct c0_outdir *out)
 	return st;
 }
 
-/* intensity_qNN.tif from x, or from the support's values (app/pipeline.h)
+/* intensity_qNN.tif from x, or from the support's values (app/result.h)
  * through one plane, and background_qNN.tif */
 static int write_intensity(const struct c0_result *r, struct c0_outdir *out)
 {
@@ -250,7 +252,7 @@ int c0_result_write_to(const struct c0_result *r, struct c0_outdir *out)
 		st = write_volume(r, &r->base, r->pixel_nm, "baseline_", out);
 	if (!st)
 		st = c0_report_write(r->rep, c0_outdir_file(out, "report.json"));
-	if (!st)   /* the page, from the files just written (app/report_html.h) */
+	if (!st)   /* the page, from the files just written (report/html.h) */
 		st = c0_report_html(out->stage);
 	if (st == C0_ENOMEM && !strstr(c0_errmsg(), "out of memory"))
 		c0_mem_fail(0);

@@ -1,6 +1,6 @@
 /* The result of a run: its arrays, its report, and the accessors of the
  * public API (include/col0rme.h). */
-#include "app/pipeline.h"
+#include "app/result.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -145,22 +145,6 @@ const float *c0_result_depth(const struct c0_result *r, int *h, int *w)
 	return r->vol.depth;
 }
 
-const float *c0_result_render(const struct c0_result *r, int q, int *h, int *w)
-{
-	if (!(r->render_sd_nm > 0) || q < 0 || q >= r->n)
-		return NULL;
-	dims(h, w, r->Ly, r->Lx);
-	const size_t L = (size_t)r->Ly * r->Lx;
-	struct c0_result *m = (struct c0_result *)r;   /* the cache is not const to its callers */
-	if (!m->render && (m->render = c0_alloc(L * (size_t)r->n, sizeof *m->render)))
-		for (int k = 0; k < r->n; k++)
-			if (c0_render_plane(r, k, m->render + k * L)) {
-				free(m->render), m->render = NULL;
-				break;
-			}
-	return m->render ? m->render + q * L : NULL;
-}
-
 const double *c0_result_z_nm(const struct c0_result *r, int *nz)
 {
 	if (nz)
@@ -203,4 +187,18 @@ double c0_result_x_sum(const struct c0_result *r, int q)
 		for (size_t i = 0; i < (size_t)r->Ly * r->Lx; i++)
 			s += r->ires[q].x[i];
 	return s;
+}
+
+int c0_result_drift_moved(const struct c0_result *r)
+{
+	struct c0_drift_info di;
+	if (!r->drift)
+		return 0;
+	c0_drift_get_info(r->drift, &di);
+	return di.corrected[0] || di.corrected[1];
+}
+
+const float *c0_result_noise(const struct c0_result *r, int i)
+{
+	return r->cal_noise_q[i] ? r->cal_noise_q[i] : r->cal_noise;
 }

@@ -1,6 +1,13 @@
 /* The single-step commands as library calls on files: the intensity step on
  * a support mask from a TIFF, and the standard MA-TIRF path on one TIFF
  * image per angle. */
+#include "app/single.h"
+#include "app/result.h"
+#include "app/pipeline_conf.h"
+#include "app/steps.h"
+#include "app/steps_intensity.h"
+#include "app/steps_matirf.h"
+#include "app/stacks.h"
 #include "app/pipeline.h"
 #include "io/tiff.h"
 #include "core/err.h"
@@ -72,15 +79,16 @@ int c0_run_matirf_files(const struct c0_run_conf *c, char *const *paths, int n, 
 				     (long long)in[q].height, paths[0]);
 	}
 	struct c0_result *r = NULL;
+	struct c0_matirf_raw raw;
+	const double px = st ? 0 : c->pixel_nm > 0 ? c->pixel_nm : in[0].pixel_size_nm;
 	if (!st)
 		st = c0_result_new("matirf", n, (const char *const *)paths, is_file, &r);
 	if (!st)
 		c0_warn_assumed_optics(r, c);
 	struct c0_progress_sink ps;
 	c0_progress_attach(&ps, c->progress, c->progress_user);
-	if (!st && !(st = c0_progress_stage("matirf")))
-		st = c0_step_matirf_raw(r, c, &mc, (const float *const *)data, (int)in[0].height, (int)in[0].width,
-					c->pixel_nm > 0 ? c->pixel_nm : in[0].pixel_size_nm);
+	if (!st && !(st = c0_progress_stage("matirf")) && !(st = c0_run_conf_matirf_raw(c, px, &mc, &raw)))
+		st = c0_step_matirf_raw(r, &raw, &mc, (const float *const *)data, (int)in[0].height, (int)in[0].width, px);
 	st = c0_progress_detach(&ps, st);
 	for (int q = 0; q < n; q++)
 		free(data[q]);

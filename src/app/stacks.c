@@ -1,6 +1,9 @@
 /* The input stacks of a run: opened as frame sources, their pixel size and
  * sizes checked, and the start every run shares (c0_pipe_begin). */
-#include "app/pipeline.h"
+#include "app/stacks.h"
+#include "app/result.h"
+#include "app/pipeline_conf.h"
+#include "app/calib.h"
 #include "core/err.h"
 #include "core/mem.h"
 #include "core/progress.h"

@@ -1,5 +1,5 @@
 /* col0rme report OUTDIR: report.html (and error_qNN.tif) again from an
- * output directory's files (app/report_html.h does the work). */
+ * output directory's files (report/html.h does the work). */
 #include "cli/commands.h"
 #include "cli/opts.h"
 #include "col0rme.h"

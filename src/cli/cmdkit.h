@@ -4,7 +4,9 @@
  * (write the result or roll back, print the error). */
 #pragma once
 #include "cli/confopts.h"
-#include "app/pipeline.h"
+#include "app/result.h"
+#include "app/single.h"
+#include "app/pipeline_write.h"
 
 struct c0_cli {
 	struct c0_conf_cli m;

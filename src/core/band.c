@@ -127,14 +127,6 @@ void c0_band_col_sumsq(const struct c0_band *b, double *out)
 		}
 }
 
-void c0_band_to_dense(const struct c0_band *b, double *d)
-{
-	memset(d, 0, sizeof *d * (size_t)b->m * b->n);
-	for (int i = 0; i < b->m; i++)
-		for (int k = 0; k < b->w; k++)
-			d[(size_t)i * b->n + b->start[i] + k] = b->v[(size_t)i * b->w + k];
-}
-
 /* The product along x runs on 8 rows at once, stored interleaved (t[k*8 +
  * j] is entry k of row j): the inner loop has unit stride over the 8 rows
  * and vectorises, where a dot product per row would not without

@@ -18,7 +18,6 @@ double c0_band_get(const struct c0_band *b, int i, int j);
 int c0_band_transpose(const struct c0_band *b, struct c0_band *t);
 /* Drops stored entries below tol*max|v| at the ends of rows to shrink w. */
 int c0_band_trim(struct c0_band *b, double tol);
-void c0_band_to_dense(const struct c0_band *b, double *dense);   /* m*n, row-major */
 /* out[j] = sum_i B[i][j]^2 (n values) */
 void c0_band_col_sumsq(const struct c0_band *b, double *out);
 /* out[y][i] = sum_k B[i][k] in[y][k]; in is ny x n, out is ny x m */

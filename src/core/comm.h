@@ -19,5 +19,3 @@ int c0_comm_status(int st);
 /* Every rank holds buf (rows of row_bytes) filled in rows row0..row0+nrows-1;
  * afterwards rank 0 holds every rank's rows. */
 int c0_comm_gather_rows(void *buf, size_t row_bytes, int row0, int nrows);
-/* Ends every rank (after an error that the others cannot learn of). */
-void c0_comm_abort(int code);

@@ -57,11 +57,6 @@ void *c0_alloc(size_t n, size_t size)
 	return p;
 }
 
-void c0_free(void *p)
-{
-	free(p);
-}
-
 void c0_mem_release(void)
 {
 #ifdef __GLIBC__

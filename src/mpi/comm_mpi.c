@@ -92,10 +92,3 @@ int c0_comm_gather_rows(void *buf, size_t row_bytes, int row0, int nrows)
 	free(all), free(cnt), free(dsp);
 	return 0;
 }
-
-void c0_comm_abort(int code)
-{
-	if (on && size > 1)
-		MPI_Abort(MPI_COMM_WORLD, code);
-	exit(code);
-}

@@ -424,8 +424,6 @@ double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x)
 	return (a->sum[i] - T * m * m - b * b) / (T - 2);
 }
 
-int64_t c0_cov_acc_frames(const struct c0_cov_acc *a) { return a->frames; }
-
 void c0_cov_acc_seal(struct c0_cov_acc *a)
 {
 	flush(a);

@@ -63,7 +63,6 @@ int c0_cov_acc_set_region(struct c0_cov_acc *a, const uint8_t *keep);
 int c0_cov_guard(struct c0_cov *c, double g, size_t *set);
 /* Temporal variance of one pixel so far. */
 double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x);
-int64_t c0_cov_acc_frames(const struct c0_cov_acc *a);
 /* Adds the frames still in the block and gives the block's memory back (up
  * to 64 MB, next to the tiles' solves); call it before cutting windows from
  * several threads (they then only read). A later frame allocates it again. */

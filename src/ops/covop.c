@@ -247,14 +247,3 @@ void c0_covop_normal(struct c0_covop *op, const double *x, double *out)
 	c0_band_apply_y(&op->Hy, op->Lx, op->tmp, out);
 }
 
-void c0_covop_psi(struct c0_covop *op, const double *x, double *y)
-{
-	c0_band_apply_x(&op->Gx, op->Ly, x, op->tmp);          /* Ly x Nx */
-	c0_band_apply_y(&op->Gy, op->Nx, op->tmp, y);
-}
-
-void c0_covop_psit(struct c0_covop *op, const double *y, double *x)
-{
-	c0_band_apply_x(&op->GxT, op->Ny, y, op->tmp);         /* Ny x Lx */
-	c0_band_apply_y(&op->GyT, op->Lx, op->tmp, x);
-}

@@ -39,6 +39,3 @@ void c0_covop_adjoint(struct c0_covop *op, const struct c0_cov *cov, const doubl
 void c0_covop_adjoint_on(const struct c0_covop *op, const struct c0_cov *cov, const double *R, const uint8_t *on, double *c);
 /* A^T A x over all pixel pairs. */
 void c0_covop_normal(struct c0_covop *op, const double *x, double *out);
-/* Psi x (fine -> coarse) and Psi^T y, for tests and the intensity step. */
-void c0_covop_psi(struct c0_covop *op, const double *x, double *y);
-void c0_covop_psit(struct c0_covop *op, const double *y, double *x);

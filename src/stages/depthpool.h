@@ -10,26 +10,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* out = sum of x over the (2h+1)^2 window, on the mask (0 elsewhere). */
-int c0_pool_window(const float *x, const uint8_t *mask, int ny, int nx, int h, float *out);
-/* out[q] = sum of x[q] over the (2h+1)^2 window on the mask, counting only
- * the pixels whose guide depth lies within range nm of the centre's: a
- * neighbour on another structure at another depth stays out. */
-int c0_pool_guided(const float *const *x, int nq, const uint8_t *mask, const float *guide, double range, int ny,
-		   int nx, int h, float *const *out);
-
 /* Each mask pixel's depth (nm) from its own intensities x[q] alone: the
  * centre of the bin j whose weights W[q][j] (nq x nz, optics/tirf.h) fit
  * them best with one non-negative amplitude; 0 elsewhere (mask NULL: every
  * pixel, as on a c0_pixlist's values). */
 void c0_depth_single(const double *W, int nq, int nz, double z0, double dz, const float *const *x, const uint8_t *mask,
 		     size_t np, float *out);
-
-/* f (nz x M: the columns at raster indices pixel[0..M), stages/matirf.h)
- * reconstructed from pooled images: scale each column by
- * sum_q x_q / sum_q pooled_q at its pixel, so the volume keeps the pixel's
- * own intensity (the depth profile, hence the depth map, is unchanged). */
-void c0_pool_rescale(float *f, int nz, const int *pixel, size_t M, int nq, const float *const *x, const float *const *pooled);
 
 /* The support's pixels by rows, what the run's pooling works on (the fine
  * grid holds a thousand pixels for one of them at 2048 x 2048 camera
@@ -45,16 +31,20 @@ int c0_pixlist_from_mask(const uint8_t *mask, int ny, int nx, struct c0_pixlist 
 void c0_pixlist_free(struct c0_pixlist *pl);
 /* the index in pl of raster pixel p, or -1 when p is not on it */
 long c0_pixlist_find(const struct c0_pixlist *pl, size_t p);
-/* c0_pool_window on the list: x and out over pl. The summed-area table in a
- * band of 2h + 2 rows: the same sums as the whole table, bit for bit. */
+/* out = sum of x over the (2h+1)^2 window on the list's pixels (x and out
+ * over pl). The summed-area table in a band of 2h + 2 rows: the same sums
+ * as the whole grid's table (the tests' c0_pool_window), bit for bit. */
 int c0_pool_window_at(const float *x, const struct c0_pixlist *pl, int h, float *out);
 /* Each pixel's unit normal to the structure it lies on, (x, y) at nrm[2k],
  * nrm[2k + 1] over pl: the minor axis of the second moments of the list's
  * pixels within r fine pixels (a disc). A lone pixel or a round blob gets an
  * arbitrary one. */
 void c0_pixlist_normals(const struct c0_pixlist *pl, int r, float *nrm);
-/* c0_pool_guided on the list: x[q], guide and out[q] over pl; the same sums
- * in the same order, bit for bit. With nrm (c0_pixlist_normals) only the
+/* out[q] = sum of x[q] over the (2h+1)^2 window on the list, counting only
+ * the pixels whose guide depth lies within range nm of the centre's: a
+ * neighbour on another structure at another depth stays out (x[q], guide
+ * and out[q] over pl; the same sums in the same order as the tests'
+ * whole-grid c0_pool_guided, bit for bit). With nrm (c0_pixlist_normals) only the
  * window's pixels within width fine pixels of the line through the centre
  * along its structure are summed: a strip along a filament, which keeps out
  * a neighbour beside it whatever the guide says. */
@@ -68,7 +58,11 @@ struct c0_pooled {
 	const float *const *own, *const *pooled;
 	const float *var;
 };
-/* c0_pool_rescale with x and pooled over pl (pixel[] on pl, increasing). */
+/* f (nz x M: the columns at raster indices pixel[0..M) on pl, increasing,
+ * stages/matirf.h) reconstructed from pooled images: each column scaled by
+ * sum_q x_q / sum_q pooled_q at its pixel (x and pooled over pl), so the
+ * volume keeps the pixel's own intensity (the depth profile, hence the
+ * depth map, is unchanged). */
 void c0_pool_rescale_at(float *f, int nz, const int *pixel, size_t M, int nq, const struct c0_pixlist *pl,
 			const float *const *x, const float *const *pooled);
 

@@ -1,4 +1,4 @@
-#include "stages/drift.h"
+#include "stages/drift_parts.h"
 #include "ops/fshift.h"
 #include "io/frames.h"
 #include "core/c0math.h"
@@ -16,31 +16,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAXQ C0_DRIFT_MAX
-#define REFINE 8      /* at most this many rounds of refinement against the mean of all blocks */
-#define REFINE_TOL 0.01   /* ... until no block moves by more than this (pixels) in a round */
-#define SIGNIF 6   /* an axis is corrected when its drift exceeds this many noise sds */
-
-struct hook {
-	struct c0_drift *d;
-	int q;
-};
-
-struct c0_drift {
-	int nq, nb, block, H, W, interleaved;
-	double sigma;                        /* the PSF's sd (pixels): the correlations' filter */
-	int64_t frames[MAXQ];                /* per stack */
-	double start[MAXQ];                  /* per stack: its first frame on the acquisition's clock */
-	int rec[MAXQ], k0[MAXQ + 1];         /* stacks in recording order; the i-th's blocks k0[i]..k0[i+1]-1 */
-	double *bt, *bx, *by;
-	float **bm;                          /* block means, while estimating */
-	double noise_px[2];                  /* sd of a block's shift estimate, per axis */
-	int off[2];                          /* axis not corrected: its drift is within the noise */
-	double max_px, seconds;
-	struct hook hooks[MAXQ];
-	struct c0_fshift *sh;
-};
-
 void c0_drift_free(struct c0_drift *d)
 {
 	if (!d)
@@ -51,361 +26,6 @@ void c0_drift_free(struct c0_drift *d)
 	free(d->bt), free(d->bx), free(d->by);
 	c0_fshift_free(d->sh);
 	free(d);
-}
-
-/* The correlation set-up: the reference block's spectrum, and the window
- * that keeps the image edges from correlating. The images are zero-padded
- * to PH x PW, enough for the lags up to LY, LX to be those of the linear
- * correlation: a drift beyond a quarter of the field is refused anyway, and
- * padding to twice the image would cost 2.5x the transforms. */
-struct xcorr {
-	int H, W, PH, PW, LY, LX;
-	size_t ns;               /* spectrum length */
-	double *win, *re;
-	double *lp;              /* the PSF's transfer function on the spectrum (NULL: none) */
-	fftw_complex *ref, *sp, *xs;   /* reference, image and cross spectra */
-	fftw_plan f, b;
-	int borrowed;            /* win, lp and ref are another xcorr's */
-};
-
-static void xcorr_free(struct xcorr *x)
-{
-	c0_fftw_destroy(x->f), c0_fftw_destroy(x->b);
-	if (!x->borrowed)
-		free(x->win), free(x->lp), fftw_free(x->ref);
-	fftw_free(x->re), fftw_free(x->sp), fftw_free(x->xs);
-}
-
-/* the transforms' buffers and plans; the window and reference are x's own
- * (share == NULL) or share's */
-static int xcorr_buffers(struct xcorr *x, const struct xcorr *share)
-{
-	x->re = fftw_malloc((size_t)x->PH * x->PW * sizeof(double));
-	x->sp = fftw_malloc(x->ns * sizeof(fftw_complex));
-	x->xs = fftw_malloc(x->ns * sizeof(fftw_complex));
-	if (share)
-		x->win = share->win, x->lp = share->lp, x->ref = share->ref, x->borrowed = 1;
-	else {
-		x->win = c0_alloc((size_t)x->H * x->W, sizeof *x->win);
-		x->ref = fftw_malloc(x->ns * sizeof(fftw_complex));
-	}
-	if (!x->win || !x->re || !x->ref || !x->sp || !x->xs)
-		return c0_mem_fail((double)x->PH * x->PW * sizeof(double) + 3.0 * x->ns * sizeof(fftw_complex));
-#pragma omp critical(c0_fftw_plan)
-	{
-		x->f = fftw_plan_dft_r2c_2d(x->PH, x->PW, x->re, x->sp, FFTW_ESTIMATE);
-		x->b = fftw_plan_dft_c2r_2d(x->PH, x->PW, x->xs, x->re, FFTW_ESTIMATE);
-	}
-	if (!x->f || !x->b)
-		return c0_fail(C0_ENOMEM, "drift: cannot plan the FFTs of %dx%d", x->W, x->H);
-	return C0_OK;
-}
-
-/* The PSF's transfer function (a Gaussian of sd sigma pixels) on the
- * r2c spectrum: the image and the reference both filtered, the matched
- * filter for an image of PSF-blurred spots in white noise. The camera's
- * fixed pattern is white too, and does not move with the sample: unfiltered,
- * its own peak at lag 0 pulled the shift towards 0. */
-static int xcorr_lowpass(struct xcorr *x, double sigma)
-{
-	if (!(sigma > 0))
-		return C0_OK;
-	const int nx = x->PW / 2 + 1;
-	if (!(x->lp = c0_alloc(x->ns, sizeof *x->lp)))
-		return C0_ENOMEM;
-	const double c = -2 * C0_PI * C0_PI * sigma * sigma;
-	for (int y = 0; y < x->PH; y++) {
-		const double fy = (double)(y <= x->PH / 2 ? y : y - x->PH) / x->PH;
-		for (int i = 0; i < nx; i++) {
-			const double fx = (double)i / x->PW;
-			x->lp[(size_t)y * nx + i] = exp(c * (fx * fx + fy * fy));
-		}
-	}
-	return C0_OK;
-}
-
-static int xcorr_init(struct xcorr *x, int H, int W, double sigma)
-{
-	memset(x, 0, sizeof *x);
-	/* lags to a quarter of the field, and one more for the sub-pixel fit */
-	x->H = H, x->W = W, x->LY = H / 4 + 2, x->LX = W / 4 + 2;
-	x->PH = c0_fft_size(H + x->LY, 5, 0), x->PW = c0_fft_size(W + x->LX, 5, 0);
-	x->ns = (size_t)x->PH * (x->PW / 2 + 1);
-	int st = xcorr_buffers(x, NULL);
-	if (st)
-		return st;
-	for (int y = 0; y < H; y++)
-		for (int i = 0; i < W; i++)   /* Hann */
-			x->win[(size_t)y * W + i] = (0.5 - 0.5 * cos(2 * C0_PI * (y + 0.5) / H)) *
-						    (0.5 - 0.5 * cos(2 * C0_PI * (i + 0.5) / W));
-	return xcorr_lowpass(x, sigma);
-}
-
-/* another thread's set-up against the same reference */
-static int xcorr_clone(struct xcorr *y, const struct xcorr *x)
-{
-	*y = *x;
-	y->re = NULL, y->sp = y->xs = NULL, y->f = y->b = NULL;
-	return xcorr_buffers(y, x);
-}
-
-/* windowed, mean-removed spectrum of img into x->sp */
-static void spectrum(struct xcorr *x, const double *img)
-{
-	const size_t n = (size_t)x->H * x->W;
-	double m = 0, w = 0;
-	for (size_t i = 0; i < n; i++)
-		m += img[i] * x->win[i], w += x->win[i];
-	m /= w;
-	memset(x->re, 0, (size_t)x->PH * x->PW * sizeof *x->re);
-	for (int y = 0; y < x->H; y++)
-		for (int i = 0; i < x->W; i++) {
-			size_t k = (size_t)y * x->W + i;
-			x->re[(size_t)y * x->PW + i] = (img[k] - m) * x->win[k];
-		}
-	fftw_execute(x->f);
-	for (size_t i = 0; x->lp && i < x->ns; i++)
-		x->sp[i] *= x->lp[i];
-}
-
-/* sub-pixel peak offset from three samples: Gaussian (log-parabola) when all
- * positive, else parabola */
-static double peak3(double a, double b, double c)
-{
-	if (a > 0 && b > 0 && c > 0) {
-		double la = log(a), lb = log(b), lc = log(c), den = la - 2 * lb + lc;
-		if (den < 0)
-			return 0.5 * (la - lc) / den;
-	}
-	double den = a - 2 * b + c;
-	return den < 0 ? 0.5 * (a - c) / den : 0;
-}
-
-/* shift (px) of the content of img relative to the reference; img's
- * spectrum is left in x->sp. in_ref: the reference is a sum that holds img,
- * which is left out of it (spectra are linear), else img's own noise peaks
- * at lag 0 and pulls the shift towards 0 */
-static void shift_of(struct xcorr *x, const double *img, int in_ref, double *dx, double *dy)
-{
-	const int H = x->PH, W = x->PW;
-	spectrum(x, img);
-	for (size_t i = 0; i < x->ns; i++)
-		x->xs[i] = x->sp[i] * conj(in_ref ? x->ref[i] - x->sp[i] : x->ref[i]);
-	fftw_execute(x->b);   /* x->re: circular cross-correlation, lag (0, 0) at index 0 */
-	int by = 0, bx = 0;
-	double best = -INFINITY;
-	for (int ly = 1 - x->LY; ly < x->LY; ly++)   /* the lags free of wrap-around, but the last */
-		for (int lx = 1 - x->LX; lx < x->LX; lx++) {
-			double v = x->re[(size_t)(ly < 0 ? ly + H : ly) * W + (lx < 0 ? lx + W : lx)];
-			if (v > best)
-				best = v, by = ly, bx = lx;
-		}
-#define AT(ly, lx) x->re[(size_t)(((ly) % H + H) % H) * W + (((lx) % W + W) % W)]
-	*dx = bx + peak3(AT(by, bx - 1), AT(by, bx), AT(by, bx + 1));
-	*dy = by + peak3(AT(by - 1, bx), AT(by, bx), AT(by + 1, bx));
-#undef AT
-}
-
-/* block k moved back by its shift, into tmp */
-static int moved_back(struct c0_drift *d, int k, float *tmp)
-{
-	memcpy(tmp, d->bm[k], (size_t)d->H * d->W * sizeof *tmp);
-	return c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
-}
-
-/* block k moved back, re-measured against x->ref */
-static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tmp, int k)
-{
-	const size_t n = (size_t)d->H * d->W;
-	int st = moved_back(d, k, tmp);
-	for (size_t i = 0; i < n; i++)
-		img[i] = tmp[i];
-	double rx, ry;
-	shift_of(x, img, 1, &rx, &ry);
-	d->bx[k] += rx, d->by[k] += ry;
-	return st;
-}
-
-/* The first estimates correlate each block with the first, one noisy block
- * mean. Refined: the reference becomes the mean of all blocks moved back by
- * their shifts, and each block is re-measured after its own shift has been
- * undone, so that the sub-pixel fit works near zero where it is unbiased.
- * The trajectory stays relative to the first block.
- * Rounds on blocks k0..k1-1 until they stop moving (each round takes a part
- * of what is left: 2 rounds left a dim stack's drift 30 % short); par: the
- * blocks are re-measured side by side (one stack: the threads are not taken
- * by the stacks), each thread but the first with transforms of its own */
-static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1, int par)
-{
-	const size_t n = (size_t)d->H * d->W;
-	int st = C0_OK;
-	double moved = INFINITY;
-	for (int round = 0; round < REFINE && moved > REFINE_TOL && k1 - k0 > 1 && !st; round++) {
-		moved = 0;
-		memset(ref, 0, n * sizeof *ref);
-		for (int k = k0; k < k1 && !st; k++) {
-			st = moved_back(d, k, tmp);
-			for (size_t i = 0; i < n; i++)
-				ref[i] += tmp[i];
-		}
-		if (st)
-			break;
-		spectrum(x, ref);
-		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
-		struct c0_first_fail fail = { 0 };
-#pragma omp parallel if (par)
-		{
-			struct xcorr own, *y = x;
-			double *img = ref;
-			float *t = tmp;
-			int ts = C0_OK;
-			if (omp_get_thread_num() > 0) {
-				y = &own, ts = xcorr_clone(&own, x);
-				img = c0_alloc(n, sizeof *img), t = c0_alloc(n, sizeof *t);
-				if (!ts && (!img || !t))
-					ts = C0_ENOMEM;
-			}
-#pragma omp for schedule(dynamic, 1) reduction(max : moved)
-			for (int k = k0; k < k1; k++) {
-				const double x0 = d->bx[k], y0 = d->by[k];
-				if (!ts)
-					ts = remeasure(d, y, img, t, k);
-				moved = fmax(moved, fmax(fabs(d->bx[k] - x0), fabs(d->by[k] - y0)));
-			}
-			c0_first_fail_note(&fail, ts);
-			if (y != x)
-				xcorr_free(&own), free(img), free(t);
-		}
-		if (fail.code)
-			st = c0_first_fail_raise(&fail);
-	}
-	return st;
-}
-
-/* mean time and value of blocks k0..k1-1 of v, and their centred sums */
-static void block_moments(const double *bt, const double *v, int k0, int k1, double *mt, double *mv, double *stt, double *stv)
-{
-	const int n = k1 - k0;
-	*mt = *mv = 0;
-	for (int k = k0; k < k1; k++)
-		*mt += bt[k] / n, *mv += v[k] / n;
-	for (int k = k0; k < k1; k++)
-		*stt += (bt[k] - *mt) * (bt[k] - *mt), *stv += (bt[k] - *mt) * (v[k] - *mv);
-}
-
-/* The stacks' levels, by continuity. Refined against its own mean, a
- * stack keeps the mean level of its chained first estimates, and those
- * shrink the small block-to-block shifts (the sub-pixel fit of a noisy
- * peak): each stack sat short by part of its own drift, and the shortfall
- * added up over the angles (5 x 500 frames, 200 nm: 64 nm short at the
- * last). Each stack is moved onto the line through the stack before: one
- * slope fitted to both stacks' blocks, each stack at its own level (a
- * stack alone may have only a few blocks). */
-static void join_stacks(struct c0_drift *d, const int *k0, double *jv)
-{
-	for (int k = 0; k < k0[1]; k++)
-		jv[k] = 0;
-	for (int q = 1; q < d->nq; q++) {
-		double v0 = k0[q] > 0 ? jv[k0[q] - 1] : 0, add = 0;
-		if (k0[q] > k0[q - 1] && k0[q + 1] > k0[q])
-			for (int a = 0; a < 2; a++) {
-				double *v = a ? d->by : d->bx, pt, pv, t, m, stt = 0, stv = 0;
-				block_moments(d->bt, v, k0[q - 1], k0[q], &pt, &pv, &stt, &stv);
-				block_moments(d->bt, v, k0[q], k0[q + 1], &t, &m, &stt, &stv);
-				const double slope = stt > 0 ? stv / stt : 0, dv = pv + slope * (t - pt) - m;
-				for (int k = k0[q]; k < k0[q + 1]; k++)
-					v[k] += dv;
-				/* the join's variance in units of a block's: the two
-				 * levels' and the slope's over the stacks' distance */
-				add = 1.0 / (k0[q] - k0[q - 1]) + 1.0 / (k0[q + 1] - k0[q]) + (stt > 0 ? (t - pt) * (t - pt) / stt : 0);
-			}
-		for (int k = k0[q]; k < k0[q + 1]; k++)
-			jv[k] = v0 + add;
-	}
-}
-
-/* Interleaved stacks share one clock: their blocks k were recorded
- * together, so the trajectory is the stacks' mean, each stack at its own
- * mean level (its blocks are only known relative to each other; a
- * correlation across angles would read their different images as a
- * shift). The block means are no longer needed (same counts: checked). */
-static void average_stacks(struct c0_drift *d)
-{
-	const int nq = d->nq, nb = d->k0[1];
-	for (int k = 0; k < d->nb; k++)
-		free(d->bm[k]), d->bm[k] = NULL;
-	double lx[MAXQ], ly[MAXQ];
-	for (int i = 0; i < nq; i++) {
-		lx[i] = ly[i] = 0;
-		for (int k = d->k0[i]; k < d->k0[i + 1]; k++)
-			lx[i] += d->bx[k] / nb, ly[i] += d->by[k] / nb;
-	}
-	for (int k = 0; k < nb; k++) {
-		double t = 0, x = 0, y = 0;
-		for (int i = 0; i < nq; i++) {
-			const int j = d->k0[i] + k;
-			t += d->bt[j] / nq, x += (d->bx[j] - lx[i]) / nq, y += (d->by[j] - ly[i]) / nq;
-		}
-		d->bt[k] = t, d->bx[k] = x, d->by[k] = y;   /* k <= j: read before written */
-	}
-	d->nb = nb;
-}
-
-static int refine(struct c0_drift *d)
-{
-	/* each stack against the mean of its own blocks: an angle changes the
-	 * image (depth-dependent excitation), which a correlation across angles
-	 * would read as a shift. The stacks' blocks are apart: side by side. */
-	const int *k0 = d->k0;
-	struct c0_first_fail fail = { 0 };
-	const size_t n = (size_t)d->H * d->W;
-#pragma omp parallel if (d->nq > 1)
-	{
-		struct xcorr x;
-		double *ref = c0_alloc(n, sizeof *ref);
-		float *tmp = c0_alloc(n, sizeof *tmp);
-		int st = xcorr_init(&x, d->H, d->W, d->sigma);
-		if (!st && (!ref || !tmp))
-			st = C0_ENOMEM;
-#pragma omp for schedule(dynamic, 1)
-		for (int q = 0; q < d->nq; q++)
-			if (!st)
-				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1], d->nq == 1);
-		c0_first_fail_note(&fail, st);
-		xcorr_free(&x);
-		free(ref), free(tmp);
-	}
-	if (fail.code)
-		return c0_first_fail_raise(&fail);
-	if (d->interleaved)
-		average_stacks(d);
-	double *jv = c0_alloc((size_t)d->nb, sizeof *jv);
-	if (!jv)
-		return C0_ENOMEM;
-	if (!d->interleaved)
-		join_stacks(d, k0, jv);
-	for (int k = d->nb - 1; k >= 0; k--)
-		d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
-	/* an axis whose shifts stay within SIGNIF noise sds of zero has no
-	 * drift we can tell from the estimates' own noise: undoing it would
-	 * only add jitter. The noise sd comes from second differences, which a
-	 * smooth drift does not feed (var of a second difference = 6 var); a
-	 * block in a later stack also carries the joins' noise (jv). */
-	for (int a = 0; a < 2 && d->nb >= 3; a++) {
-		double *v = a ? d->by : d->bx, s2 = 0, mx = 0;
-		for (int k = 1; k + 1 < d->nb; k++)
-			s2 += pow(v[k + 1] - 2 * v[k] + v[k - 1], 2);
-		for (int k = 0; k < d->nb; k++)
-			mx = fmax(mx, fabs(v[k]) / sqrt(1 + jv[k]));
-		d->noise_px[a] = sqrt(s2 / (d->nb - 2) / 6);
-		if (mx <= SIGNIF * d->noise_px[a])
-			memset(v, 0, (size_t)d->nb * sizeof *v), d->off[a] = 1;
-	}
-	free(jv);
-	d->max_px = 0;
-	for (int k = 0; k < d->nb; k++)
-		d->max_px = fmax(d->max_px, hypot(d->bx[k], d->by[k]));
-	return C0_OK;
 }
 
 /* One stack's block means, and each block's shift against the block before
@@ -442,9 +62,9 @@ static int add_frames(struct stack_blocks *o, struct xcorr *x, double *sum, cons
 		for (size_t i = 0; i < n; i++)
 			o->bm[k][i] = (float)sum[i];
 		if (k > 0)
-			shift_of(x, sum, 0, &o->sx[k], &o->sy[k]);
+			drift_shift_of(x, sum, 0, &o->sx[k], &o->sy[k]);
 		else
-			spectrum(x, sum);
+			drift_spectrum(x, sum);
 		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
 	}
 	return C0_OK;
@@ -459,7 +79,7 @@ static int stack_pass(struct c0_frames *r, int64_t B, double sigma, struct stack
 	nf = nf < 1 ? 1 : nf > T ? T : nf;
 	const int64_t nbatch = (T + nf - 1) / nf;
 	struct xcorr x;
-	int st = xcorr_init(&x, H, W, sigma), rst = C0_OK;
+	int st = drift_xcorr_init(&x, H, W, sigma), rst = C0_OK;
 	double *sum = c0_alloc(n, sizeof *sum);
 	float *buf = c0_alloc(2 * (size_t)nf * n, sizeof *buf);
 	o->B = B, o->nb = nb;
@@ -500,7 +120,7 @@ static int stack_pass(struct c0_frames *r, int64_t B, double sigma, struct stack
 	if (fail.code)    /* the message, from the thread that failed */
 		st = c0_first_fail_raise(&fail);
 	c0_progress_end(&pr);
-	xcorr_free(&x);
+	drift_xcorr_free(&x);
 	free(sum), free(buf);
 	if (st)
 		snprintf(o->msg, sizeof o->msg, "%s", c0_errmsg());
@@ -651,7 +271,7 @@ int c0_drift_estimate(const struct c0_drift_conf *c, struct c0_frames *f, int n,
 	if (!st)
 		st = c0_fshift_new(d->H, d->W, &d->sh);
 	if (!st)
-		st = refine(d);
+		st = drift_refine(d);
 	for (int k = 0; d->bm && k < d->nb; k++)
 		free(d->bm[k]);
 	free(d->bm), d->bm = NULL;

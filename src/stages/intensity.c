@@ -1,5 +1,5 @@
 #include "stages/intensity.h"
-#include "stages/tiles.h"
+#include "core/tiles.h"
 #include "stages/depthpool.h"
 #include "ops/neumann.h"
 #include "ops/psi_omega.h"

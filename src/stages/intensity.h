@@ -67,7 +67,7 @@ struct c0_intensity_result {
 
 int c0_intensity_check(const struct c0_intensity_conf *c);
 /* With tiles (c->tile smaller than the image): the tile grid of
- * stages/tiles.h, tiles solved side by side and their interiors kept; mu is
+ * core/tiles.h, tiles solved side by side and their interiors kept; mu is
  * then the interior-weighted geometric mean of the tiles' mu, and residual2,
  * target2 and floor2 the tiles' values scaled to their interiors and summed.
  * A window without support pixels solves only the background. */

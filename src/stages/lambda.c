@@ -69,17 +69,6 @@ static void choose(const struct c0_support_conf *c, double sig, double sq, doubl
 		out->chosen_rel = fmin(CEL0_GAMMA * t * t / (2 * nm * nm) / lmax0, 0.5);
 }
 
-void c0_lambda_max(const double *C, double norm, double s0, const double *n, size_t L, double lm[2])
-{
-	lm[0] = lm[1] = 0;
-	for (size_t i = 0; i < L; i++) {
-		const double g = C[i] / norm - s0 * n[i];
-		lm[0] = fmax(lm[0], g);
-		if (g > 0)
-			lm[1] = fmax(lm[1], g * g / (2 * n[i] * n[i]));
-	}
-}
-
 /* Histogram bins: HB_PER per decade from 10^HB_LO (normalised units, in
  * which lambda_max is of order 1e-2 to 1); a median read from them is
  * within 0.1 % of the exact one. */

@@ -56,11 +56,6 @@ struct c0_lambda_result {
 	double fwhm_data_nm;
 };
 
-/* lambda_max on the l1 and the l0 scale (lm[0], lm[1]) of the gradient at
- * x = 0, g = C / norm - s0 n (C = A^T R, n the column norms, s0 the noise
- * variance at x = 0): the smallest lambda for which x = 0 is optimal. */
-void c0_lambda_max(const double *C, double norm, double s0, const double *n, size_t L, double lm[2]);
-
 /* The FWHM (nm) of the Gaussian PSF whose pixel-integrated autocorrelation
  * has the covariance's ratio of lag 2 to lag 1 (summed over the image, x
  * and y): the width the data say, whatever the structure (lambda_psf.c).

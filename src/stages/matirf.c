@@ -16,6 +16,13 @@
 #include <stdint.h>
 #include <string.h>
 
+/* One level of the solve: mx0 > 0 fixes the data scale (a coarse level
+ * solves in the fine level's units); coarse: levels of warm start below it;
+ * yout, when not NULL, receives the final TV dual of the exact and apg
+ * solvers by columns (2 nz M floats, allocated; NULL for the others). */
+static int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
+			const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res);
+
 int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles)
 {
 	int st = c0_tirf_check(&c->tirf);
@@ -377,7 +384,20 @@ static int level_warm(struct level *L, const struct c0_matirf_conf *c, int nq, c
 	if (!(coarse > 0 && ctx->exact && c->reg == C0_REG_TV && !ctx->bg && ny >= 16 && nx >= 16 && ctx->g.nc <= 2))
 		return C0_OK;
 	const struct matirf_cols cols = { ctx->g.pixel, ctx->M };
-	return matirf_coarse_start(c, nq, angles, gain, x, ny, nx, ctx->nz, L->mx, coarse, L->col, &cols, L->u, L->y, iters);
+	struct c0_matirf_conf cc;
+	const float *xc[MAXQ];
+	float *buf = matirf_coarse_bin(c, nq, x, ny, nx, xc, &cc), *yc = NULL;
+	if (!buf)
+		return C0_ENOMEM;
+	struct c0_matirf_result r;
+	int st = matirf_level(&cc, nq, angles, gain, xc, (ny + 1) / 2, (nx + 1) / 2, L->mx, coarse - 1, &yc, &r);
+	if (!st) {
+		*iters = r.iters + r.coarse_iters;
+		matirf_coarse_lift(&r, yc, ny, nx, ctx->nz, L->mx, L->col, &cols, L->u, L->y);
+		c0_matirf_result_free(&r);
+	}
+	free(buf), free(yc);
+	return st;
 }
 
 /* PDHG from u, y with the solver's default tolerance */
@@ -438,8 +458,8 @@ static void level_unpack(struct level *L, const struct c0_matirf_conf *c, const 
 	res->M = ctx->M, res->pixel = ctx->g.pixel, ctx->g.pixel = NULL;   /* handed over */
 }
 
-int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-		 const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res)
+static int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
+			const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res)
 {
 	memset(res, 0, sizeof *res);
 	double t0 = c0_now();

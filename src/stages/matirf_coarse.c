@@ -12,24 +12,21 @@ static long find_col(const int *pixel, size_t M, size_t p)
 	return k < M && (size_t)pixel[k] == p ? (long)k : -1;
 }
 
-/* The warm start from a coarser grid: the images binned 2x2 (mean), the same
- * problem in physical units there (per area, lateral TV weighs kappa / 2 and
- * its axial weight doubles; the data scale is the fine level's), solved, and
- * its volume and TV dual brought back bilinearly (the dual doubled,
- * the dual's bound being kappa there), at the fine level's columns only:
- * the coarse level's are looked up by bisection (a coarse pixel off them is
- * 0). u0, y0: nz M and 2 nz M floats. */
-int matirf_coarse_start(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-			const float *const *x, int ny, int nx, int nz, double mx, int levels, const double *col,
-			const struct matirf_cols *cols, float *u0, float *y0, int *iters)
+/* The warm start from a coarser grid (matirf.c's level_warm): the images
+ * binned 2x2 (mean), the same problem in physical units there (per area,
+ * lateral TV weighs kappa / 2 and its axial weight doubles; the data scale
+ * is the fine level's), solved, and its volume and TV dual brought back
+ * bilinearly (the dual doubled, the dual's bound being kappa there), at the
+ * fine level's columns only: the coarse level's are looked up by bisection
+ * (a coarse pixel off them is 0). */
+float *matirf_coarse_bin(const struct c0_matirf_conf *c, int nq, const float *const *x, int ny, int nx,
+			 const float *xc[], struct c0_matirf_conf *cc)
 {
 	const int cy = (ny + 1) / 2, cx = (nx + 1) / 2;
-	const size_t cp = (size_t)cy * cx, M = cols->M;
-	float *buf = c0_alloc((size_t)nq * cp, sizeof *buf), *yc = NULL;
-	const float *xc[MAXQ];
-	int st = C0_ENOMEM;
+	const size_t cp = (size_t)cy * cx;
+	float *buf = c0_alloc((size_t)nq * cp, sizeof *buf);
 	if (!buf)
-		goto out;
+		return NULL;
 	for (int q = 0; q < nq; q++) {
 		float *o = buf + q * cp;
 		xc[q] = o;
@@ -44,14 +41,18 @@ int matirf_coarse_start(const struct c0_matirf_conf *c, int nq, const double *an
 				o[(size_t)y * cx + xx] = (float)(s / n);
 			}
 	}
-	struct c0_matirf_conf cc = *c;
-	cc.kappa = c->kappa / 2, cc.wz = c->wz * 2;
-	cc.psf_sigma_px = c->psf_sigma_px / 2;   /* the PSF binned with the images */
-	struct c0_matirf_result r;
-	if ((st = matirf_level(&cc, nq, angles, gain, xc, cy, cx, mx, levels - 1, &yc, &r)))
-		goto out;
-	*iters = r.iters + r.coarse_iters;
-	const size_t Mc = r.M, Nc = Mc * nz, N = M * nz;
+	*cc = *c;
+	cc->kappa = c->kappa / 2, cc->wz = c->wz * 2;
+	cc->psf_sigma_px = c->psf_sigma_px / 2;   /* the PSF binned with the images */
+	return buf;
+}
+
+void matirf_coarse_lift(const struct c0_matirf_result *r, const float *yc, int ny, int nx, int nz, double mx,
+			const double *col, const struct matirf_cols *cols, float *u0, float *y0)
+{
+	const int cy = (ny + 1) / 2, cx = (nx + 1) / 2;
+	const size_t M = cols->M;
+	const size_t Mc = r->M, Nc = Mc * nz, N = M * nz;
 	for (size_t k = 0; k < M; k++) {
 		const int y = cols->pixel[k] / nx, xx = cols->pixel[k] % nx;
 		const size_t pc = (size_t)(y / 2) * cx + xx / 2;
@@ -64,11 +65,11 @@ int matirf_coarse_start(const struct c0_matirf_conf *c, int nq, const double *an
 		const float w[4] = { 0.5625f, 0.1875f, 0.1875f, 0.0625f };
 		long i[4];
 		for (int a = 0; a < 4; a++)
-			i[a] = find_col(r.pixel, Mc, q[a]);
+			i[a] = find_col(r->pixel, Mc, q[a]);
 		for (int j = 0; j < nz; j++) {
 			float v[4], e2[2][4];
 			for (int a = 0; a < 4; a++) {
-				v[a] = i[a] < 0 ? 0 : r.f[j * Mc + i[a]];
+				v[a] = i[a] < 0 ? 0 : r->f[j * Mc + i[a]];
 				for (int e = 0; e < 2; e++)
 					e2[e][a] = i[a] < 0 || !yc ? 0 : yc[e * Nc + j * Mc + i[a]];
 			}
@@ -78,8 +79,4 @@ int matirf_coarse_start(const struct c0_matirf_conf *c, int nq, const double *an
 				y0[e * N + j * M + k] = 2 * (w[0] * e2[e][0] + w[1] * e2[e][1] + w[2] * e2[e][2] + w[3] * e2[e][3]);
 		}
 	}
-	c0_matirf_result_free(&r);
-out:
-	free(buf), free(yc);
-	return st;
 }

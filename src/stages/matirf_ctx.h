@@ -100,17 +100,15 @@ void matirf_exact_setup(struct matirf_ctx *x, const struct c0_matirf_conf *c, co
 /* their per-voxel c = W^T B b - l1 from the current data b */
 void matirf_exact_rhs(struct matirf_ctx *x);
 
-/* One level of the solve: mx0 > 0 fixes the data scale (a coarse level
- * solves in the fine level's units); coarse: levels of warm start below it;
- * yout, when not NULL, receives the final TV dual of the exact and apg
- * solvers by columns (2 nz M floats, allocated; NULL for the others). */
-int matirf_level(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-		 const float *const *x, int ny, int nx, double mx0, int coarse, float **yout, struct c0_matirf_result *res);
 /* columns: M raster indices, increasing */
 struct matirf_cols { const int *pixel; size_t M; };
-/* The warm start from 2x2-binned images (levels deep) at the columns
- * (nothing on the whole grid times the depth bins): u0 (nz M, u units) and
- * y0 (the TV dual, 2 nz M). */
-int matirf_coarse_start(const struct c0_matirf_conf *c, int nq, const double *angles, const double *gain,
-			const float *const *x, int ny, int nx, int nz, double mx, int levels, const double *col,
-			const struct matirf_cols *cols, float *u0, float *y0, int *iters);
+/* The warm start from 2x2-binned images (matirf_coarse.c): x binned into
+ * a buffer of nq ((ny + 1) / 2) ((nx + 1) / 2) floats (returned, NULL when
+ * out of memory; xc[q]: its images) and c for that grid (cc); then the
+ * coarse level's result r and TV dual yc (or NULL) brought back at the
+ * columns (nothing on the whole grid times the depth bins): u0 (nz M, u
+ * units) and y0 (the TV dual, 2 nz M). */
+float *matirf_coarse_bin(const struct c0_matirf_conf *c, int nq, const float *const *x, int ny, int nx,
+			 const float *xc[], struct c0_matirf_conf *cc);
+void matirf_coarse_lift(const struct c0_matirf_result *r, const float *yc, int ny, int nx, int nz, double mx,
+			const double *col, const struct matirf_cols *cols, float *u0, float *y0);

@@ -3,8 +3,7 @@
  * solve, support_stream.c: the passes over the frames, support_tiles.c:
  * the loops over tiles, lambda.c); not for other stages. */
 #pragma once
-#include "stages/support.h"
-#include "stages/tiles.h"
+#include "stages/support_util.h"
 #include "ops/covop.h"
 
 /* A tile solves with the whole image's normalisation and lambda, so that
@@ -17,14 +16,6 @@ struct c0_support_scale {
 /* The halves' solves for the FRC and the precision stop at this many
  * iterations. */
 #define C0_SUPPORT_FRC_MAXIT 300
-/* lambda / lambda_max: c->lambda_rel, or the penalty's fixed default */
-double c0_support_lambda_rel(const struct c0_support_conf *c);
-/* The errors that several paths share (their texts are read by users and tests) */
-int c0_support_fail_flat(void);
-int c0_support_fail_short(const struct c0_frames *in);
-/* A covariance accumulator for c's streamed stacks: with its pixel guard and
- * noise map; its pixel (0, 0) is the image's (y0, x0). */
-int c0_support_acc_new(const struct c0_support_conf *c, int W, int H, int d, int x0, int y0, struct c0_cov_acc **a);
 
 /* The covariance operator on cov's window for c's optics. */
 int c0_support_covop(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_covop *op);
@@ -46,9 +37,6 @@ int c0_support_l1_warm(const struct c0_support_conf *c, struct c0_covfit *ctx, i
 /* x refitted without penalty on its own support (x > 0), from x, at most
  * maxit iterations (tolerance C0_SUPPORT_TOL). */
 int c0_support_refit(struct c0_covfit *ctx, int maxit, double *x);
-
-/* The checks on in for c, and its tile grid (halo: two lags). */
-int c0_support_grid(const struct c0_support_conf *c, const struct c0_frames *in, struct c0_tiling *tl);
 
 /* One process's share of a tiled stack (c0_support_stack): the tile grid,
  * its tiles [k0, k1), the rows its windows read [ya, yb) and its interiors

@@ -2,7 +2,7 @@
  * ran, and each step's files must then be there (mean_qNN.tif may be absent
  * as a whole: runs before it was written). */
 #define _POSIX_C_SOURCE 200809L
-#include "app/report_html.h"
+#include "report/html.h"
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"

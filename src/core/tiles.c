@@ -1,4 +1,4 @@
-#include "stages/tiles.h"
+#include "core/tiles.h"
 #include "core/err.h"
 #include "core/mem.h"
 

@@ -1,4 +1,4 @@
-#include "stages/splat.h"
+#include "ops/splat.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -57,7 +57,3 @@ int c0_splat_rows(const float *x, int xrow0, int H, int W, double sigma_px, int 
 	return C0_OK;
 }
 
-int c0_splat(const float *x, int H, int W, double sigma_px, float *out)
-{
-	return c0_splat_rows(x, 0, H, W, sigma_px, 0, H, out);
-}

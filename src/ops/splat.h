@@ -2,9 +2,6 @@
  * a normalised Gaussian of the localisation precision (sum preserved). */
 #pragma once
 
-/* out (H x W) = x (H x W) convolved with a sampled, normalised Gaussian of
- * sd sigma_px (separable, radius ceil(3 sigma), zero outside the field). */
-int c0_splat(const float *x, int H, int W, double sigma_px, float *out);
 /* Rows y0..y1 of it alone into out ((y1 - y0) x W), the same values bit for
  * bit: a band of the fine grid in memory instead of the whole. x holds the
  * rows from xrow0 on, at least those within the radius of the band. */

@@ -1,5 +1,6 @@
-/* The common shape of a linear operator: sizes, forward, adjoint and the
- * context they run on. Two element types, as the operators have them:
+/* The common shape of a linear operator, for the tests' adjoint checks
+ * (tests/check_adjoint.h; the library's solvers take their own callbacks):
+ * sizes, forward, adjoint and the context they run on. Two element types, as the operators have them:
  * double (support, intensity) and float (the MA-TIRF volumes). The adjoint
  * is the adjoint for the Euclidean product unless the operator says
  * otherwise (the banded covariance operator: weight 2 off the diagonal). */
@@ -20,7 +21,7 @@ struct c0_linopf {
 	void (*adjoint)(void *ctx, const float *y, float *x);
 };
 
-/* Adapters for the operators of ops/ and optics/ (defined in ops/linop.c). */
+/* Adapters for the operators of ops/ and optics/ (defined in testkit/linop.c). */
 struct c0_cov;
 struct c0_covop;
 struct c0_psi_omega;

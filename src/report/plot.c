@@ -1,6 +1,6 @@
 /* Line plots as inline SVG: axes with round ticks (decades on a log axis),
  * curves, marked points and a legend, in data units. */
-#include "app/report_html.h"
+#include "report/html.h"
 
 #include <math.h>
 #include <stdio.h>

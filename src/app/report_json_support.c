@@ -1,6 +1,7 @@
 /* The support step's part of report.json: each stack's estimates, its
  * automatic lambda (rule, curve), FRC curve and precision, and the step's parameters. */
-#include "app/report_steps.h"
+#include "app/report_json_support.h"
+#include "io/report.h"
 #include "core/err.h"
 #include "core/mem.h"
 

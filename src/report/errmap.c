@@ -10,7 +10,7 @@
  *   RSP = Pearson correlation of ybar and model,
  *   RSE = RMS of the residual (camera units), read against the noise sd of
  *   a mean image, sqrt(sigma2 / T). */
-#include "app/report_html.h"
+#include "report/html.h"
 #include "optics/psf.h"
 #include "core/band.h"
 #include "core/err.h"

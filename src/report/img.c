@@ -1,6 +1,6 @@
 /* The image figures: colour maps, the page's binning, panels with a scale
  * bar, and the mean, render, depth and error-map sections. */
-#include "app/report_html.h"
+#include "report/html.h"
 #include "core/mem.h"
 
 #include <math.h>

@@ -1,6 +1,6 @@
 /* The plotted sections, each from its part of report.json: the lambda
  * criterion, the drift trajectory, the bleaching fit and the FRC. */
-#include "app/report_html.h"
+#include "report/html.h"
 #include "core/mem.h"
 
 #include <math.h>

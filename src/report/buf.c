@@ -1,6 +1,6 @@
 /* The page's text: appending, escaping, numbers tagged with their
  * report.json path, and PNG images encoded in memory as base64. */
-#include "app/report_html.h"
+#include "report/html.h"
 #include "core/err.h"
 
 #include <ctype.h>

@@ -1,6 +1,6 @@
 /* The other steps' parts of report.json: drift, render, intensity,
  * bleaching, MA-TIRF and the run's parameters. */
-#include "app/report_steps.h"
+#include "app/report_json.h"
 #include "stages/depthfit.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -102,17 +102,17 @@ void c0_report_intensity(cJSON *rep, const struct c0_result *r, const struct c0_
 		cJSON_AddStringToObject(p, "mu_shared", "the MA-TIRF stacks share one mu, the geometric mean of their own (mu_own), or the largest where the camera's fixed pattern is in the means (an offset map given, or the stacks' common pattern found): the depth reads the ratios between angles, so each angle is smoothed alike");
 }
 
-cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_run_conf *c, const struct c0_matirf_conf *m,
+cJSON *c0_report_matirf(cJSON *rep, const char *key, const struct c0_angles *a, const struct c0_matirf_conf *m,
 			const struct c0_matirf_result *res)
 {
-	const int nq = c->nangles;
+	const int nq = a->n;
 	cJSON *j = cJSON_AddObjectToObject(rep, key);
-	c0_report_add_array(j, "angles_deg", c->angles, nq);
-	if (c->ngains)
-		c0_report_add_array(j, "gains", c->gains, c->ngains);
+	c0_report_add_array(j, "angles_deg", a->deg, nq);
+	if (a->ngains)
+		c0_report_add_array(j, "gains", a->gain, a->ngains);
 	double pen[C0_MAX_STACKS];
 	for (int q = 0; q < nq; q++)
-		c0_tirf_p(&m->tirf, c->angles[q], &pen[q]), pen[q] = 1 / pen[q];
+		c0_tirf_p(&m->tirf, a->deg[q], &pen[q]), pen[q] = 1 / pen[q];
 	c0_report_add_array(j, "penetration_depth_nm", pen, nq);
 	cJSON_AddNumberToObject(j, "critical_angle_deg", c0_tirf_critical_deg(&m->tirf));
 	cJSON_AddNumberToObject(j, "n_glass", m->tirf.n_glass);
@@ -161,16 +161,16 @@ void c0_report_pattern(cJSON *rep, const struct c0_pattern_stats *ps)
 	}
 }
 
-void c0_report_matirf_raw(cJSON *j, const struct c0_run_conf *c, const struct c0_matirf_result *res)
+void c0_report_matirf_raw(cJSON *j, const struct c0_matirf_raw *raw, const struct c0_matirf_result *res)
 {
-	cJSON_AddNumberToObject(j, "offset", c->offset);
+	cJSON_AddNumberToObject(j, "offset", raw->offset);
 	if (res->background) {
 		cJSON_AddStringToObject(j, "background", "estimated");
 		cJSON_AddNumberToObject(j, "background_mean", res->background_mean);
-		cJSON_AddNumberToObject(j, "background_smooth_px2", c->background_smooth);
+		cJSON_AddNumberToObject(j, "background_smooth_px2", raw->background_smooth);
 	} else
-		cJSON_AddNumberToObject(j, "background", c->matirf_background);
-	cJSON_AddNumberToObject(j, "psf_fwhm_nm", c->psf_fwhm_nm);
+		cJSON_AddNumberToObject(j, "background", raw->background);
+	cJSON_AddNumberToObject(j, "psf_fwhm_nm", raw->psf_fwhm_nm);
 }
 
 void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct c0_bleach_result *br, int n)

@@ -1,13 +1,14 @@
 /* Adapters from each operator's own calls to the common shape. The casts
  * drop const only to fit one context type; no adapter writes through it
  * except the covariance operator, whose workspaces are its own. */
-#include "ops/linop.h"
+#include "testkit/linop.h"
 #include "core/band.h"
 #include "ops/covop.h"
 #include "ops/diff3.h"
 #include "ops/grad3m.h"
 #include "ops/psi_omega.h"
 #include "ops/tirfop.h"
+#include "testkit/reference.h"
 
 #include <string.h>
 

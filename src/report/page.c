@@ -2,7 +2,7 @@
  * computed, the sections in reading order, then error_qNN.tif and the page
  * written (each atomically; on a failure the files this call wrote are
  * removed, so an error leaves the directory as it was). */
-#include "app/report_html.h"
+#include "report/html.h"
 #include "io/atomic.h"
 #include "io/tiff.h"
 #include "core/err.h"

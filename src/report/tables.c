@@ -1,7 +1,7 @@
 /* The page's text parts: the warnings box, the parameter table (given on
  * the command line, a fixed default, or chosen from the data by a rule),
  * the timings and the command that reproduces the run. */
-#include "app/report_html.h"
+#include "report/html.h"
 
 #include <math.h>
 #include <stdio.h>

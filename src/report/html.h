@@ -4,10 +4,10 @@
  * directory's files only (report.json and the TIFFs), so `col0rme report`
  * makes it for any earlier run; `run` and `support` call it last.
  *
- * The parts: report_buf.c (text, base64, PNG in memory), report_load.c
- * (the files), report_errmap.c (the error map), report_img.c (the image
- * figures), report_plot.c (the SVG plots), report_tables.c (warnings,
- * parameters, timings, command) and report_page.c (the page). */
+ * The parts: buf.c (text, base64, PNG in memory), load.c
+ * (the files), errmap.c (the error map), img.c (the image
+ * figures), plot.c (the SVG plots), tables.c (warnings,
+ * parameters, timings, command) and page.c (the page). */
 #pragma once
 #include "col0rme.h"
 #include "optics/grid.h"
@@ -57,7 +57,7 @@ struct c0_rundir {
 	struct c0_grid grid;             /* camera pixel, PSF, super-resolution factor */
 	float *mean[C0_MAX_STACKS];      /* mean_qNN.tif, camera grid (NULL: not written) */
 	float *bg[C0_MAX_STACKS];        /* background_qNN.tif, camera grid */
-	float *err[C0_MAX_STACKS];       /* the residual (report_errmap.c), camera grid */
+	float *err[C0_MAX_STACKS];       /* the residual (errmap.c), camera grid */
 	struct c0_errstat es[C0_MAX_STACKS];
 	int inten, render;               /* intensity_qNN.tif and render.tif (fine grid) are there, checked;
 					  * read plane by plane (c0_rundir_plane) where drawn */

@@ -1,0 +1,215 @@
+/* The drift's refinement (drift_parts.h). */
+#include "stages/drift_parts.h"
+#include "core/err.h"
+#include "core/mem.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define REFINE 8      /* at most this many rounds of refinement against the mean of all blocks */
+#define REFINE_TOL 0.01   /* ... until no block moves by more than this (pixels) in a round */
+#define SIGNIF 6   /* an axis is corrected when its drift exceeds this many noise sds */
+
+/* block k moved back by its shift, into tmp */
+static int moved_back(struct c0_drift *d, int k, float *tmp)
+{
+	memcpy(tmp, d->bm[k], (size_t)d->H * d->W * sizeof *tmp);
+	return c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+}
+
+/* block k moved back, re-measured against x->ref */
+static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tmp, int k)
+{
+	const size_t n = (size_t)d->H * d->W;
+	int st = moved_back(d, k, tmp);
+	for (size_t i = 0; i < n; i++)
+		img[i] = tmp[i];
+	double rx, ry;
+	drift_shift_of(x, img, 1, &rx, &ry);
+	d->bx[k] += rx, d->by[k] += ry;
+	return st;
+}
+
+/* The first estimates correlate each block with the first, one noisy block
+ * mean. Refined: the reference becomes the mean of all blocks moved back by
+ * their shifts, and each block is re-measured after its own shift has been
+ * undone, so that the sub-pixel fit works near zero where it is unbiased.
+ * The trajectory stays relative to the first block.
+ * Rounds on blocks k0..k1-1 until they stop moving (each round takes a part
+ * of what is left: 2 rounds left a dim stack's drift 30 % short); par: the
+ * blocks are re-measured side by side (one stack: the threads are not taken
+ * by the stacks), each thread but the first with transforms of its own */
+static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1, int par)
+{
+	const size_t n = (size_t)d->H * d->W;
+	int st = C0_OK;
+	double moved = INFINITY;
+	for (int round = 0; round < REFINE && moved > REFINE_TOL && k1 - k0 > 1 && !st; round++) {
+		moved = 0;
+		memset(ref, 0, n * sizeof *ref);
+		for (int k = k0; k < k1 && !st; k++) {
+			st = moved_back(d, k, tmp);
+			for (size_t i = 0; i < n; i++)
+				ref[i] += tmp[i];
+		}
+		if (st)
+			break;
+		drift_spectrum(x, ref);
+		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
+		struct c0_first_fail fail = { 0 };
+#pragma omp parallel if (par)
+		{
+			struct xcorr own, *y = x;
+			double *img = ref;
+			float *t = tmp;
+			int ts = C0_OK;
+			if (omp_get_thread_num() > 0) {
+				y = &own, ts = drift_xcorr_clone(&own, x);
+				img = c0_alloc(n, sizeof *img), t = c0_alloc(n, sizeof *t);
+				if (!ts && (!img || !t))
+					ts = C0_ENOMEM;
+			}
+#pragma omp for schedule(dynamic, 1) reduction(max : moved)
+			for (int k = k0; k < k1; k++) {
+				const double x0 = d->bx[k], y0 = d->by[k];
+				if (!ts)
+					ts = remeasure(d, y, img, t, k);
+				moved = fmax(moved, fmax(fabs(d->bx[k] - x0), fabs(d->by[k] - y0)));
+			}
+			c0_first_fail_note(&fail, ts);
+			if (y != x)
+				drift_xcorr_free(&own), free(img), free(t);
+		}
+		if (fail.code)
+			st = c0_first_fail_raise(&fail);
+	}
+	return st;
+}
+
+/* mean time and value of blocks k0..k1-1 of v, and their centred sums */
+static void block_moments(const double *bt, const double *v, int k0, int k1, double *mt, double *mv, double *stt, double *stv)
+{
+	const int n = k1 - k0;
+	*mt = *mv = 0;
+	for (int k = k0; k < k1; k++)
+		*mt += bt[k] / n, *mv += v[k] / n;
+	for (int k = k0; k < k1; k++)
+		*stt += (bt[k] - *mt) * (bt[k] - *mt), *stv += (bt[k] - *mt) * (v[k] - *mv);
+}
+
+/* The stacks' levels, by continuity. Refined against its own mean, a
+ * stack keeps the mean level of its chained first estimates, and those
+ * shrink the small block-to-block shifts (the sub-pixel fit of a noisy
+ * peak): each stack sat short by part of its own drift, and the shortfall
+ * added up over the angles (5 x 500 frames, 200 nm: 64 nm short at the
+ * last). Each stack is moved onto the line through the stack before: one
+ * slope fitted to both stacks' blocks, each stack at its own level (a
+ * stack alone may have only a few blocks). */
+static void join_stacks(struct c0_drift *d, const int *k0, double *jv)
+{
+	for (int k = 0; k < k0[1]; k++)
+		jv[k] = 0;
+	for (int q = 1; q < d->nq; q++) {
+		double v0 = k0[q] > 0 ? jv[k0[q] - 1] : 0, add = 0;
+		if (k0[q] > k0[q - 1] && k0[q + 1] > k0[q])
+			for (int a = 0; a < 2; a++) {
+				double *v = a ? d->by : d->bx, pt, pv, t, m, stt = 0, stv = 0;
+				block_moments(d->bt, v, k0[q - 1], k0[q], &pt, &pv, &stt, &stv);
+				block_moments(d->bt, v, k0[q], k0[q + 1], &t, &m, &stt, &stv);
+				const double slope = stt > 0 ? stv / stt : 0, dv = pv + slope * (t - pt) - m;
+				for (int k = k0[q]; k < k0[q + 1]; k++)
+					v[k] += dv;
+				/* the join's variance in units of a block's: the two
+				 * levels' and the slope's over the stacks' distance */
+				add = 1.0 / (k0[q] - k0[q - 1]) + 1.0 / (k0[q + 1] - k0[q]) + (stt > 0 ? (t - pt) * (t - pt) / stt : 0);
+			}
+		for (int k = k0[q]; k < k0[q + 1]; k++)
+			jv[k] = v0 + add;
+	}
+}
+
+/* Interleaved stacks share one clock: their blocks k were recorded
+ * together, so the trajectory is the stacks' mean, each stack at its own
+ * mean level (its blocks are only known relative to each other; a
+ * correlation across angles would read their different images as a
+ * shift). The block means are no longer needed (same counts: checked). */
+static void average_stacks(struct c0_drift *d)
+{
+	const int nq = d->nq, nb = d->k0[1];
+	for (int k = 0; k < d->nb; k++)
+		free(d->bm[k]), d->bm[k] = NULL;
+	double lx[MAXQ], ly[MAXQ];
+	for (int i = 0; i < nq; i++) {
+		lx[i] = ly[i] = 0;
+		for (int k = d->k0[i]; k < d->k0[i + 1]; k++)
+			lx[i] += d->bx[k] / nb, ly[i] += d->by[k] / nb;
+	}
+	for (int k = 0; k < nb; k++) {
+		double t = 0, x = 0, y = 0;
+		for (int i = 0; i < nq; i++) {
+			const int j = d->k0[i] + k;
+			t += d->bt[j] / nq, x += (d->bx[j] - lx[i]) / nq, y += (d->by[j] - ly[i]) / nq;
+		}
+		d->bt[k] = t, d->bx[k] = x, d->by[k] = y;   /* k <= j: read before written */
+	}
+	d->nb = nb;
+}
+
+int drift_refine(struct c0_drift *d)
+{
+	/* each stack against the mean of its own blocks: an angle changes the
+	 * image (depth-dependent excitation), which a correlation across angles
+	 * would read as a shift. The stacks' blocks are apart: side by side. */
+	const int *k0 = d->k0;
+	struct c0_first_fail fail = { 0 };
+	const size_t n = (size_t)d->H * d->W;
+#pragma omp parallel if (d->nq > 1)
+	{
+		struct xcorr x;
+		double *ref = c0_alloc(n, sizeof *ref);
+		float *tmp = c0_alloc(n, sizeof *tmp);
+		int st = drift_xcorr_init(&x, d->H, d->W, d->sigma);
+		if (!st && (!ref || !tmp))
+			st = C0_ENOMEM;
+#pragma omp for schedule(dynamic, 1)
+		for (int q = 0; q < d->nq; q++)
+			if (!st)
+				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1], d->nq == 1);
+		c0_first_fail_note(&fail, st);
+		drift_xcorr_free(&x);
+		free(ref), free(tmp);
+	}
+	if (fail.code)
+		return c0_first_fail_raise(&fail);
+	if (d->interleaved)
+		average_stacks(d);
+	double *jv = c0_alloc((size_t)d->nb, sizeof *jv);
+	if (!jv)
+		return C0_ENOMEM;
+	if (!d->interleaved)
+		join_stacks(d, k0, jv);
+	for (int k = d->nb - 1; k >= 0; k--)
+		d->bx[k] -= d->bx[0], d->by[k] -= d->by[0];
+	/* an axis whose shifts stay within SIGNIF noise sds of zero has no
+	 * drift we can tell from the estimates' own noise: undoing it would
+	 * only add jitter. The noise sd comes from second differences, which a
+	 * smooth drift does not feed (var of a second difference = 6 var); a
+	 * block in a later stack also carries the joins' noise (jv). */
+	for (int a = 0; a < 2 && d->nb >= 3; a++) {
+		double *v = a ? d->by : d->bx, s2 = 0, mx = 0;
+		for (int k = 1; k + 1 < d->nb; k++)
+			s2 += pow(v[k + 1] - 2 * v[k] + v[k - 1], 2);
+		for (int k = 0; k < d->nb; k++)
+			mx = fmax(mx, fabs(v[k]) / sqrt(1 + jv[k]));
+		d->noise_px[a] = sqrt(s2 / (d->nb - 2) / 6);
+		if (mx <= SIGNIF * d->noise_px[a])
+			memset(v, 0, (size_t)d->nb * sizeof *v), d->off[a] = 1;
+	}
+	free(jv);
+	d->max_px = 0;
+	for (int k = 0; k < d->nb; k++)
+		d->max_px = fmax(d->max_px, hypot(d->bx[k], d->by[k]));
+	return C0_OK;
+}
