@@ -180,22 +180,22 @@ def _bind(f, args, kwargs):
 
 # ---- the three calls; their keywords and docs are made from the library's table below ----
 
-def run(stacks, *args, **kwargs):
-    values, other = _bind(run, (stacks,) + args, kwargs)
+def _on_stacks(fn, entry, stacks, args, kwargs):
+    """run and support: bind the keywords, then one library call on the stacks"""
+    values, other = _bind(fn, (stacks,) + args, kwargs)
     conf = _Conf(values)
     arr, n, keep = _stacks(other["stacks"])
-    r = _result(_call(_L().c0_run, conf, other.get("progress"), arr, n))
+    r = _result(_call(getattr(_L(), entry), conf, other.get("progress"), arr, n))
     del keep
     return r
+
+
+def run(stacks, *args, **kwargs):
+    return _on_stacks(run, "c0_run", stacks, args, kwargs)
 
 
 def support(stacks, *args, **kwargs):
-    values, other = _bind(support, (stacks,) + args, kwargs)
-    conf = _Conf(values)
-    arr, n, keep = _stacks(other["stacks"])
-    r = _result(_call(_L().c0_run_support, conf, other.get("progress"), arr, n))
-    del keep
-    return r
+    return _on_stacks(support, "c0_run_support", stacks, args, kwargs)
 
 
 def matirf(images, *args, **kwargs):
