@@ -59,16 +59,24 @@ static void test_simulation(void)
 	c0_simulation_free(s);
 }
 
-static void test_steps(void)
+/* The simulation's three stacks in st, and a conf with their angles and optics */
+static struct c0_run_conf *stacks3(struct c0_simulation *sim, struct c0_stack st[3])
 {
-	struct c0_simulation *sim = simulate();
-	struct c0_stack st[3] = { { 0 } };
 	for (int q = 0; q < 3; q++)
 		st[q].data = c0_simulation_stack(sim, q, &st[q].frames, &st[q].height, &st[q].width);
 	struct c0_run_conf *c = c0_run_conf_new();
 	CHECK(c && c->srf == 4);   /* the defaults */
 	CHECK(c0_run_conf_set(c, "angles", "62,65,68") == C0_OK && c0_run_conf_set(c, "pixel_nm", "100") == C0_OK &&
-	      c0_run_conf_set(c, "fwhm_nm", "229") == C0_OK && c0_run_conf_set(c, "depth_pool_nm", "0") == C0_OK &&
+	      c0_run_conf_set(c, "fwhm_nm", "229") == C0_OK);
+	return c;
+}
+
+static void test_steps(void)
+{
+	struct c0_simulation *sim = simulate();
+	struct c0_stack st[3] = { { 0 } };
+	struct c0_run_conf *c = stacks3(sim, st);
+	CHECK(c0_run_conf_set(c, "depth_pool_nm", "0") == C0_OK &&
 	      c0_run_conf_set(c, "bleach", "off") == C0_OK);   /* the volume from the intensities as returned */
 	/* the drift of a run comes from all its stacks, that of one stack from it alone */
 	CHECK(c0_run_conf_set(c, "drift", "off") == C0_OK);
@@ -144,11 +152,7 @@ static void test_progress_cancel(void)
 {
 	struct c0_simulation *sim = simulate();
 	struct c0_stack st[3] = { { 0 } };
-	for (int q = 0; q < 3; q++)
-		st[q].data = c0_simulation_stack(sim, q, &st[q].frames, &st[q].height, &st[q].width);
-	struct c0_run_conf *c = c0_run_conf_new();
-	CHECK(c && c0_run_conf_set(c, "angles", "62,65,68") == C0_OK && c0_run_conf_set(c, "pixel_nm", "100") == C0_OK &&
-	      c0_run_conf_set(c, "fwhm_nm", "229") == C0_OK);
+	struct c0_run_conf *c = stacks3(sim, st);
 	struct heard h = { 0 };
 	c0_run_conf_set_progress(c, listen, &h);
 	struct c0_result *r = NULL;
