@@ -3,6 +3,7 @@
  * middle of a run (libgomp's fatal error when a thread cannot be made),
  * remove the staging directory before the process ends. The library
  * installs no handler: a host program's signals are its own. */
+#define _POSIX_C_SOURCE 200809L   /* sigaction under -std=c11 (clang does not imply it) */
 #include "cli/cmdkit.h"
 
 #include <signal.h>
