@@ -24,8 +24,9 @@ import java.util.concurrent.TimeUnit;
 /** The col0rme executable, run as a child process: found, asked for its
  *  options (--help-json), and run with its progress on ImageJ's status line
  *  and progress bar (from --progress-json: the library's progress callback,
- *  one JSON line per call on stderr, cli/cmdkit.c); Escape or Cancel ends it (SIGTERM: the CLI removes its
- *  staging directory, so no partial output folder is left). */
+ *  one JSON line per call on stderr, cli/cmdkit.c); Escape or Cancel ends
+ *  it (SIGTERM: the CLI removes its staging directory, so no partial output
+ *  folder is left). */
 final class Cli {
 	static final String PREF = "col0rme.executable";
 	private static final Map<String, Map<String, Map<String, Object>>> helpCache = new HashMap<String, Map<String, Map<String, Object>>>();
