@@ -215,7 +215,7 @@ def test_result_calibration_and_read_round_trip(sim, tmp_path):
 def test_keywords_match_the_commands(cli):
     """run(), support() and matirf() take what `col0rme run/support/matirf` take (the CLI-only flags aside)"""
     import json as js
-    cli_only = {"outdir", "force", "verbose", "channel", "no_drift", "threads"}
+    cli_only = {"outdir", "force", "verbose", "progress_json", "channel", "no_drift", "threads"}
     for name, f in (("run", col0rme.run), ("support", col0rme.support), ("matirf", col0rme.matirf)):
         h = js.loads(cli(name, "--help-json").stdout)
         want = {o["param"] for o in h["options"]} - cli_only

@@ -6,6 +6,7 @@
 #include "app/sim_report.h"
 #include "io/outdir.h"
 #include "core/err.h"
+#include "core/progress.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,7 +33,7 @@ static int fail(void)
 }
 
 /* The options into c: -1 to go on, else the command's exit code. */
-static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **outdir, int *force)
+static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **outdir, int *force, int *progress_json)
 {
 	struct c0_sim_conf c = *conf;
 	int verbose = 0, nangles = c.nangles, nz = 2, ndrift = 0;
@@ -101,6 +102,7 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 		{ "dark-frames", 0, C0_OPT_INT, &c.dark_frames, "N", "scmos: frames of dark.tif (0: none)", NULL, 0, NULL },
 		{ "force", 0, C0_OPT_FLAG, force, NULL, "write into a non-empty output directory", NULL, 0, NULL },
 		{ "verbose", 0, C0_OPT_FLAG, &verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL },
+		{ "progress-json", 0, C0_OPT_FLAG, progress_json, NULL, C0_PROGRESS_JSON_HELP, NULL, 0, NULL },
 	};
 	const struct c0_cmd_spec spec = { "simulate", "[options] -o OUTDIR",
 		"Simulate one blinking TIRF stack per angle (uint16, calibrated) with ground truth:\n"
@@ -115,8 +117,7 @@ static int parse(int argc, char **argv, struct c0_sim_conf *conf, const char **o
 	if (rc)
 		return rc == 1 ? 0 : 2;
 	c.seed = (uint64_t)seed;
-	c.z_min_nm = zr[0];
-	c.z_max_nm = nz > 1 ? zr[1] : zr[0];
+	c.z_min_nm = zr[0], c.z_max_nm = nz > 1 ? zr[1] : zr[0];
 	c.nangles = nangles;
 	if (c0_sim_add_repeat(&c))
 		return fail();
@@ -138,7 +139,7 @@ int cmd_simulate(int argc, char **argv)
 	struct c0_sim_conf c;
 	c0_sim_defaults(&c);
 	const char *outdir = NULL;
-	int force = 0, rc = parse(argc, argv, &c, &outdir, &force);
+	int force = 0, json = 0, rc = parse(argc, argv, &c, &outdir, &force, &json);
 	if (rc >= 0)
 		return rc;
 	struct c0_outdir out;
@@ -146,7 +147,13 @@ int cmd_simulate(int argc, char **argv)
 	if (c0_sim_check(&c) || c0_outdir_open(&out, outdir, force))
 		return fail();
 	c0_cli_guard(&out);
-	int st = c0_outdir_finish(&out, c0_sim_write(&c, &out, argc, argv, &res));
+	/* --progress-json: the simulator's progress through the run's callback, one stage */
+	struct c0_progress_sink sink;
+	double t0 = 0;
+	c0_progress_attach(&sink, json ? c0_cli_progress_json : NULL, &t0);
+	c0_progress_stage("simulate");
+	int st = c0_progress_detach(&sink, c0_sim_write(&c, &out, argc, argv, &res));
+	st = c0_outdir_finish(&out, st);
 	c0_cli_unguard();
 	if (st) {
 		c0_sim_result_free(&res);

@@ -39,12 +39,22 @@ static int progress_line(const char *stage, double fraction, void *user)
 	return 0;
 }
 
+int c0_cli_progress_json(const char *stage, double fraction, void *user)
+{
+	double *t0 = user, now = c0_now();
+	if (fraction == 0)
+		*t0 = now;
+	fprintf(stderr, "{\"progress\":{\"stage\":\"%s\",\"fraction\":%.4f,\"seconds\":%.3f}}\n", stage, fraction, now - *t0);
+	fflush(stderr);
+	return 0;
+}
+
 int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *params, const struct c0_opt *extra,
 		 int nextra, int argc, char **argv)
 {
 	memset(k, 0, sizeof *k);
 	c0_conf_cli_init(&k->m);
-	int no = c0_conf_cli_table(&k->m, params, &k->outdir, &k->force, &k->verbose, k->opts);
+	int no = c0_conf_cli_table(&k->m, params, &k->outdir, &k->force, &k->verbose, &k->progress_json, k->opts);
 	if (nextra)
 		memcpy(k->opts + no, extra, (size_t)nextra * sizeof *extra);
 	spec->opts = k->opts, spec->nopts = no + nextra;
@@ -52,7 +62,7 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	const char *pnames[64] = { "outdir" };
 	for (int i = 0; params[i]; i++)
 		pnames[1 + i] = params[i];
-	pnames[no - 2] = "force", pnames[no - 1] = "verbose";
+	pnames[no - 3] = "force", pnames[no - 2] = "verbose", pnames[no - 1] = "progress_json";
 	for (int i = 1; i < argc && strcmp(argv[i], "--"); i++)
 		if (!strcmp(argv[i], "--help-json")) {
 			c0_opts_help_json(spec, pnames);
@@ -68,8 +78,8 @@ int c0_cli_start(struct c0_cli *k, struct c0_cmd_spec *spec, const char *const *
 	}
 	for (int i = 0; i < k->n; i++)
 		k->stacks[i].path = k->paths[i] = k->names[i];
-	if (c0_progress_enabled() && c0_comm_rank() == 0)
-		c0_run_conf_set_progress(&k->m.c, progress_line, &k->t0);
+	if ((k->progress_json || c0_progress_enabled()) && c0_comm_rank() == 0)
+		c0_run_conf_set_progress(&k->m.c, k->progress_json ? c0_cli_progress_json : progress_line, &k->t0);
 	return 0;
 }
 

@@ -11,7 +11,7 @@
 struct c0_cli {
 	struct c0_conf_cli m;
 	const char *outdir;
-	int force, verbose;
+	int force, verbose, progress_json;
 	struct c0_opt opts[64];
 	char *paths[C0_MAX_STACKS];  /* after multi-channel files were expanded (FILE:cK) */
 	char **names;                /* their storage */
@@ -19,8 +19,13 @@ struct c0_cli {
 	int n;
 	struct c0_outdir out;
 	int opened;
-	double t0;                   /* the progress line's stage start */
+	double t0;                   /* the progress line's (or JSON line's) stage start */
 };
+
+/* --progress-json: the library's progress callback (user: a double, the
+ * stage's start) as one JSON line per call on stderr,
+ * {"progress":{"stage":S,"fraction":F,"seconds":T}}, flushed. */
+int c0_cli_progress_json(const char *stage, double fraction, void *user);
 
 /* Parses argv with spec (whose opts are filled here from params and the
  * nextra rows of extra); then the named choices. 0: go on; 1: help was

@@ -80,12 +80,13 @@ int c0_conf_cli_opts(struct c0_conf_cli *m, const char *const *params, struct c0
 }
 
 int c0_conf_cli_table(struct c0_conf_cli *m, const char *const *params, const char **outdir, int *force, int *verbose,
-		      struct c0_opt *o)
+		      int *progress_json, struct c0_opt *o)
 {
 	o[0] = (struct c0_opt){ "output", 'o', C0_OPT_STRING, outdir, "DIR", "output directory (created; must be empty unless --force)", NULL, 0, NULL };
 	int n = 1 + c0_conf_cli_opts(m, params, o + 1);
 	o[n++] = (struct c0_opt){ "force", 0, C0_OPT_FLAG, force, NULL, "write into a non-empty output directory", NULL, 0, NULL };
 	o[n++] = (struct c0_opt){ "verbose", 0, C0_OPT_FLAG, verbose, NULL, "show progress even when not on a terminal", NULL, 0, NULL };
+	o[n++] = (struct c0_opt){ "progress-json", 0, C0_OPT_FLAG, progress_json, NULL, C0_PROGRESS_JSON_HELP, NULL, 0, NULL };
 	return n;
 }
 

@@ -27,10 +27,12 @@ void c0_conf_cli_init(struct c0_conf_cli *m);
 /* Appends the rows of the NULL-terminated parameter names to o (room
  * needed: one per name); returns how many. */
 int c0_conf_cli_opts(struct c0_conf_cli *m, const char *const *params, struct c0_opt *o);
-/* A command's whole table: -o, the parameters' rows, --force, --verbose
- * (room needed: the names plus 3); returns the row count. */
+/* --progress-json's help (the commands that run the method, and simulate) */
+#define C0_PROGRESS_JSON_HELP "progress as one JSON line per update on stderr (for programs; no progress line)"
+/* A command's whole table: -o, the parameters' rows, --force, --verbose,
+ * --progress-json (room needed: the names plus 4); returns the row count. */
 int c0_conf_cli_table(struct c0_conf_cli *m, const char *const *params, const char **outdir, int *force, int *verbose,
-		      struct c0_opt *o);
+		      int *progress_json, struct c0_opt *o);
 /* After parsing: the named choices into m->c, fixed-length lists' lengths. */
 int c0_conf_cli_finish(struct c0_conf_cli *m);
 /* A command's own parameter name and its flag. */

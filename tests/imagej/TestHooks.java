@@ -28,13 +28,13 @@ public class TestHooks {
 		return text;
 	}
 
-	/** Presses Escape once a child "col0rme COMMAND --verbose" (the run, not
+	/** Presses Escape once a child "col0rme COMMAND --progress-json" (the run, not
 	 *  its --help-json) has run for a moment. */
 	public static String escapeWhileRunning(final String command) {
 		Thread t = new Thread(() -> {
 			try {
 				while (!ProcessHandle.current().descendants().anyMatch(p -> p.info().arguments()
-					.map(a -> a.length > 1 && a[0].equals(command) && a[1].equals("--verbose")).orElse(false)))
+					.map(a -> a.length > 1 && a[0].equals(command) && a[1].equals("--progress-json")).orElse(false)))
 					Thread.sleep(20);
 				Thread.sleep(300);
 			} catch (InterruptedException e) {
@@ -157,5 +157,17 @@ public class TestHooks {
 
 	public static String seen() {
 		return seen;
+	}
+
+	/** The stages the plugin's last run with progress finished, from the
+	 *  CLI's --progress-json lines (col0rme.Cli.stagesDone, package-private). */
+	public static String stagesDone() {
+		try {
+			java.lang.reflect.Field f = Class.forName("col0rme.Cli").getDeclaredField("stagesDone");
+			f.setAccessible(true);
+			return (String) f.get(null);
+		} catch (Exception e) {
+			return "unreadable: " + e;
+		}
 	}
 }

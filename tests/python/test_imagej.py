@@ -120,10 +120,12 @@ out1 = os.path.join(scratch, "run_headless")
 raw1 = os.path.join(scratch, "volume_headless.raw")
 rc, so, se = imagej(f"""
 d = call("col0rme.Col0rme.demo", "{demo}");
+print("demo stages: " + call("TestHooks.stagesDone"));
 out = call("col0rme.Col0rme.run3d", "angles={ANGLES} pixel=100 fwhm=229 output={out1} other=[--threads 2]");
 selectImage("volume.tif");
 getVoxelSize(w, h, d, unit);
 print("voxel " + w + " " + h + " " + d + " " + unit + " slices " + nSlices);
+print("run stages: " + call("TestHooks.stagesDone"));
 call("TestHooks.saveRaw", "volume.tif", "{raw1}");
 selectImage("depth.tif");
 getVoxelSize(w, h, d, unit);
@@ -132,9 +134,15 @@ print("depth voxel " + w + " " + unit + ", " + call("TestHooks.depthInfo", "dept
 print(so, se)
 cli1 = os.path.join(scratch, "run_cli")
 stacks = [os.path.join(demo, "data", s) for s in STACKS.split(",")]
-r = subprocess.run([exe, "run", "--angles", ANGLES, "--pixel-size", "100", "--fwhm", "229", "-o", cli1] + stacks,
+r = subprocess.run([exe, "run", "--progress-json", "--angles", ANGLES, "--pixel-size", "100", "--fwhm", "229", "-o", cli1] + stacks,
                    capture_output=True, text=True, timeout=300)
 check(r.returncode == 0, "the CLI on the demo data")
+# the stages the CLI's JSON lines finish, in order: the plugin's status line read the same lines
+cli_stages = " ".join(json.loads(l)["progress"]["stage"] for l in r.stderr.splitlines()
+                      if l.startswith('{"progress":') and json.loads(l)["progress"]["fraction"] == 1)
+check(cli_stages.split()[:2] == ["drift", "support"] and "matirf" in cli_stages, "the CLI's --progress-json names its stages: " + cli_stages)
+check("run stages: " + cli_stages + "\n" in so, "headless: the plugin's progress came from the JSON lines (the run's stages, in order)")
+check("demo stages: simulate\n" in so, "headless: Demo data's progress came from simulate's JSON lines")
 check(rc == 0 and os.path.isfile(os.path.join(out1, "volume.tif")), "headless: the plugin ran on the demo data (exit 0)")
 check(open(os.path.join(out1, "volume.tif"), "rb").read() == open(os.path.join(cli1, "volume.tif"), "rb").read(),
       "headless: the plugin's volume.tif equals the CLI's, byte for byte")
@@ -142,7 +150,8 @@ check(open(raw1, "rb").read() == volume_bytes(os.path.join(cli1, "volume.tif")),
       "headless: the volume opened in ImageJ equals the CLI's volume.tif, bit for bit")
 check("voxel 25 25 20 nm slices 20" in so, "headless: the opened volume is z-calibrated in nm (25 x 25 x 20 nm)")
 argv = json.load(open(os.path.join(out1, "report.json")))["argv"]
-check("--verbose" in argv and argv[argv.index("--angles") + 1] == ANGLES, "the plugin ran col0rme with --verbose and the angles")
+check("--progress-json" in argv and "--verbose" not in argv and argv[argv.index("--angles") + 1] == ANGLES,
+      "the plugin ran col0rme with --progress-json (not --verbose) and the angles")
 check(argv[argv.index("--threads") + 1] == "2", "other=[--threads 2] reached col0rme")
 check("depth voxel 25 nm, unit nm colour true range 0.0-400.0" in so,
       "headless: depth.tif opened in nm, values in nm, a depth lookup table over 0-400 nm")

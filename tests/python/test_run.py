@@ -169,8 +169,64 @@ def test_bad_inputs(tmp):
     check(not os.path.exists(out + "3"), "nothing written by refused intensity")
 
 
+def progress_lines(stderr):
+    """the --progress-json lines of stderr, parsed: [(stage, fraction, seconds)]"""
+    out = []
+    for l in stderr.splitlines():
+        if l.startswith("{"):
+            p = json.loads(l)["progress"]
+            out.append((p["stage"], p["fraction"], p["seconds"]))
+    return out
+
+
+def test_progress_json(tmp):
+    """--progress-json: the library's progress callback as one JSON line per
+    call on stderr; every stage the run reports has lines, its fractions in
+    [0, 1] never go back, it starts at 0 and ends at 1; without the flag no
+    JSON (and --verbose keeps its human lines)"""
+    data = os.path.join(tmp, "pj_data")
+    p = cli("simulate", "--progress-json", "--seed", "5", "-o", data, "--width", "24", "--height", "20", "--frames", "120")
+    check(p.returncode == 0, "simulate --progress-json: %s" % p.stderr)
+    sim = progress_lines(p.stderr)
+    check([s for s, f, t in sim if f in (0, 1)] == ["simulate", "simulate"], "simulate --progress-json: its one stage, 0 then 1")
+    ang = ",".join("%.6g" % a for a in angles_of(data))
+    stacks = sorted(os.path.join(data, f) for f in os.listdir(data) if f.startswith("stack_q"))
+    images = [os.path.join(tmp, "pj_run", "intensity_q%02d.tif" % (q + 1)) for q in range(len(stacks))]
+    runs = [("run", ["--fwhm", "229", "--angles", ang] + stacks, ["drift", "support", "intensity", "render", "bleaching", "matirf"]),
+            ("support", ["--fwhm", "229"] + stacks, ["drift", "support"]),
+            ("matirf", ["--angles", ang] + images, ["matirf"])]
+    for cmd, args, want in runs:
+        out = os.path.join(tmp, "pj_" + cmd)
+        p = cli(cmd, "--progress-json", "-o", out, *args)
+        check(p.returncode == 0, "%s --progress-json: %s" % (cmd, p.stderr))
+        lines = progress_lines(p.stderr)
+        # (text mode reads a \r as a line end: a redrawn progress line would show here)
+        other = [l for l in p.stderr.splitlines() if l.strip() and not l.startswith("{")]
+        check(all(l.startswith("col0rme %s: warning:" % cmd) for l in other),
+              "%s: the other stderr lines are warnings, no progress line: %s" % (cmd, other))
+        stages = []
+        for s, f, t in lines:
+            if not stages or stages[-1][0] != s:
+                stages.append((s, []))
+            stages[-1][1].append(f)
+            check(0 <= f <= 1 and t >= 0, "%s: %s fraction %g in [0, 1], %g s" % (cmd, s, f, t))
+        names = [s for s, fs in stages]
+        check(len(set(names)) == len(names), "%s: each stage reported once, in one run of lines: %s" % (cmd, names))
+        for s, fs in stages:
+            check(fs[0] == 0 and fs[-1] == 1 and all(a <= b for a, b in zip(fs, fs[1:])),
+                  "%s: stage %s goes 0 to 1 and never back (%s)" % (cmd, s, fs))
+        check(names == want, "%s --progress-json: the stages %s (want %s)" % (cmd, names, want))
+    out = os.path.join(tmp, "pj_plain")
+    p = cli("run", "--fwhm", "229", "--angles", ang, "-o", out, *stacks)
+    check(p.returncode == 0 and "{" not in p.stderr, "run without --progress-json: no JSON on stderr")
+    p = cli("run", "--verbose", "--fwhm", "229", "--angles", ang, "-o", out + "v", *stacks)
+    check(p.returncode == 0 and "{" not in p.stderr and "support" in p.stderr and "100%" in p.stderr,
+          "run --verbose: the human progress lines, no JSON")
+
+
 with tempfile.TemporaryDirectory() as tmp:
     test_bad_inputs(tmp)
+    test_progress_json(tmp)
     if MODE == "full":
         test_accuracy(tmp)
         test_musij(tmp)

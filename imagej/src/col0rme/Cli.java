@@ -20,18 +20,18 @@ import java.util.HashMap;
 import java.util.List;
 import java.util.Map;
 import java.util.concurrent.TimeUnit;
-import java.util.regex.Matcher;
-import java.util.regex.Pattern;
 
 /** The col0rme executable, run as a child process: found, asked for its
  *  options (--help-json), and run with its progress on ImageJ's status line
- *  and progress bar; Escape or Cancel ends it (SIGTERM: the CLI removes its
- *  staging directory, so no partial output folder is left). */
+ *  and progress bar (from --progress-json: the library's progress callback,
+ *  one JSON line per call on stderr, cli/cmdkit.c); Escape or Cancel ends
+ *  it (SIGTERM: the CLI removes its staging directory, so no partial output
+ *  folder is left). */
 final class Cli {
 	static final String PREF = "col0rme.executable";
 	private static final Map<String, Map<String, Map<String, Object>>> helpCache = new HashMap<String, Map<String, Map<String, Object>>>();
-	/* "stage   42%   1.3s" (the library's progress callback as the CLI draws it, cli/cmdkit.c; an ETA may follow) */
-	private static final Pattern PROGRESS = Pattern.compile("^(.*?)\\s+(\\d+)%\\s+([0-9.]+)s(?:\\s+ETA\\s+([0-9.]+)s)?\\s*$");
+	/* the stages the last run with progress finished, in order, as its JSON lines told them (read by the tests) */
+	static volatile String stagesDone = "";
 
 	final String exe;
 
@@ -101,13 +101,17 @@ final class Cli {
 		return m;
 	}
 
-	/** Runs col0rme with args; returns its standard output. Progress lines
-	 *  drive the status line when progress is set; a non-zero exit throws
-	 *  the CLI's error line. */
+	/** Runs col0rme with args; returns its standard output. With progress
+	 *  set, --progress-json is passed and its lines drive the status line;
+	 *  a non-zero exit throws the CLI's error line. */
 	String run(List<String> args, boolean progress) throws Failure {
 		List<String> cmd = new ArrayList<String>();
 		cmd.add(exe);
 		cmd.addAll(args);
+		if (progress) {
+			cmd.add(2, "--progress-json");   /* after the subcommand: one of its flags */
+			stagesDone = "";
+		}
 		final Process p;
 		try {
 			p = new ProcessBuilder(cmd).start();
@@ -160,7 +164,7 @@ final class Cli {
 	}
 
 	/* Reads a stream to its end on its own thread: into out, or as lines
-	 * (split at \r too: progress redraws its line) into lines and the status. */
+	 * into lines and the status. */
 	private static Thread drain(final InputStream in, final StringBuilder out, final List<String> lines, final boolean progress) {
 		Thread t = new Thread(new Runnable() {
 			public void run() {
@@ -195,18 +199,33 @@ final class Cli {
 	private static void take(String l, List<String> lines, boolean progress) {
 		if (l.trim().isEmpty())
 			return;
-		Matcher m = PROGRESS.matcher(l);
-		if (m.matches()) {
-			if (progress) {
-				IJ.showProgress(Integer.parseInt(m.group(2)) / 100.0);
-				IJ.showStatus("col0rme: " + m.group(1).trim() + " " + m.group(2) + "%"
-					+ (m.group(4) != null ? ", ETA " + m.group(4) + " s" : "") + " (Esc cancels)");
-			}
+		if (l.startsWith("{\"progress\":")) {
+			if (progress)
+				show(l);
 			return;
 		}
-		if (progress && l.contains(" done in "))
-			IJ.showStatus("col0rme: " + l.trim());
 		synchronized (lines) { lines.add(l); }
+	}
+
+	/* {"progress":{"stage":S,"fraction":F,"seconds":T}}: the bar, the status
+	 * line (percent, and an ETA once it can be guessed) */
+	private static void show(String l) {
+		String stage;
+		double f, t;
+		try {
+			@SuppressWarnings("unchecked")
+			Map<String, Object> p = (Map<String, Object>) ((Map<String, Object>) Json.parse(l)).get("progress");
+			stage = (String) p.get("stage");
+			f = ((Double) p.get("fraction")).doubleValue();
+			t = ((Double) p.get("seconds")).doubleValue();
+		} catch (RuntimeException e) {
+			return;   /* not ours: a newer CLI's line */
+		}
+		IJ.showProgress(f);
+		IJ.showStatus("col0rme: " + stage + " " + Math.round(100 * f) + "%"
+			+ (f > 0.01 && f < 1 ? String.format(java.util.Locale.ROOT, ", ETA %.1f s", t * (1 - f) / f) : "") + " (Esc cancels)");
+		if (f >= 1)
+			stagesDone = stagesDone.isEmpty() ? stage : stagesDone + " " + stage;
 	}
 
 	/** A small window with a Cancel button while the child runs (not in batch mode). */

@@ -163,7 +163,6 @@ public class Col0rme implements PlugIn {
 			throw new Failure("col0rme: output folder " + outdir + " is not empty: give a new one");
 		List<String> args = new ArrayList<String>();
 		args.add(cmd);
-		args.add("--verbose");
 		args.add("-o");
 		args.add(outdir.getPath());
 		args.addAll(fs.args());
@@ -229,7 +228,6 @@ public class Col0rme implements PlugIn {
 		File data = new File(dir, "data");
 		List<String> args = new ArrayList<String>();
 		args.add("simulate");
-		args.add("--verbose");
 		args.add("--angles");
 		args.add(DEMO_ANGLES);
 		args.add("-o");

@@ -135,7 +135,7 @@ final class Fields {
 			for (Field d : list)
 				if (f.equals(d.flag))
 					throw new Failure("col0rme: other options: " + f + " is the dialog's field " + d.key + "=: give it there");
-			if (f.equals("--output") || f.equals("--force") || f.equals("--verbose"))
+			if (f.equals("--output") || f.equals("--force") || f.equals("--verbose") || f.equals("--progress-json"))
 				throw new Failure("col0rme: other options: " + f + " is the plugin's own (the output folder is the dialog's field)");
 			a.add(t[i]);
 			if (!"flag".equals(o.get("type")) && !t[i].contains("=")) {
