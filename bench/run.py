@@ -3,7 +3,9 @@ a baseline measured in the same run). Run from the repository root after
 scripts/setup.sh:  /usr/bin/python3 bench/run.py [--quick]
 (--quick skips the 256x256 cases: support, intensity, dense MA-TIRF, and the
 350x350 MA-TIRF rows; --matirf350 runs only those, --matirf-psf only their
-plain against --psf-fwhm rows;
+plain against --psf-fwhm rows; --matirf-example DIR only the authors' public
+13-angle example (its images as DIR/img_qNN.tif, its angles in DIR/angles.txt)
+with --psf-fwhm against its converged answer;
 --large adds whole camera frames: support on 1024x1024x500 and 2048x2048x200,
 run on 5 angles of 512x512x500, each against the single-tile path measured in
 the same run where it fits, thread scaling and a run next to a busy process;
@@ -232,6 +234,46 @@ def table():
     for r in rows:
         print(" | ".join(str(c).ljust(w) for c, w in zip(r, widths)))
 
+
+def matirf_example(tmp, d):
+    # the authors' public 13-angle example (esoubies/MA-TIRF_Reconstruction,
+    # Example/: not in this repository; DIR holds its 13 images as
+    # img_qNN.tif and their angles in degrees, comma-separated, in
+    # angles.txt) at their settings: the default tolerance against a tight
+    # solve (5e-5), CPU seconds and the median depth difference (issue 55:
+    # <= 9 CPU-s, <= 5 nm)
+    import numpy as np
+    import tifffile
+    imgs = sorted(os.path.join(d, f) for f in os.listdir(d) if f.startswith("img_q"))
+    ang = open(os.path.join(d, "angles.txt")).read().strip()
+    base = [CLI, "matirf", "--angles", ang, "--n-sample", "1.34", "--wavelength", "491", "--pixel-size", "106",
+            "--z-range", "0,300,20", "--offset", "200", "--psf-fwhm", "221", "--kappa", "5e-4", "--sparsity", "0", "--force"]
+    res = {}
+    for tag, extra in (("tight", ["--matirf-tol", "5e-5", "--matirf-iterations", "30000"]), ("default", []),
+                       ("plain", None)):
+        o = os.path.join(tmp, "ex_" + tag)
+        cmd = base + (extra or []) + ["-o", o] + imgs
+        if extra is None:   # the same without the PSF
+            cmd = [c for c in cmd if c not in ("--psf-fwhm", "221")]
+        dt, mem, _ = timed(cmd)
+        rep = json.load(open(os.path.join(o, "report.json")))["matirf"]
+        res[tag] = (dt, LAST_CPU[0], mem, rep, tifffile.imread(os.path.join(o, "depth.tif")))
+    ref = res["tight"][4]
+    for tag, what in (("tight", "tolerance 5e-5 (the converged answer)"), ("default", "default tolerance"),
+                      ("plain", "no PSF (the plain solve)")):
+        dt, cpu, mem, rep, dep = res[tag]
+        row("matirf, the authors' example, --psf-fwhm 221, " + what if tag != "plain" else "matirf, the authors' example, " + what,
+            "350x350x15 x13", dt, "%.1f CPU-s, %d its (+%d coarse), objective %.6g" % (
+                cpu, rep["iterations"], rep.get("coarse_iterations", 0), rep["objective"]), mem,
+            "depth vs the converged: median %.2f nm; %.2fx the plain CPU" % (
+                np.median(np.abs(dep - ref)), cpu / res["plain"][1]))
+
+
+if "--matirf-example" in sys.argv:   # the authors' example only: --matirf-example DIR
+    with tempfile.TemporaryDirectory() as tmp:
+        matirf_example(tmp, sys.argv[sys.argv.index("--matirf-example") + 1])
+    table()
+    sys.exit(0)
 
 if "--matirf350" in sys.argv or "--matirf-psf" in sys.argv:   # only the MA-TIRF rows at the public example's size
     with tempfile.TemporaryDirectory() as tmp:

@@ -50,6 +50,8 @@ int c0_matirf_check(const struct c0_matirf_conf *c, int nq, const double *angles
 			       c->sparsity);
 	if (c->halo < 0 || c->halo > 64)
 		return c0_fail(C0_EINVAL, "matirf: halo %d: must be 0..64", c->halo);
+	if (!(c->coarse_tol >= 0 && isfinite(c->coarse_tol)))
+		return c0_fail(C0_EINVAL, "matirf: coarse_tol %g: must be >= 0", c->coarse_tol);
 	if (c->coarse < 0 || c->coarse > 8)
 		return c0_fail(C0_EINVAL, "matirf: coarse %d: must be 0..8", c->coarse);
 	if (c->pdhg.maxit < 1)
@@ -269,7 +271,7 @@ static int level_alloc(struct level *L, const struct c0_matirf_conf *c, size_t n
 	if ((c->psf_sigma_px > 0 || c->bg_smooth > 0) && !(ctx->dwork = c0_alloc(nd, sizeof(float))))
 		st = C0_ENOMEM;
 	if (c->psf_sigma_px > 0 && ctx->exact &&
-	    (!(ctx->dwork2 = c0_alloc(nd, sizeof(float))) || !(ctx->corr = c0_alloc(N, sizeof(float)))))
+	    (!(ctx->dwork2 = c0_alloc(nd, sizeof(float))) || (!ctx->apg && !(ctx->corr = c0_alloc(N, sizeof(float))))))
 		st = C0_ENOMEM;
 	if (c->bg_smooth > 0) {
 		ctx->bg = c0_alloc(M, sizeof *ctx->bg), ctx->bgd = c0_alloc(M, sizeof *ctx->bgd), ctx->bgr = c0_alloc(M, sizeof *ctx->bgr);

@@ -50,13 +50,19 @@ struct c0_matirf_conf {
 	 * of its volume, depths 1.8 nm, on the phantom: tests/test_matirf.c), in memory that
 	 * still follows the support */
 	int halo;
+	/* 0: the coarse levels of the warm start stop at the solve's own
+	 * tolerance; > 0: at this one. The early-stopped answer stays near the
+	 * start, so a tighter start brings it nearer the converged one (the
+	 * blurred unit-test object: 3.5 -> 1.5 nm median depth at 1e-4, for
+	 * coarse levels of 1/4 and 1/16 the pixels; docs/speed.md) */
+	double coarse_tol;
 };
 /* kappa where the run conf deconvolves (psf_fwhm_nm > 0) and gives none:
  * measured with the blur modelled, 1e-3 halves the depth error of 3e-2 and
  * doubles the sum-over-depth image's fine detail, short of the truth's
  * (3e-4 overshoots it: noise) (docs/defaults.md#kappa) */
 #define C0_MATIRF_KAPPA_DECONV 1e-3
-#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0, 0, 0 }
+#define C0_MATIRF_DEFAULTS { C0_TIRF_DEFAULTS, 0, 400, 20, C0_REG_TV, 3e-2, 0, 3e-2, { 3000, 0, 1.8 }, 1, C0_MATIRF_DIAG, 3, 0, 0, 0, 0, 0, 0 }
 
 /* The volume is held by columns: the M lateral pixels solved for (with
  * TV, those with data in some image; 0.1 % of a whole camera frame's fine

@@ -44,6 +44,8 @@ float *matirf_coarse_bin(const struct c0_matirf_conf *c, int nq, const float *co
 	*cc = *c;
 	cc->kappa = c->kappa / 2, cc->wz = c->wz * 2;
 	cc->psf_sigma_px = c->psf_sigma_px / 2;   /* the PSF binned with the images */
+	if (c->coarse_tol > 0)
+		cc->pdhg.tol = c->coarse_tol;
 	return buf;
 }
 

@@ -38,7 +38,8 @@ struct matirf_ctx {
 	float *dwork;
 	/* the exact and apg solvers with a blur: W^T W majorises W^T B^2 W
 	 * (||B|| <= 1), so their per-pixel step stays, its gradient corrected by
-	 * corr = W^T (I - B^2) W x (N floats; work: dwork2, nq M floats) */
+	 * corr = W^T (I - B^2) W x (N floats, the exact solver only: apg applies W^T
+	 * to (I - B^2) W x, left in dwork, chunk by chunk; work: dwork2, nq M floats) */
 	float *corr, *dwork2;
 	/* background estimation: b = b0 - bg, bg updated from the residual every
 	 * BG_EVERY iterations; u is the solver's primal iterate */

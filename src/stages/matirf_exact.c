@@ -31,7 +31,7 @@ void matirf_exact_rhs(struct matirf_ctx *x)
  * majorises its curvature: the per-pixel step keeps H and takes the
  * gradient's remainder corr = W^T (I - B^2) W x as a forward step (Condat-Vu
  * in the metric H). Without a blur corr is 0 and the step is exact's. */
-static void blur_correction(struct matirf_ctx *c, const float *x)
+static void blur_correction(struct matirf_ctx *c, const float *x, int adjoint)
 {
 	const struct c0_tirfop w = { c->nq, c->nz, (size_t)c->M, c->W };
 	const size_t nd = (size_t)c->nq * c->M;
@@ -42,8 +42,24 @@ static void blur_correction(struct matirf_ctx *c, const float *x)
 	c0_blur2_apply(&c->blur, s, c->nq);
 	for (size_t i = 0; i < nd; i++)
 		r[i] -= s[i];
+	if (!adjoint)    /* apg applies W^T to r chunk by chunk (corr_chunk) */
+		return;
 	memset(c->corr, 0, sizeof(float) * c->N);
 	c0_tirfop_adjoint_add(&w, r, c->corr);
+}
+
+/* corr at depth l of the n columns from k0: W^T r as c0_tirfop_adjoint_add
+ * sums it (from 0, the angles in turn), without storing it */
+static void corr_chunk(const struct matirf_ctx *c, int l, size_t k0, size_t n, float *out)
+{
+	const size_t M = c->M;
+	for (size_t i = 0; i < n; i++)
+		out[i] = 0;
+	for (int q = 0; q < c->nq; q++) {
+		const float w = (float)c->W[q * c->nz + l], *rq = c->dwork + q * M + k0;
+		for (size_t i = 0; i < n; i++)
+			out[i] += w * rq[i];
+	}
 }
 
 /* The exact solver's primal step: G = data + l1 + positivity, whose prox is
@@ -58,7 +74,7 @@ void matirf_primal_step_exact(void *vc, float *x, float *t, float rho, double su
 	const double tau = c->tau1;
 	float d2 = 0, n2 = 0;
 	if (c->blur.k)
-		blur_correction(c, x);
+		blur_correction(c, x, 1);
 #pragma omp parallel for schedule(dynamic, 512) reduction(+ : d2, n2) if (c->N > 50000)
 	for (size_t k = 0; k < M; k++) {
 		double g[C0_NNQP_MAX], u[C0_NNQP_MAX];
@@ -137,11 +153,11 @@ static void apg_step(struct matirf_ctx *c, const float *y, float *x, float *t, f
 	const float it1 = (float)(1 / c->tau1), wl = (float)c->g.wl;
 	float d2 = 0, n2 = 0;
 	if (c->blur.k)
-		blur_correction(c, x);
+		blur_correction(c, x, 0);
 #pragma omp parallel for schedule(static) reduction(+ : d2, n2) if (N > 50000)
 	for (size_t k0 = 0; k0 < M; k0 += APG_CHUNK) {
 		const size_t n = k0 + APG_CHUNK < M ? APG_CHUNK : M - k0;
-		float g[C0_NNQP_MAX * APG_CHUNK], u[C0_NNQP_MAX * APG_CHUNK], a[APG_CHUNK];
+		float g[C0_NNQP_MAX * APG_CHUNK], u[C0_NNQP_MAX * APG_CHUNK], a[APG_CHUNK], cr[APG_CHUNK];
 		for (int l = 0; l < nz; l++) {
 			const float *xl = x + l * M + k0, *cl = c->c + l * M + k0, *al = t + l * M + k0;
 			if (y) {
@@ -154,9 +170,11 @@ static void apg_step(struct matirf_ctx *c, const float *y, float *x, float *t, f
 				g[l * APG_CHUNK + i] = cl[i] + xl[i] * it1 - al[i];
 				u[l * APG_CHUNK + i] = xl[i];
 			}
-			if (c->blur.k)
+			if (c->blur.k) {
+				corr_chunk(c, l, k0, n, cr);
 				for (size_t i = 0; i < n; i++)
-					g[l * APG_CHUNK + i] += c->corr[l * M + k0 + i];
+					g[l * APG_CHUNK + i] += cr[i];
+			}
 		}
 		apg_chunk(c, n, g, u);
 		for (int l = 0; l < nz; l++) {

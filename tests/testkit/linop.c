@@ -2,6 +2,7 @@
  * drop const only to fit one context type; no adapter writes through it
  * except the covariance operator, whose workspaces are its own. */
 #include "testkit/linop.h"
+#include "ops/blur2.h"
 #include "core/band.h"
 #include "ops/covop.h"
 #include "ops/diff3.h"
@@ -102,4 +103,16 @@ static void tirf_ad(void *c, const float *y, float *x)
 struct c0_linopf c0_tirfop_linop(const struct c0_tirfop *o)
 {
 	return (struct c0_linopf){ o->M * (size_t)o->nz, o->M * (size_t)o->nq, (void *)o, tirf_fw, tirf_ad };
+}
+
+static void blur_fw(void *c, const float *x, float *y)
+{
+	const struct c0_blur2 *b = c;
+	memcpy(y, x, sizeof *y * b->ny * (size_t)b->nx);
+	c0_blur2_apply(b, y, 1);
+}
+struct c0_linopf c0_blur2_linop(const struct c0_blur2 *b)
+{
+	const size_t np = (size_t)b->ny * b->nx;
+	return (struct c0_linopf){ np, np, (void *)b, blur_fw, blur_fw };   /* symmetric */
 }

@@ -28,6 +28,7 @@ struct c0_psi_omega;
 struct c0_diff3;
 struct c0_grad3m;
 struct c0_tirfop;
+struct c0_blur2;
 struct c0_band;
 
 /* The banded covariance operator on the lags of cov (Ly Lx -> nlag Ny Nx). */
@@ -47,3 +48,5 @@ struct c0_linopf c0_hess3_linop(const struct c0_diff3 *d);
 struct c0_linopf c0_grad3m_linop(const struct c0_grad3m *g);
 /* MA-TIRF weights per column: nz M -> nq M. */
 struct c0_linopf c0_tirfop_linop(const struct c0_tirfop *o);
+/* The separable blur of one ny x nx image (its own adjoint). */
+struct c0_linopf c0_blur2_linop(const struct c0_blur2 *b);
