@@ -13,7 +13,12 @@ GRID=1: the grid panel instead (angles x cameras x blinking x frames, issue 29)
 with a finer sweep (ratio sqrt 2, 11 points) and a column for the
 cross-validated lambda (--lambda-rule cv); the table then gives per member
 the Jaccard index and lambda / lambda_max of each automatic rule, its gap to
-the sweep's best and its ratio to the best lambda."""
+the sweep's best and its ratio to the best lambda.
+RULES=noise,peaks adds a column per named --lambda-rule beside the default's
+(gap to the best); LABEL=15 simulates every member with --label-radius 15 (a
+labelled tube; its own folders); SOFI=DIR,DIR adds SOFI-tool sets made by
+bench/sofi_panel.py (angle01.tif, truth_support.tif; 100 nm pixels, FWHM 229),
+each as a member of its own whatever SEEDS says."""
 import json, os, subprocess, sys
 from concurrent.futures import ThreadPoolExecutor
 
@@ -75,7 +80,8 @@ GRID = {
 if os.environ.get("GRID"):
     PANEL = GRID
 if os.environ.get("MEMBERS"):
-    PANEL = {k: PANEL[k] for k in os.environ["MEMBERS"].split(",")}
+    m = os.environ["MEMBERS"]   # names with commas: separate them with ';'
+    PANEL = {k: PANEL[k] for k in m.split(";" if ";" in m else ",")}
 SWEEP = {"l1": ["4e-2", "2e-2", "1e-2", "5e-3", "2.5e-3", "1.2e-3"],
          "cel0": ["1e-4", "3e-5", "1e-5", "3e-6", "1e-6", "3e-7"]}[PEN]
 if os.environ.get("GRID"):
@@ -98,23 +104,35 @@ def ji(sim, out):
 
 def solve(job):
     sim, lam = job
-    out = sim + "_out_" + lam
-    fwhm = str(json.load(open(sim + "/sim.json"))["parameters"]["fwhm_nm"])
+    out = sim + "_out_" + lam.replace(":", "_")
+    sofi = os.path.exists(sim + "/angle01.tif")
+    stack = sim + ("/angle01.tif" if sofi else "/stack_q01.tif")
+    fwhm = "229" if sofi else str(json.load(open(sim + "/sim.json"))["parameters"]["fwhm_nm"])
+    how = ([] if lam == "auto" else ["--lambda-rule", "cv"] if lam == "cv" else
+           ["--lambda-rule", lam[5:]] if lam.startswith("rule:") else ["--lambda", lam])
     run([BIN, "support", "-o", out, "--force", "--fwhm", fwhm, "--penalty", PEN, "--threads", "1", *EXTRA,
-         sim + "/stack_q01.tif"] + ([] if lam == "auto" else ["--lambda-rule", "cv"] if lam == "cv" else ["--lambda", lam]))
+         *(["--pixel-size", "100"] if sofi else []), stack] + how)
     rep = json.load(open(out + "/report.json"))["support"][0]
     return ji(sim, out), rep["lambda_relative"]
 
 
 os.makedirs(WORK, exist_ok=True)
 sims = {}
+LABEL = os.environ.get("LABEL")
 for name, extra in PANEL.items():
     for seed in SEEDS:
-        sim = os.path.join(WORK, name.replace(" ", "_").replace(",", "") + ("" if seed == "5" else "_s" + seed))
+        sim = os.path.join(WORK, name.replace(" ", "_").replace(",", "") + ("" if seed == "5" else "_s" + seed)
+                           + ("_label" + LABEL if LABEL else ""))
         if not os.path.exists(sim + "/truth_support.tif"):
-            run([BIN, "simulate", "-o", sim, "--force", "--seed", seed] + COMMON + extra)
+            run([BIN, "simulate", "-o", sim, "--force", "--seed", seed] + COMMON + extra
+                + (["--label-radius", LABEL] if LABEL else []))
         sims[(name, seed)] = sim
-AUTO = ["auto"] + (["cv"] if os.environ.get("GRID") else [])
+for d in filter(None, os.environ.get("SOFI", "").split(",")):
+    PANEL["sofi " + os.path.basename(d.rstrip("/"))] = []
+    for seed in SEEDS:
+        sims[("sofi " + os.path.basename(d.rstrip("/")), seed)] = d
+AUTO = ["auto"] + (["cv"] if os.environ.get("GRID") else []) + [
+    "rule:" + r for r in filter(None, os.environ.get("RULES", "").split(","))]
 jobs = [(sims[k], lam) for k in sims for lam in SWEEP + AUTO]
 with ThreadPoolExecutor(int(os.environ.get("JOBS", "1"))) as ex:
     got = dict(zip(jobs, ex.map(solve, jobs)))
@@ -128,5 +146,6 @@ for name in PANEL:
               "%.3f (%.2g) | %+.3f | %.2f" % (res[a][0], res[a][1], res[a][0] - best, res[a][1] / float(lbest))
               for a in AUTO)), flush=True)
         continue
-    print("| %s | %s | %.3f (%.2g) | %.3f | %+.3f |" % (name, " | ".join("%.3f" % res[l][0] for l in SWEEP),
-          res["auto"][0], res["auto"][1], best, res["auto"][0] - best), flush=True)
+    print("| %s | %s | %.3f (%.2g) | %.3f | %+.3f |%s" % (name, " | ".join("%.3f" % res[l][0] for l in SWEEP),
+          res["auto"][0], res["auto"][1], best, res["auto"][0] - best, "".join(
+          " %s %.3f (%.2g) %+.3f |" % (a[5:], res[a][0], res[a][1], res[a][0] - best) for a in AUTO[1:])), flush=True)
