@@ -4,7 +4,12 @@
  * come from the same streaming pass. Their noise is independent, so
  * D = (A^T R_A - A^T R_B) / 2 has the noise of C = A^T R (all frames) and no
  * signal: its robust sd (from the lower quartile of |D| over the fine pixels)
- * is sigma_C. A pixel enters the l1 support where its correlation exceeds the threshold
+ * is sigma_C. With lambda_noise (the run's default) the l1 solve runs at
+ * kappa * sigma_C alone: a labelled structure is wider than a fine pixel,
+ * and the pixels beside its axis, which hold a fraction of its variance,
+ * enter once they stand above the noise (docs/defaults.md#lambda_rule).
+ * Otherwise (the peaks rule) a pixel enters the l1 support where its
+ * correlation exceeds the threshold
  *   t = max(rho * q90, kappa * sigma_C),
  * q90 the 90th percentile of the correlation image C - s0 n over the pixels
  * above kappa * sigma_C: a fraction of the bright structure's typical level
