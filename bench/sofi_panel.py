@@ -17,9 +17,10 @@ reads as it reads the simulator's.
 Prints a Markdown table, one row per member: the Jaccard index of the support at 40 and
 25 nm (one-to-one matching, as COL0RME's code scores it), its fine pixels against the
 truth's, depth.tif's median absolute and median signed error (nm; positive = deeper than
-the truth), and with --sweep the best Jaccard (40 nm) of a 13-point sweep of --lambda on
-the support stack (1/64x to 4x the automatic lambda, ratio 1.6) with its multiple of
-the automatic lambda and the gap to it."""
+the truth), and with --sweep the best Jaccard (40 nm) of a 13-point sweep of --lambda
+(1/64x to 4x the automatic lambda, ratio 1.6; whole runs, so that the sweep is of the
+support the run makes, pooled or not) with its multiple of the automatic lambda and
+the gap to it."""
 import argparse
 import json
 import os
@@ -105,8 +106,8 @@ def one(a, name):
         best = (row["j40"], 1.0)
         for m in SWEEP:
             o = os.path.join(a.work, "sweep", "%s_%.4g" % (name, m))
-            sh([a.cli, "support", "--threads", "1", "--force", "--frc", "0", "--lambda", "%.6g" % (rel * m), "-o", o,
-                stacks[0]] + optics[:4] + a.run_opts)
+            sh([a.cli, "run", "--angles", ang, "--threads", "1", "--force", "--frc", "0", "--lambda", "%.6g" % (rel * m),
+                "-o", o] + optics + a.run_opts + stacks)
             best = max(best, (jaccard(a.cli, o + "/support.tif", d, 40), m))
         row["best_j40"], row["best_times_auto"] = best
     return row

@@ -72,6 +72,7 @@ struct c0_run_conf {
 	/* support (sparse covariance) */
 	int support_stacks[C0_MAX_STACKS];
 	int nsupport_stacks;
+	int support_pool;
 	enum c0_penalty penalty;
 	double lambda;
 	int lag;
@@ -156,7 +157,7 @@ struct c0_run_conf {
 	uint32_t given[4];
 };
 
-#define C0_RUN_CONF_DEFAULTS { .srf = 4, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
+#define C0_RUN_CONF_DEFAULTS { .srf = 4, .support_pool = 1, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
 	.reweightings = 10, .drift = 1, .pixel_guard = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 100, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
 	.graph_radius = 6, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = -1, .sparsity = 3e-2, \
@@ -208,7 +209,8 @@ int c0_result_write(const struct c0_result *r, const char *outdir, int force);
  * last). On failure nothing is written. */
 int c0_report_html(const char *outdir);
 /* One step alone, as `col0rme support` and `col0rme matirf` do. The support of
- * each stack, joined (support and report). */
+ * the stacks: their covariances pooled (support_pool, the default), or each
+ * stack's, joined (support and report). */
 int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out);
 /* The MA-TIRF volume from n images of h x w (one per angle of c, row-major;
  * pixel size c->pixel_nm, for the outputs' calibration): volume, depth, z_nm. */

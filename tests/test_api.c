@@ -86,9 +86,9 @@ static void test_steps(void)
 		c0_run_conf_free(c), c0_simulation_free(sim);
 		return;
 	}
-	/* the support of the smallest angle's stack, alone: c0_run's support */
+	/* the support of the three stacks pooled: c0_run's support */
 	int h, w, h2, w2, nz, nz2;
-	CHECK(c0_run_support(c, st, 1, &sup) == C0_OK);
+	CHECK(c0_run_support(c, st, 3, &sup) == C0_OK);
 	const uint8_t *ma = c0_result_support(run, &h, &w), *mb = sup ? c0_result_support(sup, &h2, &w2) : NULL;
 	CHECK(ma && mb && h == 64 && w == 64 && h2 == h && w2 == w && !memcmp(ma, mb, (size_t)h * w));
 	CHECK(sup && !c0_result_volume(sup, &nz, &h2, &w2) && !c0_result_intensity(sup, 0, &h2, &w2));

@@ -51,7 +51,7 @@ static int support(const struct c0_run_conf *c, const struct c0_stage_confs *sc,
 		st = c0_step_drift(r, &sc->drift, c->nangles > 0 ? &sc->bleach : NULL, f, n);
 	if (!st)
 		st = c0_progress_stage("support");
-	return st ? st : c0_step_support(r, &sc->support, f);
+	return st ? st : c0_step_support(r, &sc->support, f, c->support_pool);
 }
 
 int c0_run_support(const struct c0_run_conf *c, const struct c0_stack *stacks, int n, struct c0_result **out)

@@ -22,7 +22,8 @@ static const struct c0_param table[] = {
 	NUM(na, C0_P_DOUBLE, "na", "NA", "numerical aperture of the objective (with --emission)", "none"),
 	NUM(srf, C0_P_INT, "srf", "R", "super-resolution factor: fine pixel = pixel size / R", "4"),
 	/* support */
-	LIST(support_stacks, C0_P_INTS, "support-angles", "I,J", "1-based stack numbers whose supports are joined", "the smallest angle"),
+	LIST(support_stacks, C0_P_INTS, "support-angles", "I,J", "1-based stack numbers of the support (pooled, or with --support-pool 0 each solved and the supports joined)", "every stack pooled; with --support-pool 0 the smallest angle"),
+	NUM(support_pool, C0_P_FLAG, "support-pool", "0|1", "1: one support from the support stacks' covariances pooled (one sample, the same emitters at every angle); 0: a support per stack, joined", "1"),
 	ENUM(penalty, "l1|cel0", "penalty", "support sparsity penalty", "l1"),
 	NUM(lambda, C0_P_DOUBLE, "lambda", "F", "support regularisation relative to lambda_max (the smallest that gives an empty support)",
 	    "automatic (--lambda-rule): for l1 4 noise sds of the correlation image; with --lambda-rule peaks a first solve at max(2e-2 of the correlation's 90th percentile, 4 noise sds), then max(0.28 of the median emitter peak, 4 noise sds)"),

@@ -23,14 +23,22 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* The support stacks: 1-based numbers, or the smallest angle (the deepest
- * penetration sees every emitter), or the first stack in 2D mode. */
+/* The support stacks: 1-based numbers; or pooled, every angle's stack (one
+ * sample: each holds every emitter's fluctuation, more frames hold more of
+ * it, docs/defaults.md#support_pool); or alone, the smallest angle (the
+ * deepest penetration sees every emitter); or the first stack in 2D mode. */
 static int support_stacks(const struct c0_run_conf *c, const int *only, int n, struct c0_result *r)
 {
+	const int na = c->nangles - (c->bleach == C0_BLEACHING_REPEAT);   /* the repeat only measures the fade */
+	if (!c->nsupport_stacks && c->support_pool && na > 1) {
+		for (int i = 0; i < na; i++)
+			r->sup[i] = i;
+		r->nsup = na;
+		return C0_OK;
+	}
 	if (!c->nsupport_stacks) {
 		/* the support-only stacks (at or below the critical angle) and the smallest TIRF angle */
 		int best = -1, k = 0;
-		const int na = c->nangles - (c->bleach == C0_BLEACHING_REPEAT);   /* the repeat only measures the fade */
 		for (int i = 0; i < na; i++)
 			if (only[i])
 				r->sup[k++] = i;
@@ -330,7 +338,7 @@ static int run(const struct c0_run_conf *c, const struct c0_stage_confs *sc, str
 	if (!st && c->drift && !(st = c0_progress_stage("drift")))
 		st = c0_step_drift(r, &s.drift, c->nangles > 0 ? &s.bleach : NULL, f, n);
 	if (!st && !(st = c0_progress_stage("support")))
-		st = c0_step_support(r, &s.support, f);
+		st = c0_step_support(r, &s.support, f, c->support_pool);
 	if (!st && r->fwhm_nm > 0 && r->fwhm_nm != s.support.grid.fwhm_nm)
 		c0_stage_confs_width(&s, r->fwhm_nm);   /* the data's width (fwhm_rule data, app/steps.c) */
 	if (c0_comm_rank() != 0)

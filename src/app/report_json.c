@@ -243,9 +243,11 @@ void c0_report_run_params(cJSON *rep, const struct c0_run_conf *c, const struct 
 		cJSON_AddNumberToObject(p, "depth_pool_range_nm", s->pool_range_nm);
 	}
 	double s1[C0_MAX_STACKS];
-	for (int k = 0; k < r->nsup; k++)
-		s1[k] = r->sup[k] + 1;
-	c0_report_add_array(p, "support_stacks", s1, r->nsup);
+	const int ns = r->npool ? r->npool : r->nsup;
+	for (int k = 0; k < ns; k++)
+		s1[k] = (r->npool ? r->pool[k] : r->sup[k]) + 1;
+	c0_report_add_array(p, "support_stacks", s1, ns);
+	cJSON_AddBoolToObject(p, "support_pooled", r->npool > 0);
 	int k = 0;
 	for (int q = 0; q < r->n; q++)
 		if (only[q])

@@ -17,6 +17,7 @@ struct c0_result {
 	double pixel_nm;             /* camera pixel size */
 	int srf;
 	int nsup, sup[C0_MAX_STACKS];/* support step: its stacks (0-based) and results */
+	int npool, pool[C0_MAX_STACKS];/* the stacks pooled into sres[0] (nsup 1, sup[0] = pool[0]); 0: none */
 	struct c0_support_result *sres;
 	uint8_t *mask;               /* Ly x Lx union of the supports (or the given mask) */
 	int Ly, Lx;

@@ -123,19 +123,42 @@ static void psf_width(struct c0_result *r, int k, struct c0_support_conf *cc)
 	cc->fwhm_data = 0;   /* later stacks: the first's decision */
 }
 
-int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struct c0_frames *f)
+/* stack i's support configuration: its drift hook and noise map */
+static void stack_conf(const struct c0_result *r, int i, const struct c0_support_conf *c0, struct c0_support_conf *cc)
+{
+	cc->frame_fn = r->drift ? c0_drift_frame_fn : NULL, cc->frame_ctx = r->hooks[i];
+	if (c0->noise_map)
+		cc->noise_map = c0_result_noise(r, i);
+}
+
+/* The support stacks' covariances pooled into one support (sres[0]): the
+ * stacks are listed in r->pool, and nsup becomes 1 */
+static int support_pooled(struct c0_result *r, const struct c0_support_conf *c0, struct c0_support_conf *cc,
+			  struct c0_frames *f)
+{
+	struct c0_support_conf cq[C0_MAX_STACKS];
+	struct c0_frames fq[C0_MAX_STACKS];   /* copies: they share the files and the frame sums */
+	for (int k = 0; k < r->nsup; k++) {
+		cq[k] = *cc, fq[k] = f[r->sup[k]];
+		stack_conf(r, r->sup[k], c0, &cq[k]);
+		r->pool[k] = r->sup[k];
+	}
+	r->npool = r->nsup, r->nsup = 1;
+	return c0_support_stacks(cq, fq, r->npool, &r->sres[0]);
+}
+
+int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struct c0_frames *f, int pool)
 {
 	struct c0_support_conf cc = *c0;
 	cJSON *arr = cJSON_AddArrayToObject(r->rep, "support");
 	if (!(r->sres = c0_alloc((size_t)r->nsup, sizeof *r->sres)))
 		return C0_ENOMEM;
 	const struct c0_step_clock t = c0_step_begin("support");
+	const int pooled = pool && r->nsup > 1;
 	for (int k = 0; k < r->nsup; k++) {
 		int i = r->sup[k];
-		cc.frame_fn = r->drift ? c0_drift_frame_fn : NULL, cc.frame_ctx = r->hooks[i];
-		if (c0->noise_map)
-			cc.noise_map = c0_result_noise(r, i);
-		int st = c0_support_stack(&cc, &f[i], &r->sres[k]);
+		stack_conf(r, i, c0, &cc);
+		int st = pooled ? support_pooled(r, c0, &cc, f) : c0_support_stack(&cc, &f[i], &r->sres[k]);
 		if (st)
 			return st;
 		cJSON *o = c0_report_support_stack(r->names[i], &r->sres[k], &cc);

@@ -16,8 +16,10 @@ void c0_step_end(struct c0_result *r, const struct c0_step_clock *k);
  * the later steps undo it frame by frame. */
 int c0_step_drift(struct c0_result *r, const struct c0_drift_conf *dc, const struct c0_bleach_conf *clock,
 		  struct c0_frames *f, int n);
-/* Support of stacks r->sup[0..nsup) (indices into f); sets the union mask. */
-int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struct c0_frames *f);
+/* Support of stacks r->sup[0..nsup) (indices into f); sets the union mask.
+ * pool (and several stacks): one support from their covariances pooled
+ * (c0_support_stacks), listed in r->pool; nsup becomes 1. */
+int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struct c0_frames *f, int pool);
 /* Bleaching across the stacks (stages/bleach.h) by bc: the fade estimated
  * from the frame sums and the fitted backgrounds (or the known factors, or
  * none) into r->bleach_factor and rep["bleaching"]. */

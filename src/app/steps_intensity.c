@@ -444,7 +444,7 @@ int c0_step_intensity(struct c0_result *r, const struct c0_intensity_conf *ic, c
 {
 	const int n = r->n;
 	const struct c0_support_result *known[C0_MAX_STACKS] = { 0 };
-	for (int k = 0; r->sres && k < r->nsup; k++)
+	for (int k = 0; r->sres && k < r->nsup && !r->npool; k++)   /* a pooled one is no stack's own */
 		known[r->sup[k]] = &r->sres[k];
 	if (f[0].height * sc->grid.srf != r->Ly || f[0].width * sc->grid.srf != r->Lx)
 		return c0_fail(C0_EINVAL, "%s: %dx%d pixels at srf %d do not match the %dx%d support", f[0].name, f[0].width,

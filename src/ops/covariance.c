@@ -28,6 +28,11 @@ struct c0_cov_acc {
 	const float *noise; /* c0_cov_acc_set_noise's map (NULL: none), its width and this accumulator's origin in it */
 	int noise_w, noise_x0, noise_y0;
 	int *span, *span_at; /* c0_cov_acc_set_region's row spans [x0, x1): row y's from span_at[y] to span_at[y + 1] (NULL: none) */
+	/* c0_cov_acc_next's finished segments: their cross-products are in sum */
+	int64_t seg_frames; /* their frames */
+	double seg_dof;     /* the sum of their T - 2 */
+	double *seg_sum;    /* n: the sum of their frames (unshifted), for the mean; NULL: none yet */
+	double *seg_noise;  /* n: the sum of their noise maps, each times its T - 2; NULL: none */
 };
 
 static void subtract_noise(const struct c0_cov_acc *a, int y0, int x0, struct c0_cov *c);
@@ -109,7 +114,7 @@ void c0_cov_acc_free(struct c0_cov_acc *a)
 	if (!a)
 		return;
 	free(a->dy), free(a->dx), free(a->sum), free(a->shift), free(a->s1), free(a->st), free(a->blk);
-	free(a->span), free(a->span_at);
+	free(a->span), free(a->span_at), free(a->seg_sum), free(a->seg_noise);
 	free(a);
 }
 
@@ -282,7 +287,7 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 		return c0_fail(C0_EINVAL, "covariance: window from row %d, but rows up to %d were dropped", y0, a->dropped);
 	flush(a);
 	struct c0_cov *c = out;
-	c->W = w, c->H = h, c->d = a->d, c->nlag = a->nlag, c->frames = a->frames;
+	c->W = w, c->H = h, c->d = a->d, c->nlag = a->nlag, c->frames = a->frames + a->seg_frames;
 	const size_t n = (size_t)w * h, N = (size_t)a->W * a->H;
 	c->dy = c0_alloc((size_t)c->nlag, sizeof(int));
 	c->dx = c0_alloc((size_t)c->nlag, sizeof(int));
@@ -318,15 +323,19 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 			for (int x = dx < 0 ? -dx : 0; x < (dx > 0 ? w - dx : w); x++) {
 				size_t i = (size_t)y * w + x, j = (size_t)(y + dy) * w + x + dx;
 				double s = a->sum[(size_t)l * N + (size_t)(y0 + y) * a->W + x0 + x];
-				c->r[(size_t)l * n + i] = (s - T * c->mean[i] * c->mean[j] - tr[i] * tr[j]) / (T - 2);
+				c->r[(size_t)l * n + i] = (s - T * c->mean[i] * c->mean[j] - tr[i] * tr[j]) / (a->seg_dof + T - 2);
 			}
 	}
 	free(tr);
 	if (a->span)
 		clear_outside(a, y0, x0, c);
 	for (int y = 0; y < h; y++)
-		for (int x = 0; x < w; x++)
-			c->mean[(size_t)y * w + x] += a->shift[(size_t)(y0 + y) * a->W + x0 + x];
+		for (int x = 0; x < w; x++) {
+			const size_t i = (size_t)y * w + x, k = (size_t)(y0 + y) * a->W + x0 + x;
+			c->mean[i] += a->shift[k];
+			if (a->seg_sum)   /* every segment's frames */
+				c->mean[i] = (a->seg_sum[k] + T * c->mean[i]) / (double)c->frames;
+		}
 	subtract_noise(a, y0, x0, c);
 	int st = a->guard > 0 ? c0_cov_guard(c, a->guard, NULL) : C0_OK;
 	if (st)
@@ -344,12 +353,15 @@ void c0_cov_acc_set_noise(struct c0_cov_acc *a, const float *map, int map_w, int
 /* lag 0 of the window at (y0, x0) of a minus a's noise map there */
 static void subtract_noise(const struct c0_cov_acc *a, int y0, int x0, struct c0_cov *c)
 {
-	if (!a->noise)
-		return;
-	for (int y = 0; y < c->H; y++)
+	/* the current segment's share of its map (1 without segments), and the finished segments' */
+	const double D = a->seg_dof + (double)(a->frames - 2), f = (double)(a->frames - 2) / D;
+	for (int y = 0; a->noise && y < c->H; y++)
 		for (int x = 0; x < c->W; x++)
 			c->r[(size_t)y * c->W + x] -=
-				a->noise[(size_t)(a->noise_y0 + y0 + y) * a->noise_w + a->noise_x0 + x0 + x];
+				f * a->noise[(size_t)(a->noise_y0 + y0 + y) * a->noise_w + a->noise_x0 + x0 + x];
+	for (int y = 0; a->seg_noise && y < c->H; y++)
+		for (int x = 0; x < c->W; x++)
+			c->r[(size_t)y * c->W + x] -= a->seg_noise[(size_t)(y0 + y) * a->W + x0 + x] / D;
 }
 
 static int lag_index(const struct c0_cov *c, int dy, int dx)
@@ -421,7 +433,48 @@ double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x)
 	flush(a);
 	const size_t i = (size_t)y * a->W + x;
 	const double T = (double)a->frames, m = a->s1[i] / T, b = trend(a, i);
-	return (a->sum[i] - T * m * m - b * b) / (T - 2);
+	return (a->sum[i] - T * m * m - b * b) / (a->seg_dof + T - 2);
+}
+
+/* sum's pair (i, j) of lag l less the segment's mean and trend products */
+static void centre_segment(struct c0_cov_acc *a)
+{
+	const int W = a->W, H = a->H;
+	const size_t n = (size_t)W * H;
+	const double T = (double)a->frames;
+#pragma omp parallel for schedule(static)
+	for (int l = 0; l < a->nlag; l++) {
+		const int dy = a->dy[l], dx = a->dx[l];
+		for (int y = 0; y + dy < H; y++)
+			for (int x = dx < 0 ? -dx : 0; x < (dx > 0 ? W - dx : W); x++) {
+				const size_t i = (size_t)y * W + x, j = (size_t)(y + dy) * W + x + dx;
+				const double s = a->sum[(size_t)l * n + i] - a->s1[i] * a->s1[j] / T - trend(a, i) * trend(a, j);
+				a->sum[(size_t)l * n + i] = (float)s;
+			}
+	}
+}
+
+int c0_cov_acc_next(struct c0_cov_acc *a)
+{
+	const size_t n = (size_t)a->W * a->H;
+	if (a->frames < 3)
+		return c0_fail(C0_EINVAL, "covariance: a segment needs at least 3 frames (got %lld)", (long long)a->frames);
+	if (a->dropped)
+		return c0_fail(C0_EINVAL, "covariance: a new segment after rows were dropped");
+	if (!a->seg_sum && !(a->seg_sum = c0_alloc(n, sizeof *a->seg_sum)))
+		return C0_ENOMEM;
+	flush(a);
+	centre_segment(a);
+	if (a->noise && !a->seg_noise && !(a->seg_noise = c0_alloc(n, sizeof *a->seg_noise)))
+		return C0_ENOMEM;
+	for (int y = 0; a->noise && y < a->H; y++)   /* each segment's own map, over its degrees of freedom */
+		for (int x = 0; x < a->W; x++)
+			a->seg_noise[(size_t)y * a->W + x] +=
+				(double)(a->frames - 2) * a->noise[(size_t)(a->noise_y0 + y) * a->noise_w + a->noise_x0 + x];
+	for (size_t i = 0; i < n; i++)
+		a->seg_sum[i] += a->s1[i] + (double)a->frames * a->shift[i], a->s1[i] = a->st[i] = 0;
+	a->seg_frames += a->frames, a->seg_dof += (double)(a->frames - 2), a->frames = 0;
+	return C0_OK;
 }
 
 void c0_cov_acc_seal(struct c0_cov_acc *a)
@@ -453,6 +506,8 @@ int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y
 	memset(out, 0, sizeof *out);
 	const int h = odd->H, w = odd->W;
 	const int64_t To = odd->frames, Te = all->frames - To;
+	if (all->seg_sum || odd->seg_sum)
+		return c0_fail(C0_EINVAL, "covariance: the even frames of several segments are not derived (accumulate them)");
 	if (Te < 3 || To < 3 || Te - To < 0 || Te - To > 1 || odd->d != all->d)
 		return c0_fail(C0_EINVAL, "covariance: %lld and %lld frames are not the even and odd halves of a stack",
 			       (long long)all->frames, (long long)To);

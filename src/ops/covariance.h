@@ -22,6 +22,7 @@ struct c0_cov {
 	double *r;             /* nlag * H * W */
 	double *mean;          /* H * W temporal mean */
 	int64_t frames;
+	double dof;            /* degrees of freedom of r, where pooled from sets (c0_cov_pool_add); 0: frames - 2 */
 };
 
 struct c0_cov_acc;
@@ -76,6 +77,15 @@ void c0_cov_acc_drop_rows(struct c0_cov_acc *a, int y1);
  * the whole image's value, so that it gives the same numbers bit for bit. */
 int c0_cov_block_frames(size_t pixels);
 int c0_cov_acc_set_block(struct c0_cov_acc *a, int frames);
+/* Ends a segment of frames (one stack of several pooled into one
+ * covariance): its sums become its own cross-products about its mean and
+ * trend, and the next frame starts a segment with its own. Windows then
+ * pool the segments: their summed cross-products over their summed degrees
+ * of freedom (each T - 2), the mean over all their frames; the noise map
+ * set now is the finished segment's (set the next one's before its frames),
+ * each subtracted from its segment's lag 0 (c0_cov_acc_variance: none).
+ * Before any row is dropped; each segment needs >= 3 frames. */
+int c0_cov_acc_next(struct c0_cov_acc *a);
 /* Finishes (needs >= 3 frames) and frees the accumulator. */
 int c0_cov_acc_finish(struct c0_cov_acc *a, struct c0_cov *out);
 void c0_cov_acc_free(struct c0_cov_acc *a);

@@ -47,3 +47,25 @@ int c0_cov_pool(const struct c0_cov *a, const struct c0_cov *b, struct c0_cov *o
 		}
 	return C0_OK;
 }
+
+int c0_cov_pool_add(struct c0_cov *acc, struct c0_cov *b)
+{
+	if (!acc->r) {   /* the first set: taken over */
+		*acc = *b;
+		memset(b, 0, sizeof *b);
+		return C0_OK;
+	}
+	if (acc->W != b->W || acc->H != b->H || acc->d != b->d || b->frames < 3)
+		return c0_cov_free(b), c0_fail(C0_EINVAL, "covariance pooling: the sets differ in size or lag, or one holds < 3 frames");
+	const size_t n = (size_t)acc->W * acc->H;
+	const double na = (double)acc->frames, nb = (double)b->frames;
+	const double wa = acc->dof > 0 ? acc->dof : na - 2, wb = nb - 2;
+	for (size_t i = 0; i < n; i++)
+		acc->mean[i] = (na * acc->mean[i] + nb * b->mean[i]) / (na + nb);
+	/* partners outside the image are 0 in both: they stay 0 */
+	for (size_t i = 0; i < (size_t)acc->nlag * n; i++)
+		acc->r[i] = (wa * acc->r[i] + wb * b->r[i]) / (wa + wb);
+	acc->frames += b->frames, acc->dof = wa + wb;
+	c0_cov_free(b);
+	return C0_OK;
+}

@@ -98,16 +98,37 @@ static double data_width(struct c0_support_conf *cc, const struct c0_cov half[2]
 	return fw;
 }
 
+/* The covariance (halves: and its two interleaved halves) of the n stacks
+ * pooled (ops/covpool.h), one pass of whole frames each. */
+static int pooled_covariance(const struct c0_support_conf *c, struct c0_frames *in, int n, int halves,
+			     struct c0_cov *cov, struct c0_cov half[2], double *tc)
+{
+	int st = C0_OK;
+	*tc = 0;
+	for (int q = 0; q < n && !st; q++) {
+		struct c0_cov one = { 0 }, h[2] = { { 0 } };
+		double t;
+		st = halves ? c0_stack_covariance_halves(&c[q], &in[q], h, &t) : c0_stack_covariance(&c[q], &in[q], &one, &t);
+		*tc += t;
+		for (int k = 0; k < 2 && !st && halves; k++)
+			st = c0_cov_pool_add(&half[k], &h[k]);
+		if (!st && !halves)
+			st = c0_cov_pool_add(cov, &one);
+		c0_cov_free(&one), c0_cov_free(&h[0]), c0_cov_free(&h[1]);
+	}
+	return st;
+}
+
 /* One tile and one process: the covariance with its two interleaved halves
- * (automatic lambda, FRC) in one pass of whole frames. */
-static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
+ * (automatic lambda, FRC) in one pass of whole frames, of each stack. */
+static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
 	struct c0_cov cov = { 0 }, half[2] = { { 0 } };
 	struct c0_support_conf cc = *c;
 	const int automatic = !(c->lambda_rel > 0), halves = automatic || c->frc;
 	double tc;
-	int st = halves ? c0_stack_covariance_halves(c, in, half, &tc) : c0_stack_covariance(c, in, &cov, &tc);
+	int st = pooled_covariance(c, in, n, halves, &cov, half, &tc);
 	if (!st && halves) {
 		double t0 = c0_now();
 		st = c0_cov_pool(&half[0], &half[1], &cov);
@@ -143,6 +164,7 @@ static int stack_whole(const struct c0_support_conf *c, struct c0_frames *in, st
 		cov.mean = NULL;
 	}
 	res->tiles = 1, res->tile = c0_support_tile_size(c, in->width, in->height);
+	res->frames = cov.frames;
 	c0_cov_free(&cov);
 	return st;
 }
@@ -155,7 +177,8 @@ struct stack {
 	const struct c0_support_conf *c;
 	struct c0_support_conf cc;  /* c with the data's PSF width (stack_width) */
 	double fwd;                 /* that width (nm; 0: not measured) */
-	struct c0_frames *in;
+	struct c0_frames *in;      /* n stacks pooled (in[0] gives the sizes) */
+	int n;
 	struct c0_support_share s;
 	int automatic, halves;     /* lambda from the data; the halves' bands needed */
 	double norm, rel;          /* the image's normalisation, lambda / lambda_max */
@@ -182,9 +205,9 @@ static void share_close(struct c0_support_share *s)
 {
 	c0_cov_acc_free(s->acc), s->acc = NULL;
 	for (int j = 0; s->odd && j < s->k1 - s->k0; j++)
-		c0_cov_acc_free(s->odd[j]);
-	free(s->odd), free(s->sub);
-	s->odd = NULL, s->sub = NULL;
+		c0_cov_acc_free(s->odd[j]), c0_cov_acc_free(s->even ? s->even[j] : NULL);
+	free(s->odd), free(s->even), free(s->sub);
+	s->odd = s->even = NULL, s->sub = NULL;
 }
 
 /* After the pass (its status st, collective): the bands sealed, the arrays
@@ -199,8 +222,9 @@ static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
 	if (!st && s->acc)
 		c0_cov_acc_seal(s->acc);
 	for (int j = 0; !st && j < s->k1 - s->k0; j++)
-		if (s->odd[j])
-			c0_cov_acc_seal(s->odd[j]);
+		for (int h = 0; h < 2; h++)
+			if (h ? s->even && s->even[j] : s->odd[j] != NULL)
+				c0_cov_acc_seal(h ? s->even[j] : s->odd[j]);
 	c0_mem_release();    /* the blocks and the frame */
 	double norm = 0;
 	for (int y = s->ia; !st && y < s->ib; y++)
@@ -211,7 +235,9 @@ static int stack_scale(struct stack *k, int st, struct c0_support_result *res)
 	k->stats = c0_alloc(4 * nt, sizeof *k->stats);
 	k->hist = k->automatic ? c0_alloc(C0_LAMBDA_HIST, sizeof *k->hist) : NULL;
 	res->Ly = k->in->height * r, res->Lx = W * r, res->lag = d, res->nlag = c0_cov_lag_count(d);
-	res->frames = k->in->count;
+	res->frames = 0;
+	for (int q = 0; q < k->n; q++)
+		res->frames += k->in[q].count;
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
 	k->obj = c0_alloc(nt * res->nhist, sizeof *k->obj);
@@ -317,8 +343,11 @@ static int stack_solve(struct stack *k, struct c0_support_result *res)
 	const struct c0_support_scale g = { k->norm, res->lambda };
 	if (c->frc)
 		st = c0_comm_status(c0_support_tiles_precision(c, s, &g, res));
-	for (int j = 0; j < s->k1 - s->k0; j++)
+	for (int j = 0; j < s->k1 - s->k0; j++) {
 		c0_cov_acc_free(s->odd[j]), s->odd[j] = NULL;
+		if (s->even)
+			c0_cov_acc_free(s->even[j]), s->even[j] = NULL;
+	}
 	c0_mem_release();     /* the odd bands and the halves' solves */
 	/* the results only now: the steps above fill freed memory again */
 	res->mask = c0_alloc((size_t)res->Ly * res->Lx, 1);
@@ -372,28 +401,45 @@ static int stack_gather(struct stack *k, struct c0_support_result *res)
 
 int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_result *res)
 {
+	return c0_support_stacks(c, in, 1, res);
+}
+
+/* the n stacks are one field: the same size, enough frames each */
+static int stacks_check(struct c0_frames *in, int n, int halves)
+{
+	for (int q = 0; q < n; q++) {
+		if (in[q].width != in[0].width || in[q].height != in[0].height)
+			return c0_fail(C0_EINVAL, "%s: %dx%d pixels, but %s has %dx%d: stacks pooled into one support share one field",
+				       in[q].name, in[q].width, in[q].height, in[0].name, in[0].width, in[0].height);
+		if (halves && in[q].count < 6)
+			return c0_support_fail_short(&in[q]);
+	}
+	return C0_OK;
+}
+
+int c0_support_stacks(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_result *res)
+{
 	memset(res, 0, sizeof *res);
-	struct stack k = { .c = c, .in = in };
+	struct stack k = { .c = c, .in = in, .n = n };
+	if (n < 1)
+		return c0_fail(C0_EINVAL, "support: no stack");
 	int st = c0_support_grid(c, in, &k.s.tl);
 	if (st)
 		return st;
 	double t0 = c0_now();
+	k.automatic = !(c->lambda_rel > 0), k.halves = k.automatic || c->frc;
+	st = stacks_check(in, n, k.halves && k.s.tl.n > 1);
 	/* one tile: every process solves the whole image, as one process does
 	 * (the tiles' path normalises and chooses lambda its own way) */
-	if (k.s.tl.n == 1) {
+	if (st || k.s.tl.n == 1) {
 		c0_tiling_free(&k.s.tl);
-		return stack_whole(c, in, res);
+		return st ? st : stack_whole(c, in, n, res);
 	}
 	/* several tiles or processes: the band of all frames, and for the
 	 * automatic lambda that of the odd frames on a subset of the tiles */
-	k.automatic = !(c->lambda_rel > 0), k.halves = k.automatic || c->frc;
-	if (k.halves && in->count < 6) {
-		c0_tiling_free(&k.s.tl);
-		return c0_support_fail_short(in);
-	}
 	st = share_open(&k);
 	if (!st && k.s.yb > k.s.ya)
-		st = c0_support_stream_tiles(c, in, &k.s);
+		st = c0_support_stream_tiles(c, in, n, &k.s);
 	res->t_cov = c0_now() - t0;
 	double t1 = c0_now();
 	st = stack_scale(&k, st, res);

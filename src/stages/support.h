@@ -107,6 +107,15 @@ double c0_support_default_lambda(enum c0_penalty p);
  * process then makes alone. Under MPI the result is complete on rank 0,
  * and the same on any number of processes. */
 int c0_support_stack(const struct c0_support_conf *c, struct c0_frames *f, struct c0_support_result *res);
+/* The support of n stacks of one field (MA-TIRF angles: one sample, the
+ * same emitters) from their covariances pooled: each stack's about its own
+ * mean and trend, weighted by its degrees of freedom (ops/covpool.h; on
+ * tiles, a segment of the bands each, c0_cov_acc_next). c[q] is stack q's
+ * configuration, the same but for its frame hook and noise map; c[0]'s
+ * decides the rest. The emitter variances are then the stacks' mean ones,
+ * and sigma2 their pooled noise variance, not any one stack's. n = 1 is
+ * c0_support_stack. */
+int c0_support_stacks(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_result *res);
 /* Solves from a finished covariance (which is left unchanged). */
 int c0_support_solve(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_support_result *res);
 void c0_support_result_free(struct c0_support_result *r);

@@ -42,16 +42,22 @@ int c0_support_refit(struct c0_covfit *ctx, int maxit, double *x);
  * its tiles [k0, k1), the rows its windows read [ya, yb) and its interiors
  * cover [ia, ib); the band of all frames over those rows (acc, from row ya)
  * and, for the automatic lambda and the FRC, the odd frames' band of each
- * of its tiles in the noise subset sub (odd[k - k0], else NULL). */
+ * of its tiles in the noise subset sub (odd[k - k0], else NULL). With
+ * several stacks pooled (each a segment of the bands, c0_cov_acc_next) the
+ * even frames have bands of their own too (even, else NULL). */
 struct c0_support_share {
 	struct c0_tiling tl;
 	int k0, k1, ya, yb, ia, ib;
 	struct c0_cov_acc *acc;
-	struct c0_cov_acc **odd;
+	struct c0_cov_acc **odd, **even;
 	uint8_t *sub;
 };
-/* The one pass over the frames for the share, each reading only its rows. */
-int c0_support_stream_tiles(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_share *s);
+/* The one pass over each stack's frames for the share (c[q], in[q], q < n,
+ * one segment each), each process reading only its rows. */
+int c0_support_stream_tiles(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_share *s);
+/* Subset tile k's covariance over the even frames (from its own band, or
+ * from all frames' less the odd ones'). */
+int c0_support_even_window(const struct c0_support_share *s, int k, struct c0_cov *out);
 
 /* The loops over the share's tiles (support_tiles.c), side by side, one
  * tile per thread (the solvers' own loops then run serially, so a tile's

@@ -312,49 +312,85 @@ int c0_stack_noise(const struct c0_support_conf *c, struct c0_frames *in, const 
 	return st;
 }
 
-/* the tiled stack's pass: all frames into s->acc, and the odd ones' windows
- * into the subset's accumulators */
+/* the tiled stack's pass: all frames into s->acc, and the odd ones' (and
+ * with even bands the even ones') windows into the subset's accumulators */
 struct tiles_pass {
 	struct c0_support_share *s;
 	int W;
 	float *win;
 };
 
+static int add_window(const struct tiles_pass *p, struct c0_cov_acc *a, const struct c0_tile *w, const float *mine)
+{
+	const struct c0_support_share *s = p->s;
+	c0_tile_copy(p->win, (size_t)w->w * sizeof *p->win, mine + (size_t)(w->y0 - s->ya) * p->W + w->x0,
+		     (size_t)p->W * sizeof *p->win, w->h, (size_t)w->w * sizeof *p->win);
+	return c0_cov_acc_add(a, p->win);
+}
+
 static int add_tiles(void *ctx, int64_t t, const float *mine)
 {
 	const struct tiles_pass *p = ctx;
 	const struct c0_support_share *s = p->s;
 	int st = c0_cov_acc_add(s->acc, mine);
-	for (int k = s->k0; k < s->k1 && !st && t % 2; k++) {
-		const struct c0_tile *w = &s->tl.t[k];
-		if (!s->odd[k - s->k0])
-			continue;
-		c0_tile_copy(p->win, (size_t)w->w * sizeof *p->win, mine + (size_t)(w->y0 - s->ya) * p->W + w->x0,
-			     (size_t)p->W * sizeof *p->win, w->h, (size_t)w->w * sizeof *p->win);
-		st = c0_cov_acc_add(s->odd[k - s->k0], p->win);
+	for (int k = s->k0; k < s->k1 && !st; k++) {
+		struct c0_cov_acc *a = t % 2 ? s->odd[k - s->k0] : s->even ? s->even[k - s->k0] : NULL;
+		if (a)
+			st = add_window(p, a, &s->tl.t[k], mine);
 	}
 	return st;
 }
 
-int c0_support_stream_tiles(const struct c0_support_conf *c, struct c0_frames *in, struct c0_support_share *s)
+/* the share's accumulators, the even bands with several stacks */
+static int tiles_open(const struct c0_support_conf *c, int W, int H, int n, struct c0_support_share *s)
 {
-	const int W = in->width, rows = s->yb - s->ya, d = c0_support_lag(c);
-	const int block = c0_cov_block_frames((size_t)W * in->height);
+	const int rows = s->yb - s->ya, d = c0_support_lag(c), block = c0_cov_block_frames((size_t)W * H);
 	int st = c0_support_acc_new(c, W, rows, d, 0, s->ya, &s->acc);
 	if (!st)
 		st = c0_cov_acc_set_block(s->acc, block);
-	size_t wmax = 0;
+	if (!st && n > 1 && !(s->even = c0_alloc((size_t)(s->k1 - s->k0) + 1, sizeof *s->even)))
+		st = C0_ENOMEM;
 	for (int k = s->k0; k < s->k1 && !st; k++) {
 		const struct c0_tile *t = &s->tl.t[k];
-		if (s->sub[k] && !(st = c0_support_acc_new(c, t->w, t->h, d, t->x0, t->y0, &s->odd[k - s->k0])))
-			st = c0_cov_acc_set_block(s->odd[k - s->k0], block);
-		wmax = s->sub[k] && (size_t)t->w * t->h > wmax ? (size_t)t->w * t->h : wmax;
+		struct c0_cov_acc **pair[2] = { &s->odd[k - s->k0], s->even ? &s->even[k - s->k0] : NULL };
+		for (int h = 0; h < 2 && !st && s->sub[k]; h++)
+			if (pair[h] && !(st = c0_support_acc_new(c, t->w, t->h, d, t->x0, t->y0, pair[h])))
+				st = c0_cov_acc_set_block(*pair[h], block);
 	}
+	return st;
+}
+
+/* the share's accumulators start stack c's segment: its noise map */
+static int tiles_next(const struct c0_support_conf *c, struct c0_support_share *s)
+{
+	int st = c0_cov_acc_next(s->acc);
+	if (!st && c->noise_map)
+		c0_cov_acc_set_noise(s->acc, c->noise_map, c->noise_map_w, 0, s->ya);
+	for (int k = s->k0; k < s->k1 && !st; k++)
+		for (int h = 0; h < 2 && !st; h++) {
+			struct c0_cov_acc *a = h ? s->even[k - s->k0] : s->odd[k - s->k0];
+			if (a && !(st = c0_cov_acc_next(a)) && c->noise_map)
+				c0_cov_acc_set_noise(a, c->noise_map, c->noise_map_w, s->tl.t[k].x0, s->tl.t[k].y0);
+		}
+	return st;
+}
+
+int c0_support_stream_tiles(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_share *s)
+{
+	const int W = in[0].width, rows = s->yb - s->ya;
+	int st = tiles_open(&c[0], W, in[0].height, n, s);
+	size_t wmax = 0;
+	for (int k = s->k0; k < s->k1; k++)
+		wmax = s->sub[k] && (size_t)s->tl.t[k].w * s->tl.t[k].h > wmax ? (size_t)s->tl.t[k].w * s->tl.t[k].h : wmax;
 	struct tiles_pass p = { s, W, NULL };
 	if (!st && wmax && !(p.win = c0_alloc(wmax, sizeof *p.win)))
 		st = C0_ENOMEM;
-	if (!st)
-		st = each_frame(c, in, 1, s->ya, rows, "covariance", add_tiles, &p);
+	for (int q = 0; q < n && !st; q++) {
+		if (q)
+			st = tiles_next(&c[q], s);
+		if (!st)
+			st = each_frame(&c[q], &in[q], 1, s->ya, rows, "covariance", add_tiles, &p);
+	}
 	free(p.win);
 	return st;
 }

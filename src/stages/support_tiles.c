@@ -13,6 +13,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+int c0_support_even_window(const struct c0_support_share *s, int k, struct c0_cov *out)
+{
+	const struct c0_tile *t = &s->tl.t[k];
+	if (s->even)
+		return c0_cov_acc_window(s->even[k - s->k0], 0, 0, t->h, t->w, out);
+	return c0_cov_acc_window_even(s->acc, s->odd[k - s->k0], t->y0 - s->ya, t->x0, out);
+}
+
 /* One tile: its window's covariance from the accumulator (rows from ya),
  * solved with the image's scale. */
 static int tile_solve(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, const struct c0_tile *t,
@@ -149,7 +157,7 @@ static int tile_cv(const struct c0_support_conf *c, struct c0_support_share *s, 
 	const struct c0_tile *t = &s->tl.t[k];
 	struct c0_cov_acc *o = s->odd[k - s->k0];
 	struct c0_cov ev, od;
-	int st = c0_cov_acc_window_even(s->acc, o, t->y0 - s->ya, t->x0, &ev);
+	int st = c0_support_even_window(s, k, &ev);
 	if (st)
 		return st;
 	if (!(st = c0_cov_acc_window(o, 0, 0, t->h, t->w, &od))) {
@@ -244,14 +252,15 @@ void c0_support_subset(const struct c0_tiling *tl, uint8_t *sub)
 	spread(tl, NULL, tl->n, SUBSET_PX, sub);
 }
 
-/* Tile t's halves (the even frames from all and the odd ones in o), one
- * band at a time: each gives its correlation image; their noise into h */
-static int tile_halves(const struct c0_support_conf *c, struct c0_cov_acc *acc, int ya, struct c0_cov_acc *o,
-		       const struct c0_tile *t, double norm, double *h)
+/* Tile k's halves (the even frames and the odd ones in o), one band at a
+ * time: each gives its correlation image; their noise into h */
+static int tile_halves(const struct c0_support_conf *c, const struct c0_support_share *s, int k, double norm, double *h)
 {
+	const struct c0_tile *t = &s->tl.t[k];
+	struct c0_cov_acc *o = s->odd[k - s->k0];
 	struct c0_cov ev, od;
 	double *ca = NULL, *cb = NULL, *cn = NULL;
-	int st = c0_cov_acc_window_even(acc, o, t->y0 - ya, t->x0, &ev);
+	int st = c0_support_even_window(s, k, &ev);
 	if (!st) {
 		st = c0_lambda_tile_corr(c, &ev, &ca, &cn);
 		c0_cov_free(&ev);
@@ -278,15 +287,15 @@ int c0_support_tiles_lambda(const struct c0_support_conf *c, struct c0_support_s
 	for (int k = s->k0; k < s->k1; k++) {
 		const struct c0_tile *t = &tl->t[k];
 		struct c0_cov all;
-		struct c0_cov_acc *o = hist ? s->odd[k - s->k0] : NULL;
+		const int halves = hist && s->odd[k - s->k0];
 		double *h = hist ? c0_alloc(C0_LAMBDA_HIST, sizeof *h) : NULL;
 		int st = hist && !h ? C0_ENOMEM : c0_cov_acc_window(s->acc, t->y0 - s->ya, t->x0, t->h, t->w, &all);
 		if (!st) {
 			st = c0_lambda_tile_max(c, &all, norm, t->iy0 - t->y0, t->ix0 - t->x0, t->ih, t->iw, lm + 2 * (size_t)k, h);
 			c0_cov_free(&all);
 		}
-		if (!st && o)
-			st = tile_halves(c, s->acc, s->ya, o, t, norm, h);
+		if (!st && halves)
+			st = tile_halves(c, s, k, norm, h);
 		tile_hist_done(hist, h, C0_LAMBDA_HIST, st, &fail, &pr, &done);
 	}
 	c0_progress_end(&pr);
@@ -333,7 +342,7 @@ static int half_solve(const struct c0_support_conf *c, struct c0_support_share *
 	memset(&hr, 0, sizeof hr);
 	const int ih = t->ih * r, iw = t->iw * r, oy = (t->iy0 - t->y0) * r, ox = (t->ix0 - t->x0) * r;
 	struct c0_cov_acc *o = s->odd[k - s->k0];
-	int st = j ? c0_cov_acc_window(o, 0, 0, t->h, t->w, &h) : c0_cov_acc_window_even(s->acc, o, t->y0 - s->ya, t->x0, &h);
+	int st = j ? c0_cov_acc_window(o, 0, 0, t->h, t->w, &h) : c0_support_even_window(s, k, &h);
 	if (!st) {
 		st = c0_support_window_solve(c, &h, NULL, &h.r, g, &hr);
 		c0_cov_free(&h);

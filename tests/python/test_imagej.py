@@ -212,7 +212,8 @@ check(re.search(r"^XDEPTH unit nm colour true range 0.0-400.0 overlay true$", so
       "Xvfb: depth.tif with its depth lookup table and calibration bar")
 sup5 = tifffile.imread(os.path.join(out5, "support.tif"))
 rep5 = json.load(open(os.path.join(out5, "report.json")))
-check(sup5.shape == (96, 128) and all(s["frames"] == 300 for s in rep5["support"]) and "ROI kept 0" in so
+# the support pools the 5 stacks' frames 101-400
+check(sup5.shape == (96, 128) and all(s["frames"] == 5 * 300 for s in rep5["support"]) and "ROI kept 0" in so
       and rep5["argv"][rep5["argv"].index("--acquisition-order") + 1] == "1,2,3,4,5",
       "Xvfb: a rectangular selection (32x24) and frames=101-400 honoured, other options passed, the selection kept")
 asked = sorted(glob.glob(os.path.join(TMP, "col0rme-demo*", "data", "col0rme_run*", "report.json")))

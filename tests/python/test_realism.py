@@ -235,19 +235,28 @@ def test_noisy_pixels(tmp):
 
 
 def test_support_only(tmp):
-    """an epi stack below the critical angle joins the support and stays out of the volume"""
+    """an epi stack below the critical angle joins the support and stays out of the volume:
+    pooled with the others (the default), or its own support joined to the smallest TIRF angle's"""
     ang = [55, 61.48, 63.37, 65.39, 67.58, 70]
     size = ["--width", "24", "--height", "24", "--frames", "150"] if MODE == "quick" else \
         ["--width", "40", "--height", "40", "--frames", "300"]
     data, sim, stacks = simulate(tmp, "epi", "--angles", ",".join(map(str, ang)), *size)
     check(len(stacks) == 6, "six stacks")
     check("excitation" in sim["estimates"]["angles"][0], "the simulator marks the 55 degree stack as epi")
-    rep, d = run(tmp, "epi_run", data, sim, stacks)
+    rep, d = run(tmp, "epi_pool", data, sim, stacks)
+    if rep is not None:
+        p = rep["parameters"]
+        check(p["support_stacks"] == [1, 2, 3, 4, 5, 6] and p["support_pooled"],
+              "support from all six stacks pooled (%s)" % p["support_stacks"])
+        rx = tifffile.imread(os.path.join(tmp, "epi_pool", "rx.tif"))
+        check(rx.ndim == 2, "one pooled support: rx.tif has one plane")
+    rep, d = run(tmp, "epi_run", data, sim, stacks, "--support-pool", "0")
     if rep is None:
         return
     out = os.path.join(tmp, "epi_run")
     p = rep["parameters"]
-    check(p["support_stacks"] == [1, 2], "support from the epi stack and the smallest TIRF angle (%s)" % p["support_stacks"])
+    check(p["support_stacks"] == [1, 2] and not p["support_pooled"],
+          "support-pool 0: support from the epi stack and the smallest TIRF angle (%s)" % p["support_stacks"])
     check(p.get("support_only_stacks") == [1] and "critical" in p.get("support_only_note", ""), "report names the support-only stack")
     s = tifffile.imread(os.path.join(out, "support.tif"))
     rx = tifffile.imread(os.path.join(out, "rx.tif"))   # 2 planes: read as ImageJ lays them out

@@ -75,7 +75,8 @@ def test_contract(data, out):
     check(png_size(os.path.join(out, "depth.png")) is not None and png_size(os.path.join(out, "depth.png"))[0] > W * r,
           "depth.png is a PNG wider than the image (colour bar)")
     check(all(k in rep["timings_s"] for k in ("support", "intensity", "matirf")), "per-stage timings in the report")
-    check(rep["parameters"]["support_stacks"] == [1], "default support stack is the smallest angle")
+    check(rep["parameters"]["support_stacks"] == list(range(1, len(rep["matirf"]["angles_deg"]) + 1)) and
+          rep["parameters"]["support_pooled"], "default support: every stack pooled")
 
 
 def test_accuracy(tmp):
