@@ -161,7 +161,9 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		int st = pooled ? support_pooled(r, c0, &cc, f) : c0_support_stack(&cc, &f[i], &r->sres[k]);
 		if (st)
 			return st;
-		cJSON *o = c0_report_support_stack(r->names[i], &r->sres[k], &cc);
+		char name[300];   /* a pooled support: its stacks said */
+		snprintf(name, sizeof name, r->npool ? "%s and %d more stacks, pooled" : "%s", r->names[i], r->npool - 1);
+		cJSON *o = c0_report_support_stack(name, &r->sres[k], &cc);
 		if (!o)
 			return C0_ENOMEM;
 		cJSON_AddItemToArray(arr, o);
