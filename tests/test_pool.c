@@ -202,6 +202,7 @@ static void test_pooled_support(void)
 	c[0].grid.pixel_nm = c[1].grid.pixel_nm = 100, c[0].grid.fwhm_nm = c[1].grid.fwhm_nm = 229;
 	struct c0_support_result r;
 	CHECK(c0_support_stacks(c, f, 2, &r) == C0_EINVAL && strstr(c0_errmsg(), "second"));
+	c0_frames_close(&f[0]), c0_frames_close(&f[1]);
 }
 
 int main(void)
