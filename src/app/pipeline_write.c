@@ -122,10 +122,10 @@ static int write_intensity(const struct c0_result *r, struct c0_outdir *out)
 
 /* mean_qNN.tif: each stack's temporal mean (camera grid), from the
  * intensity step or, without it, the support step (report.html's error map
- * and mean images read them) */
+ * and mean images read them); a pooled support's mean is no stack's */
 static int write_means(const struct c0_result *r, struct c0_outdir *out)
 {
-	const int ny = r->Ly / r->srf, nx = r->Lx / r->srf, nk = r->mean ? r->n : r->nsup;
+	const int ny = r->Ly / r->srf, nx = r->Lx / r->srf, nk = r->mean ? r->n : r->npool ? 0 : r->nsup;
 	const size_t L = (size_t)ny * nx;
 	float *img = r->mean ? NULL : c0_alloc(L, sizeof *img);
 	int st = r->mean || img ? C0_OK : C0_ENOMEM;
