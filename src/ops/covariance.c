@@ -201,11 +201,21 @@ static int spans_meet(const struct c0_cov_acc *a, int y, int c0, int c1)
 static void row_moments(struct c0_cov_acc *a, int y, const double *p, size_t S)
 {
 	double *s1 = a->s1 + (size_t)y * a->W, *st = a->st + (size_t)y * a->W;
-	for (int b = 0; b < a->nb; b++) {
-		const double t = (double)(a->frames - a->nb + b), *v = p + b * S;
-		for (int x = 0; x < a->W; x++)
-			s1[x] += v[x], st[x] += t * v[x];
+	const double t0 = (double)(a->frames - a->nb);
+	int x = 0;
+	for (; x + 4 <= a->W; x += 4) {   /* the frames inner: 4 pixels' sums stay in registers */
+		double u[4], w[4];
+		for (int k = 0; k < 4; k++)
+			u[k] = s1[x + k], w[k] = st[x + k];
+		for (int b = 0; b < a->nb; b++)
+			for (int k = 0; k < 4; k++)
+				u[k] += p[b * S + x + k], w[k] += (t0 + b) * p[b * S + x + k];
+		for (int k = 0; k < 4; k++)
+			s1[x + k] = u[k], st[x + k] = w[k];
 	}
+	for (; x < a->W; x++)
+		for (int b = 0; b < a->nb; b++)
+			s1[x] += p[b * S + x], st[x] += (t0 + b) * p[b * S + x];
 }
 
 /* flush's work on row y, the ring holding rows y..y+d: chunk by chunk of
@@ -223,6 +233,9 @@ static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw)
 		for (int l = 0; ce < W && l < a->nlag; l++)
 			for (int x = ce; x < (ce + cw < W ? ce + cw : W); x += 16)
 				__builtin_prefetch(a->sum + (size_t)l * n + (size_t)y * W + x, 1);
+		for (int b = 0; y + nr < H && b < nb; b++)   /* and the ring's next row, from memory */
+			for (int x = cx; x < ce; x += 16)
+				__builtin_prefetch(a->blk + b * n + (size_t)(y + nr) * W + x, 0);
 		const int meet = spans_meet(a, y, cx, ce);
 		for (int l = 0; l < a->nlag; l++) {
 			const int dy = a->dy[l], dx = a->dx[l], whole = !a->span || whole_lag(dy, dx);
