@@ -119,7 +119,7 @@ def roofline_rows(r, files, w, T, bw, peak):
     rows = [("drift (block means)", allb, px * len(files) / 1e9, t.get("drift", 0),
              "every stack read; frames decoded one by one, 1 add a pixel: bound by reading"),
             ("support: covariance", supb, (2 * nlag + 4) * px * nsup / 1e9, cov_s,
-             "double multiply-adds (float converted), 4 frames a pass"),
+             "double FMAs (exact float products), rows converted once, chunks in L1"),
             ("support: solve (tiles)", None, None, max(solve_s, 0), "FISTA on the tiles' working sets"),
             ("support: lambda rule", None, None, lam_s, "a first solve and its peaks"),
             ("intensity (means and solves)", allb - supb, 2 * px * (len(files) - nsup) / 1e9, t.get("intensity", 0),
