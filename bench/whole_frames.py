@@ -38,13 +38,14 @@ STEPS = ("drift", "support", "intensity", "render", "bleaching", "matirf")
 
 
 def timed(cmd):
-    """(wall s, peak RSS MiB, exit status, last stderr line) of one child process"""
+    """(wall s, peak RSS MiB, exit status, last stderr line, CPU s: user + system) of one child process"""
     t0 = time.perf_counter()
     p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     err = p.stderr.read()
     _, status, ru = os.wait4(p.pid, 0)
     lines = err.strip().splitlines()
-    return time.perf_counter() - t0, ru.ru_maxrss / 1024.0, os.waitstatus_to_exitcode(status), lines[-1] if lines else ""
+    return (time.perf_counter() - t0, ru.ru_maxrss / 1024.0, os.waitstatus_to_exitcode(status), lines[-1] if lines else "",
+            ru.ru_utime + ru.ru_stime)
 
 
 def stacks(cli, data, w, frames):
@@ -61,11 +62,11 @@ def stacks(cli, data, w, frames):
 
 def run(cli, d, angles, files, tag):
     out = os.path.join(d, "out_" + tag)
-    dt, mem, rc, last = timed([cli, "run", "--fwhm", "229", "--angles", angles, "--force", "-o", out, *files])
+    dt, mem, rc, last, cpu = timed([cli, "run", "--fwhm", "229", "--angles", angles, "--force", "-o", out, *files])
     rep = json.load(open(os.path.join(out, "report.json"))) if rc == 0 else {}
     shutil.rmtree(out, ignore_errors=True)
     lam = sum(x.get("lambda_auto", {}).get("seconds", 0) for x in rep.get("support", []))
-    return dict(wall=dt, mem=mem, rc=rc, last=last, t=rep.get("timings_s", {}), peak=rep.get("peak_rss_mb", {}), lam=lam,
+    return dict(wall=dt, cpu=cpu, mem=mem, rc=rc, last=last, t=rep.get("timings_s", {}), peak=rep.get("peak_rss_mb", {}), lam=lam,
                 rep=rep)
 
 
@@ -118,7 +119,7 @@ def roofline_rows(r, files, w, T, bw, peak):
     rows = [("drift (block means)", allb, px * len(files) / 1e9, t.get("drift", 0),
              "every stack read; frames decoded one by one, 1 add a pixel: bound by reading"),
             ("support: covariance", supb, (2 * nlag + 4) * px * nsup / 1e9, cov_s,
-             "double multiply-adds (float converted), 4 frames a pass"),
+             "double FMAs (exact float products), rows converted once, chunks in L1"),
             ("support: solve (tiles)", None, None, max(solve_s, 0), "FISTA on the tiles' working sets"),
             ("support: lambda rule", None, None, lam_s, "a first solve and its peaks"),
             ("intensity (means and solves)", allb - supb, 2 * px * (len(files) - nsup) / 1e9, t.get("intensity", 0),
@@ -169,7 +170,8 @@ def main():
                 roof = ("%dx%d, %d x %d frames" % (w, w, len(files), T), roofline_rows(r, files, w, T, bw, p64))
             b = run(a.baseline, d, angles, files, "base") if a.baseline else None
             if b and b["rc"] == 0 and r["rc"] == 0:
-                ratio = "%.2fx faster, %.2fx the memory of the baseline" % (b["wall"] / r["wall"], r["mem"] / b["mem"])
+                ratio = "%.2fx faster (CPU s %.0f -> %.0f: %.2fx), %.2fx the memory of the baseline" % (
+                    b["wall"] / r["wall"], b["cpu"], r["cpu"], b["cpu"] / r["cpu"], r["mem"] / b["mem"])
             elif b:
                 ratio = "baseline: %s" % ("%.0f s, %.0f MiB" % (b["wall"], b["mem"]) if b["rc"] == 0 else "failed: " + b["last"])
             elif r["rc"] == 0 and ref is None:
@@ -179,7 +181,8 @@ def main():
             steps = ", ".join("%s %.1f s %s MiB" % (k, r["t"][k], r["peak"].get(k, "?")) for k in STEPS if k in r["t"]) \
                 if r["rc"] == 0 else \
                 "FAILED (exit %d) after %.0f s: %s" % (r["rc"], r["wall"], r["last"])
-            rows.append(("%dx%d" % (w, w), "%d x %d" % (len(files), T), "%.1f" % r["wall"], "%.0f" % r["mem"], steps,
+            rows.append(("%dx%d" % (w, w), "%d x %d" % (len(files), T), "%.1f (CPU %.0f)" % (r["wall"], r["cpu"]),
+                         "%.0f" % r["mem"], steps,
                          "%.1f" % (work / r["wall"] / 1e6), ratio))
             print(" | ".join(rows[-1]), file=sys.stderr, flush=True)
             if r["rc"] == 0 and r["lam"] > 0:   # issue 36: the lambda rule's extra solves on their own row
@@ -190,7 +193,7 @@ def main():
     finally:
         if not a.data:
             shutil.rmtree(data, ignore_errors=True)
-    hdr = ("frame", "stacks x frames", "wall s", "peak RSS MiB", "steps: seconds, peak RSS after it", "Mpx-frames/s", "ratio")
+    hdr = ("frame", "stacks x frames", "wall s (CPU s)", "peak RSS MiB", "steps: seconds, peak RSS after it", "Mpx-frames/s", "ratio")
     wd = [max(len(str(x[i])) for x in rows + [hdr]) for i in range(len(hdr))]
     print("load %.1f, %d CPUs, %s" % (os.getloadavg()[0], os.cpu_count(), cli))
     print(" | ".join(h.ljust(n) for h, n in zip(hdr, wd)))

@@ -30,25 +30,51 @@ static void calibrate(const struct c0_frames *f, int y0, int ny, float *v)
 			v[i] *= f->cal_scale[o + i];
 }
 
+/* The sum of v in double, as added in order. Where all values are integers
+ * of at most 2^22 in magnitude (n < 2^28) every partial sum is exact, so
+ * any order gives that sum bit for bit (uint8/16 frames, uncalibrated):
+ * then it comes from 8 interleaved parts (vectorised, and one pass over v
+ * with the test); otherwise v is added again in order. In that range
+ * v + M - M (float) rounds v to an integer; NaN and infinity fail the bound. */
+static double sum_floats(const float *v, size_t n)
+{
+	const float K = 4194304.f, M = 12582912.f;   /* 2^22, 1.5 2^23 */
+	double p[8] = { 0 }, s = 0;
+	int ok = n < ((size_t)1 << 28);
+	size_t i = 0;
+	for (; i + 8 <= n; i += 8)
+		for (int k = 0; k < 8; k++) {
+			const float u = v[i + k];
+			p[k] += u;
+			ok &= (fabsf(u) <= K) & ((u + M) - M == u);
+		}
+	for (int k = 0; k < 8; k++)
+		s += p[k];
+	for (; i < n; i++)
+		s += v[i], ok &= (fabsf(v[i]) <= K) & ((v[i] + M) - M == v[i]);
+	if (ok)
+		return s;
+	s = 0;
+	for (i = 0; i < n; i++)
+		s += v[i];
+	return s;
+}
+
 static void note_sum(struct c0_frames *f, int64_t t, const float *v)
 {
 	if (!isnan(f->sum[t]))
 		return;   /* noted by an earlier pass: the same raw frame */
 	const size_t n = (size_t)f->height * f->width;
-	double s = 0;
-	for (size_t i = 0; i < n; i++)
-		s += v[i];
-	f->sum[t] = s;
+	f->sum[t] = sum_floats(v, n);
 	if (!f->rows)
 		return;
 	double *r = f->rows + (size_t)t * f->height, *c = f->cols + (size_t)t * f->width;
 	memset(c, 0, (size_t)f->width * sizeof *c);
 	for (int y = 0; y < f->height; y++) {
 		const float *row = v + (size_t)y * f->width;
-		double a = 0;
+		r[y] = sum_floats(row, (size_t)f->width);
 		for (int x = 0; x < f->width; x++)
-			a += row[x], c[x] += row[x];
-		r[y] = a;
+			c[x] += row[x];
 	}
 }
 

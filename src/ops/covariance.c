@@ -1,5 +1,6 @@
 #define _DEFAULT_SOURCE   /* madvise */
 #include "ops/covariance.h"
+#include "ops/covsum.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -118,45 +119,10 @@ void c0_cov_acc_free(struct c0_cov_acc *a)
 	free(a);
 }
 
-/* row[x] += sum_b p_b[x] q_b[x] in double, x in [x0, x1), frame b at
- * offset b * stride. The hot loop of the covariance: built for AVX2 too
- * and chosen at run time (the same operations in the same order, so the
- * same numbers: ISO C does not contract them into FMAs). */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-static void row_products(double *row, const float *p, const float *q, int x0, int x1, int nb, size_t stride)
-{
-	int b = 0;
-	/* four frames a pass: a quarter of the loads and stores of row */
-	for (; b + 4 <= nb; b += 4) {
-		const float *p0 = p + b * stride, *p1 = p0 + stride, *p2 = p1 + stride, *p3 = p2 + stride;
-		const float *q0 = q + b * stride, *q1 = q0 + stride, *q2 = q1 + stride, *q3 = q2 + stride;
-		for (int x = x0; x < x1; x++)
-			row[x] = row[x] + (double)p0[x] * q0[x] + (double)p1[x] * q1[x] + (double)p2[x] * q2[x] +
-				 (double)p3[x] * q3[x];
-	}
-	for (; b < nb; b++) {
-		const float *pb = p + b * stride, *qb = q + b * stride;
-		for (int x = x0; x < x1; x++)
-			row[x] += (double)pb[x] * qb[x];
-	}
-}
-
 /* the lags c0_cov_guard reads (and the variance): kept on every pixel */
 static int whole_lag(int dy, int dx)
 {
 	return (dy == 0 && dx <= 1) || (dy == 1 && dx == 0);
-}
-
-/* acc[x] += the block's products over [x0, x1), through row (in double) */
-static void sum_span(float *acc, double *row, const float *p, const float *q, int x0, int x1, int nb, size_t n)
-{
-	for (int x = x0; x < x1; x++)
-		row[x] = acc[x];
-	row_products(row, p, q, x0, x1, nb, n);
-	for (int x = x0; x < x1; x++)
-		acc[x] = (float)row[x];
 }
 
 int c0_cov_acc_set_region(struct c0_cov_acc *a, const uint8_t *keep)
@@ -190,38 +156,135 @@ int c0_cov_acc_set_region(struct c0_cov_acc *a, const uint8_t *keep)
 	return C0_OK;
 }
 
+/* flush's working set: per thread, the block's rows y..y+d (a ring of d + 1
+ * slots) as doubles, converted once each; frame b of row y at
+ * ring + (y % (d + 1)) nb S + b S, S = W + 8 (rows 8 kB apart would share
+ * L1's sets) */
+struct ring {
+	double *v;
+	size_t S;
+	int slots;
+};
+
+static double *ring_row(const struct ring *g, const struct c0_cov_acc *a, int y)
+{
+	return g->v + (size_t)(y % g->slots) * a->nb * g->S;
+}
+
+static void ring_fill(const struct ring *g, const struct c0_cov_acc *a, int y)
+{
+	const size_t n = (size_t)a->W * a->H;
+	double *dst = ring_row(g, a, y);
+	for (int b = 0; b < a->nb; b++) {
+		const float *src = a->blk + b * n + (size_t)y * a->W;
+		for (int x = 0; x < a->W; x++)
+			dst[b * g->S + x] = src[x];
+	}
+}
+
+/* Columns per pass of flush_row: the ring's d + 1 rows of them stay in L1
+ * (about 40 kB) while every lag reads them; a multiple of the kernel's 32 */
+static int chunk_cols(int d, int nb)
+{
+	const int c = 40960 / ((d + 1) * nb * (int)sizeof(double)) - 2 * d;
+	return c < 32 ? 32 : c > 512 ? 512 : c / 32 * 32;
+}
+
+/* does a span of row y meet columns [c0, c1)? (no region: all do) */
+static int spans_meet(const struct c0_cov_acc *a, int y, int c0, int c1)
+{
+	if (!a->span)
+		return 1;
+	for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++)
+		if (a->span[2 * k] < c1 && a->span[2 * k + 1] > c0)
+			return 1;
+	return 0;
+}
+
+/* s1 and st of row y from the block's frames in order, as c0_cov_acc_add
+ * once did frame by frame (t v is exact in double: the same sums) */
+static void row_moments(struct c0_cov_acc *a, int y, const double *p, size_t S)
+{
+	double *s1 = a->s1 + (size_t)y * a->W, *st = a->st + (size_t)y * a->W;
+	const double t0 = (double)(a->frames - a->nb);
+	int x = 0;
+	for (; x + 4 <= a->W; x += 4) {   /* the frames inner: 4 pixels' sums stay in registers */
+		double u[4], w[4];
+		for (int k = 0; k < 4; k++)
+			u[k] = s1[x + k], w[k] = st[x + k];
+		for (int b = 0; b < a->nb; b++)
+			for (int k = 0; k < 4; k++)
+				u[k] += p[b * S + x + k], w[k] += (t0 + b) * p[b * S + x + k];
+		for (int k = 0; k < 4; k++)
+			s1[x + k] = u[k], st[x + k] = w[k];
+	}
+	for (; x < a->W; x++)
+		for (int b = 0; b < a->nb; b++)
+			s1[x] += p[b * S + x], st[x] += (t0 + b) * p[b * S + x];
+}
+
+/* flush's work on row y, the ring holding rows y..y+d: chunk by chunk of
+ * columns, every lag's products */
+static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw)
+{
+	const int W = a->W, H = a->H, nb = a->nb, nr = a->d + 1 < H - y ? a->d + 1 : H - y;
+	const size_t n = (size_t)W * H, S = g->S;
+	const double *p = ring_row(g, a, y);
+	row_moments(a, y, p, S);
+	for (int cx = 0; cx < W; cx += cw) {
+		const int ce = cx + cw < W ? cx + cw : W;
+		/* the next chunk's sums: the lags' rows are more streams than the
+		 * hardware prefetcher follows, and a chunk is 2 lines of each */
+		for (int l = 0; ce < W && l < a->nlag; l++)
+			for (int x = ce; x < (ce + cw < W ? ce + cw : W); x += 16)
+				__builtin_prefetch(a->sum + (size_t)l * n + (size_t)y * W + x, 1);
+		for (int b = 0; y + nr < H && b < nb; b++)   /* and the ring's next row, from memory */
+			for (int x = cx; x < ce; x += 16)
+				__builtin_prefetch(a->blk + b * n + (size_t)(y + nr) * W + x, 0);
+		const int meet = spans_meet(a, y, cx, ce);
+		for (int l = 0; l < a->nlag; l++) {
+			const int dy = a->dy[l], dx = a->dx[l], whole = !a->span || whole_lag(dy, dx);
+			if (dy >= nr || !(whole || meet))
+				continue;
+			const int x0 = dx < 0 ? (cx > -dx ? cx : -dx) : cx, x1 = dx > 0 ? (ce < W - dx ? ce : W - dx) : ce;
+			float *acc = a->sum + (size_t)l * n + (size_t)y * W;
+			const double *q = ring_row(g, a, y + dy) + dx;   /* q[x]: column x + dx */
+			if (whole) {
+				if (x1 > x0)
+					c0_covsum_span(acc + x0, p + x0, q + x0, x1 - x0, nb, S);
+				continue;
+			}
+			for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++) {
+				const int s0 = a->span[2 * k] > x0 ? a->span[2 * k] : x0;
+				const int s1 = a->span[2 * k + 1] < x1 ? a->span[2 * k + 1] : x1;
+				if (s1 > s0)
+					c0_covsum_span(acc + s0, p + s0, q + s0, s1 - s0, nb, S);
+			}
+		}
+	}
+}
+
 /* The sums are float (half the memory of the band: whole sCMOS frames fit);
  * each pass adds a block of frames in double and rounds once. */
 static void flush(struct c0_cov_acc *a)
 {
-	const int W = a->W, H = a->H, nb = a->nb;
-	const size_t n = (size_t)W * H;
+	const int nb = a->nb, H = a->H, G = 32;   /* rows per task: the ring refills d rows per task */
 	if (!nb)
 		return;
-	/* each (lag, row) owns one accumulator row: no races. Row by row, all
-	 * lags: the block's rows y..y+d stay in cache for every lag (lag by lag,
-	 * each lag swept the whole block from memory: 85 times the block) */
+	const int cw = chunk_cols(a->d, nb);
+	/* each (lag, row) owns one accumulator row: no races */
 #pragma omp parallel
 	{
-		double *row = malloc(sizeof *row * (size_t)W);
-#pragma omp for schedule(dynamic, 4)
-		for (int y = 0; y < H; y++)
-			for (int l = 0; l < a->nlag; l++) {
-				const int dy = a->dy[l], dx = a->dx[l];
-				if (y + dy >= H || !row)
-					continue;
-				const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? W - dx : W;
-				float *acc = a->sum + (size_t)l * n + (size_t)y * W;
-				const float *p = a->blk + (size_t)y * W, *q = a->blk + (size_t)(y + dy) * W + dx;
-				if (!a->span || whole_lag(dy, dx)) {
-					sum_span(acc, row, p, q, x0, x1, nb, n);
-					continue;
-				}
-				for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++)
-					sum_span(acc, row, p, q, a->span[2 * k] > x0 ? a->span[2 * k] : x0,
-						 a->span[2 * k + 1] < x1 ? a->span[2 * k + 1] : x1, nb, n);
+		struct ring g = { NULL, (size_t)a->W + 8, a->d + 1 };
+		g.v = malloc(sizeof *g.v * (size_t)g.slots * nb * g.S);
+#pragma omp for schedule(dynamic, 1)
+		for (int y0 = 0; y0 < H; y0 += G)
+			for (int y = y0; g.v && y < (y0 + G < H ? y0 + G : H); y++) {
+				for (int r = y == y0 ? y : y + a->d; r <= y + a->d && r < H; r++)
+					ring_fill(&g, a, r);
+				flush_row(a, y, &g, cw);
 			}
-		free(row);
+		free(g.v);
 	}
 	a->nb = 0;
 }
@@ -234,14 +297,10 @@ int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
 	if (a->frames == 0)
 		for (size_t i = 0; i < n; i++)
 			a->shift[i] = frame[i];
+	/* the frame's sums (s1, st) are added by flush, from the block */
 	float *dst = a->blk + a->nb * n;
-	const double t = (double)a->frames;
-	for (size_t i = 0; i < n; i++) {
-		double v = frame[i] - a->shift[i];
-		dst[i] = (float)v;
-		a->s1[i] += dst[i];
-		a->st[i] += t * dst[i];
-	}
+	for (size_t i = 0; i < n; i++)
+		dst[i] = frame[i] - a->shift[i];
 	a->frames++;
 	if (++a->nb == a->block)
 		flush(a);
