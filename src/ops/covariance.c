@@ -522,10 +522,10 @@ int c0_cov_acc_next(struct c0_cov_acc *a)
 		return c0_fail(C0_EINVAL, "covariance: a new segment after rows were dropped");
 	if (!a->seg_sum && !(a->seg_sum = c0_alloc(n, sizeof *a->seg_sum)))
 		return C0_ENOMEM;
-	flush(a);
-	centre_segment(a);
 	if (a->noise && !a->seg_noise && !(a->seg_noise = c0_alloc(n, sizeof *a->seg_noise)))
 		return C0_ENOMEM;
+	flush(a);
+	centre_segment(a);
 	for (int y = 0; a->noise && y < a->H; y++)   /* each segment's own map, over its degrees of freedom */
 		for (int x = 0; x < a->W; x++)
 			a->seg_noise[(size_t)y * a->W + x] +=
