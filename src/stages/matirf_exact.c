@@ -3,6 +3,7 @@
  * only the regulariser's rows), and the steps and matrices it needs. */
 #include "stages/matirf_ctx.h"
 #include "ops/tirfop.h"
+#include "core/c0math.h"
 
 #include <string.h>
 
@@ -50,7 +51,7 @@ static void blur_correction(struct matirf_ctx *c, const float *x, int adjoint)
 
 /* corr at depth l of the n columns from k0: W^T r as c0_tirfop_adjoint_add
  * sums it (from 0, the angles in turn), without storing it */
-static void corr_chunk(const struct matirf_ctx *c, int l, size_t k0, size_t n, float *out)
+C0_HOT_SAME static void corr_chunk(const struct matirf_ctx *c, int l, size_t k0, size_t n, float *out)
 {
 	const size_t M = c->M;
 	for (size_t i = 0; i < n; i++)
