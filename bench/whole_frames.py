@@ -97,9 +97,9 @@ def probe():
 def roofline_rows(r, files, w, T, bw, peak):
     """The steps of one run: (step, GB read, GFLOP, seconds, fraction of the roofline, why).
     Counted: every stack's frames are read by drift (block means: 1 add a
-    pixel-frame) and by the intensity step's means (the support stacks' means
-    come from the support pass; 1 add, plus 1 for the block halves of the
-    noise estimate); the support stacks again by the covariance pass (per
+    pixel-frame) and by the intensity step's means (a support stack's own
+    support pass gives its mean, a pooled one does not; 1 add, plus 1 for the
+    block halves of the noise estimate); the support stacks again by the covariance pass (per
     pixel-frame one multiply-add in double for each lag kept, 2 sums for the
     mean and trend, the shift: 2 nlag + 4 flops). Solves (support, lambda
     rule, intensity, MA-TIRF) are iterations on the fine grid's working set,
@@ -109,21 +109,27 @@ def roofline_rows(r, files, w, T, bw, peak):
     nbytes = [os.path.getsize(f) for f in files]
     allb = sum(nbytes) / 1e9
     sup = rep.get("support", [])
-    supb = sum(os.path.getsize(s["stack"]) for s in sup if os.path.isfile(s.get("stack", ""))) / 1e9
+    # the support stacks (1-based): pooled into one support (each read by the covariance
+    # pass, and again by the intensity step for its own noise variance) or each its own
+    par = rep.get("parameters", {})
+    idx = [q - 1 for q in par.get("support_stacks", [])]
+    pooled = bool(par.get("support_pooled"))
+    supb = sum(nbytes[q] for q in idx if 0 <= q < len(nbytes)) / 1e9
     px = w * w * T
     nlag = sup[0]["lags"] if sup else 0
     cov_s = sum(s.get("covariance_s", 0) for s in sup)
     lam_s = r["lam"]
     solve_s = t.get("support", 0) - cov_s - lam_s
-    nsup = len(sup)
+    nsup = len(idx)
+    nint = len(files) if pooled else len(files) - nsup   # the stacks the intensity step reads
     rows = [("drift (block means)", allb, px * len(files) / 1e9, t.get("drift", 0),
              "every stack read; frames decoded one by one, 1 add a pixel: bound by reading"),
             ("support: covariance", supb, (2 * nlag + 4) * px * nsup / 1e9, cov_s,
              "double FMAs (exact float products), rows converted once, chunks in L1"),
             ("support: solve (tiles)", None, None, max(solve_s, 0), "FISTA on the tiles' working sets"),
             ("support: lambda rule", None, None, lam_s, "a first solve and its peaks"),
-            ("intensity (means and solves)", allb - supb, 2 * px * (len(files) - nsup) / 1e9, t.get("intensity", 0),
-             "the other stacks read again (a second pass over their frames), then CG solves for mu"),
+            ("intensity (means and solves)", allb if pooled else allb - supb, 2 * px * nint / 1e9, t.get("intensity", 0),
+             "the stacks read again (pooled: all, each for its own noise variance), then CG solves for mu"),
             ("bleaching", None, None, t.get("bleaching", 0), ""),
             ("render", None, None, t.get("render", 0), ""),
             ("MA-TIRF", None, None, t.get("matirf", 0), "apg PDHG on the support's columns"),
