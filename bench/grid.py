@@ -10,7 +10,8 @@ over the acquisition, run with the defaults and scored against its truth.
 Prints a Markdown table, one row per cell (the median over the seeds):
 Jaccard of the support (40 nm), median absolute and median SIGNED depth error
 (nm; positive = deeper than the truth), depth coverage, and with --sweep the
-best Jaccard of a 12-point sweep of --lambda on the support stack (0.1x to 4x
+best Jaccard of a 12-point sweep of --lambda on the support stacks (`support` on
+every stack: pooled, as the run's support is by default; 0.1x to 4x
 the automatic lambda, ratio about 1.4) and its gap to the automatic choice.
 With a camera "scmos" and a col0rme that accepts --offset-map/--variance-map,
 a "scmos+maps" row runs the same stacks with the simulator's calibration maps.
@@ -98,7 +99,7 @@ def one(cli, work, name, k, sim_opts, seed, sweep, run_opts, maps, label=0):
                     continue
                 o = os.path.join(work, "sweep", "%s_%g" % (key, m))
                 sh([cli, "support", "--fwhm", "229", "--threads", "1", "--force", "--lambda", "%.6g" % (rel * m),
-                    "-o", o, stacks[0]] + run_opts)
+                    "-o", o] + run_opts + stacks)
                 j = json.loads(sh([cli, "eval", "--support", o + "/support.tif", "--support-truth",
                                    sim + "/truth_support.tif"]))["support"]["jaccard"]
                 best = max(best, (j, m))
