@@ -162,10 +162,12 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *c0, struc
 		if (st)
 			return st;
 		char name[300];   /* a pooled support: its stacks said */
-		snprintf(name, sizeof name, r->npool ? "%s and %d more stacks, pooled" : "%s", r->names[i], r->npool - 1);
+		snprintf(name, sizeof name, r->npool ? "%s (+%d stacks, pooled)" : "%s", r->names[i], r->npool - 1);
 		cJSON *o = c0_report_support_stack(name, &r->sres[k], &cc);
 		if (!o)
 			return C0_ENOMEM;
+		if (r->npool)
+			cJSON_AddNumberToObject(o, "stacks_pooled", r->npool);
 		cJSON_AddItemToArray(arr, o);
 		psf_width(r, k, &cc);
 	}

@@ -194,7 +194,9 @@ static void absent(struct c0_html *h, const char *id, const char *title, const c
 void c0_fig_mean(struct c0_html *h, const struct c0_rundir *d)
 {
 	if (!d->n || !d->mean[0]) {
-		absent(h, "mean", "Mean images", "No mean_qNN.tif here: the command read no stacks (matirf), or the run is older than these files.");
+		absent(h, "mean", "Mean images", c0_json_at(d->rep, "support.0.stacks_pooled")
+			? "No mean_qNN.tif here: the support pooled the stacks' covariances, which keeps no stack's own mean (run writes them)."
+			: "No mean_qNN.tif here: the command read no stacks (matirf), or the run is older than these files.");
 		return;
 	}
 	section(h, "mean", "Mean images", "The temporal mean of each stack on the camera grid (after drift correction), "
