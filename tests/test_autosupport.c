@@ -325,15 +325,13 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 	first_abs = res.cv.first_rel * res.lambda_max * res.norm;
 	last_cv = res.cv;
 	snprintf(p, sizeof p, "%s/%s/truth_support.tif", dir, sub);
-	struct c0_tiff_info in;
-	float *t;
-	CHECK(c0_tiff_load_f32(p, &in, &t) == C0_OK);
-	uint8_t *tm = malloc(in.width * in.height);
-	for (int64_t i = 0; i < in.width * in.height; i++)
-		tm[i] = t[i] > 0;
-	struct c0_jaccard ji;
-	c0_jaccard_index(res.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &ji);
-	free(t), free(tm);
+	int tw, th;
+	uint8_t *tm = c0_truth_mask(p, &tw, &th);
+	CHECK(tm && tw == res.Lx && th == res.Ly);
+	struct c0_jaccard ji = { 0 };
+	if (tm)
+		c0_jaccard_index(res.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &ji);
+	free(tm);
 	c0_support_result_free(&res);
 	return ji.index;
 }

@@ -11,9 +11,9 @@
 #include "sim/sim.h"
 #include "io/outdir.h"
 #include "io/frames.h"
-#include "io/tiff.h"
 #include "core/err.h"
 #include "core/rng.h"
+#include "testkit/reference.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -150,15 +150,13 @@ static double jaccard(const char *sub, const uint8_t *mask, int Ly, int Lx)
 {
 	char p[512];
 	snprintf(p, sizeof p, "%s/%s/truth_support.tif", dir, sub);
-	struct c0_tiff_info in;
-	float *t;
-	CHECK(c0_tiff_load_f32(p, &in, &t) == C0_OK);
-	uint8_t *tm = malloc((size_t)Ly * Lx);
-	for (int i = 0; i < Ly * Lx; i++)
-		tm[i] = t[i] > 0;
-	struct c0_jaccard ji;
-	c0_jaccard_index(mask, tm, Ly, Lx, 25, 40, 3 * 4, &ji);
-	free(t), free(tm);
+	int tw, th;
+	uint8_t *tm = c0_truth_mask(p, &tw, &th);
+	CHECK(tm && tw == Lx && th == Ly);
+	struct c0_jaccard ji = { 0 };
+	if (tm)
+		c0_jaccard_index(mask, tm, Ly, Lx, 25, 40, 3 * 4, &ji);
+	free(tm);
 	return ji.index;
 }
 

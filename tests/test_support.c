@@ -853,18 +853,15 @@ static void test_accuracy(void)
 	CHECK(c0_support_stack(&c, &fr, &res) == C0_OK);
 	c0_frames_close(&fr);
 	snprintf(p, sizeof p, "%s/truth_support.tif", dir);
-	struct c0_tiff_info in;
-	float *t;
-	CHECK(c0_tiff_load_f32(p, &in, &t) == C0_OK);
-	uint8_t *tm = malloc(in.width * in.height);
-	for (int i = 0; i < in.width * in.height; i++)
-		tm[i] = t[i] > 0;
-	struct c0_jaccard ji;
-	CHECK(c0_jaccard_index(res.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &ji) == C0_OK);
+	int tw, th;
+	uint8_t *tm = c0_truth_mask(p, &tw, &th);
+	CHECK(tm && tw == res.Lx && th == res.Ly);
+	struct c0_jaccard ji = { 0 };
+	CHECK(tm && c0_jaccard_index(res.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &ji) == C0_OK);
 	fprintf(stderr, "support: JI %.3f (tp %d fp %d fn %d), %d iterations, %.2fs\n", ji.index, ji.tp, ji.fp, ji.fn, res.iters, res.t_solve);
 	CHECK(ji.index >= 0.5);
 	c0_support_result_free(&res);
-	free(t), free(tm);
+	free(tm);
 	snprintf(p, sizeof p, "rm -rf %s", dir);
 	if (system(p)) {}
 }

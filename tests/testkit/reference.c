@@ -4,6 +4,7 @@
 #include "ops/splat.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "io/tiff.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -100,4 +101,19 @@ int c0_pool_guided(const float *const *x, int nq, const uint8_t *mask, const flo
 				out[q][p] = (float)acc[q];
 		}
 	return C0_OK;
+}
+
+uint8_t *c0_truth_mask(const char *path, int *w, int *h)
+{
+	struct c0_tiff_info in;
+	float *t;
+	if (c0_tiff_load_f32(path, &in, &t))
+		return NULL;
+	const size_t n = (size_t)in.width * in.height;
+	uint8_t *m = malloc(n ? n : 1);
+	for (size_t i = 0; m && i < n; i++)
+		m[i] = t[i] > 0;
+	free(t);
+	*w = in.width, *h = in.height;
+	return m;
 }

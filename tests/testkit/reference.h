@@ -24,3 +24,6 @@ int c0_pool_guided(const float *const *x, int nq, const uint8_t *mask, const flo
 /* f (nz x M, the columns at raster indices pixel[0..M)) scaled by
  * sum_q x_q / sum_q pooled_q at each column's pixel (images on the grid). */
 void c0_pool_rescale(float *f, int nz, const int *pixel, size_t M, int nq, const float *const *x, const float *const *pooled);
+/* A simulation's truth_support.tif as a 0/1 mask (allocated; NULL when the
+ * file cannot be read), its size into *w and *h. */
+uint8_t *c0_truth_mask(const char *path, int *w, int *h);
