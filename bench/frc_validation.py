@@ -85,8 +85,10 @@ def measure(d, seed, size=32, frames=500, cli=CLI, threads=1):
         subprocess.run([cli, "simulate", "-o", sim, "--emitters", csv, "--width", str(size), "--height", str(size),
                         "--frames", str(frames), "--angles", "70", "--brightness-cv", "0", "--seed", str(seed)]
                        + common, check=True, capture_output=True)
-        # lines one fine pixel wide: the lambda rule for them (docs/defaults.md#lambda_rule)
-        subprocess.run([cli, "support", "--fwhm", str(FWHM), "--srf", str(SRF), "--lambda-rule", "peaks", "-o", sup,
+        # lines one fine pixel wide: the lambda rule for them (docs/defaults.md#lambda_rule), and no
+        # label radius (the support grown across a tube would close the gap between lines 80 nm apart)
+        subprocess.run([cli, "support", "--fwhm", str(FWHM), "--srf", str(SRF), "--lambda-rule", "peaks",
+                        "--label-radius", "0", "-o", sup,
                         os.path.join(sim, "stack_q01.tif")] + common, check=True, capture_output=True)
         rep = json.load(open(os.path.join(sup, "report.json")))["support"][0]
         rx = tifffile.imread(os.path.join(sup, "rx.tif")).astype(np.float64)

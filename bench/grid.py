@@ -28,7 +28,7 @@ import sys
 from concurrent.futures import ThreadPoolExecutor
 
 N_GLASS, N_SAMPLE = 1.518, 1.33
-SWEEP = [0.1, 0.14, 0.2, 0.28, 0.4, 0.56, 0.8, 1.0, 1.4, 2.0, 2.8, 4.0]
+SWEEP = [0.1, 0.14, 0.2, 0.28, 0.4, 0.56, 0.8, 1.0, 1.4, 2.0, 2.8, 4.0, 5.6, 8.0]
 
 
 def angles(k):

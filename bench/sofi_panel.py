@@ -47,7 +47,7 @@ MEMBERS = {
     "sofibg": ["--seed", "18", "--crop-x", "1200", "--crop-y", "400"],
     "bright": ["--seed", "19", "--crop-x", "0", "--crop-y", "1600", "--photons", "800"] + ADD,
 }
-SWEEP = [4 * 1.6 ** -k for k in range(13)]
+SWEEP = [16 * 1.6 ** -k for k in range(16)]
 
 
 def sh(args):

@@ -73,6 +73,7 @@ struct c0_run_conf {
 	int support_stacks[C0_MAX_STACKS];
 	int nsupport_stacks;
 	int support_pool;
+	double label_radius_nm;
 	enum c0_penalty penalty;
 	double lambda;
 	int lag;
@@ -157,7 +158,7 @@ struct c0_run_conf {
 	uint32_t given[4];
 };
 
-#define C0_RUN_CONF_DEFAULTS { .srf = 4, .support_pool = 1, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
+#define C0_RUN_CONF_DEFAULTS { .srf = 4, .support_pool = 1, .label_radius_nm = 15, .penalty = C0_PENALTY_L1, .iterations = -1, .tol = -1, \
 	.reweightings = 10, .drift = 1, .pixel_guard = 1, .frc = 1, .background = C0_BG_SMOOTH, .beta = 100, .nu = 1, .cg_tol = 1e-3, .cg_iterations = 500, \
 	.graph_radius = 6, .n_glass = 1.518, .n_sample = 1.33, .wavelength_nm = 488, .s_fraction = 0.75, \
 	.z_range_nm = { 0, 400, 20 }, .reg = C0_REG_TV, .kappa = -1, .sparsity = 3e-2, \

@@ -291,6 +291,7 @@ static void simulate(const char *sub, int size, int frames, double drift_x, doub
 	if (sim_cv > 0)
 		s.brightness_cv = sim_cv;
 	s.seed = sim_seed ? sim_seed : 5, s.nangles = 1, s.angles[0] = 65, s.z_min_nm = 0, s.z_max_nm = 200;
+	s.density_per_um = 60;   /* the panel of docs/history/lambda-drift.md, before issue 52's labelled default */
 	if (sim_sparse)
 		s.density_per_um = sim_sparse == 1 ? 15 : 150, s.filaments = sim_sparse == 1 ? 3 : 8;
 	if (sim_brightness > 0)
@@ -314,6 +315,7 @@ static double support_ji(const char *sub, struct c0_drift *d, double lambda_rel,
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
 	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229, c.frc = 0, c.lambda_rel = lambda_rel, c.tile = tile_px;
 	c.lambda_noise = sup_noise;
+	c.label_radius_nm = 0;   /* the lambda rules' own supports, as the panel measured them */
 	if (d)
 		c.frame_fn = c0_drift_frame_fn, c.frame_ctx = c0_drift_hook(d, 0);
 	struct c0_support_result res;

@@ -641,6 +641,10 @@ static void test_noise_variance(void)
 	struct c0_sim_conf s;
 	c0_sim_defaults(&s);
 	s.width = s.height = 32, s.frames = 400, s.nangles = 1, s.background = 0, s.filaments = 3;
+	/* lines at 60 a um, as this bar was set: on the default's 4x denser tubes the
+	 * l1 iterate's shrinkage leaves 20 % more in the residual (173 against 144),
+	 * which the masked fit below takes out */
+	s.density_per_um = 60, s.label_radius_nm = 0;
 	struct c0_emitter *em;
 	int ne;
 	CHECK(c0_sim_structure(&s, &em, &ne) == C0_OK);
@@ -849,18 +853,29 @@ static void test_accuracy(void)
 	CHECK(c0_frames_open(&fr, p) == C0_OK);
 	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
 	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229;
-	struct c0_support_result res;
+	struct c0_support_result res, thin;
 	CHECK(c0_support_stack(&c, &fr, &res) == C0_OK);
+	c.label_radius_nm = 0;   /* the l1 support alone: one pixel across the tubes */
+	CHECK(c0_support_stack(&c, &fr, &thin) == C0_OK);
 	c0_frames_close(&fr);
 	snprintf(p, sizeof p, "%s/truth_support.tif", dir);
 	int tw, th;
 	uint8_t *tm = c0_truth_mask(p, &tw, &th);
 	CHECK(tm && tw == res.Lx && th == res.Ly);
-	struct c0_jaccard ji = { 0 };
+	struct c0_jaccard ji = { 0 }, j0 = { 0 };
 	CHECK(tm && c0_jaccard_index(res.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &ji) == C0_OK);
-	fprintf(stderr, "support: JI %.3f (tp %d fp %d fn %d), %d iterations, %.2fs\n", ji.index, ji.tp, ji.fp, ji.fn, res.iters, res.t_solve);
-	CHECK(ji.index >= 0.5);
-	c0_support_result_free(&res);
+	CHECK(tm && c0_jaccard_index(thin.mask, tm, res.Ly, res.Lx, 25, 40, 3 * 4, &j0) == C0_OK);
+	fprintf(stderr, "support: JI %.3f (tp %d fp %d fn %d), %d iterations, %.2fs; without the label radius %.3f (%d pixels "
+		"against %d)\n", ji.index, ji.tp, ji.fp, ji.fn, res.iters, res.t_solve, j0.index, thin.support_pixels,
+		res.support_pixels);
+	CHECK(ji.index >= 0.65);
+	/* the growth adds pixels and no variance: the l1 pixels are the same */
+	int same = thin.support_pixels < res.support_pixels;
+	for (size_t i = 0; i < (size_t)res.Ly * res.Lx; i++)
+		same &= res.rx[i] == thin.rx[i] && (!thin.mask[i] || res.mask[i]);
+	CHECK(same);
+	CHECK_MSG(ji.index >= j0.index + 0.08, "labelled tubes: JI %.3f grown, %.3f without", ji.index, j0.index);
+	c0_support_result_free(&res), c0_support_result_free(&thin);
 	free(tm);
 	snprintf(p, sizeof p, "rm -rf %s", dir);
 	if (system(p)) {}

@@ -18,7 +18,7 @@ ALIASES = {"pixel_size": "pixel_size_nm", "pixel_nm": "pixel_size_nm", "fwhm": "
            "lambda": "lambda_"}
 # which function takes which (the CLI's commands take the same: tests/install check it)
 RAW_MATIRF = ("offset", "matirf_background", "estimate_background", "background_smooth", "psf_fwhm_nm")
-SUPPORT = ("pixel_nm", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_pool", "penalty", "lambda", "lambda_rule",
+SUPPORT = ("pixel_nm", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_pool", "label_radius_nm", "penalty", "lambda", "lambda_rule",
            "fwhm_rule", "iterations", "support_solver", "tol", "reweightings", "lag", "tile", "drift", "pixel_guard",
            "frc", "offset_map", "variance_map", "gain_map")
 MATIRF = ("pixel_nm", "angles", "n_glass", "n_sample", "wavelength_nm", "s_fraction", "gains", "z_range_nm", "reg",

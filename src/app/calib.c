@@ -84,9 +84,24 @@ static void highpass(const double *v, int W, int H, double *h)
 		}
 }
 
+/* Pixel i and its 3 x 3 neighbours (its high-pass's support) vary in time
+ * no more than lim */
+static int quiet(const float *tv, int W, int H, size_t i, double lim)
+{
+	const int x = (int)(i % (size_t)W), y = (int)(i / (size_t)W);
+	for (int j = y > 0 ? y - 1 : 0; j <= (y + 1 < H ? y + 1 : y); j++)
+		for (int k = x > 0 ? x - 1 : 0; k <= (x + 1 < W ? x + 1 : x); k++)
+			if (!(tv[(size_t)j * W + k] <= lim))
+				return 0;
+	return 1;
+}
+
 /* Does the offset map's fine pattern show in the stack? The correlation of
  * the high-passed mean of the first frames with the high-passed map, over
- * the pixels without a bright spot or a noisy read-out. A map of another
+ * the quiet pixels: no bright spot, no noisy read-out, and no more temporal
+ * variance than the median pixel's across their 3 x 3 neighbourhood (where
+ * labelled structures blink, their shot noise in a mean of 20 frames hides
+ * a pattern of 2 ADU). A map of another
  * region (or camera) of the right size has none; a map flatter than
  * REGION_PATTERN cannot be told from another and passes. *rho: NAN then. */
 static int region_check(const char *path, struct c0_frames *f, const float *off, const float *var, double *rho)
@@ -94,13 +109,13 @@ static int region_check(const char *path, struct c0_frames *f, const float *off,
 	*rho = NAN;
 	const int W = f->width, H = f->height, K = f->count < REGION_FRAMES ? (int)f->count : REGION_FRAMES;
 	const size_t n = (size_t)W * H;
-	double *m = c0_alloc(4 * n, sizeof *m), *hm = m + n, *o = m + 2 * n, *ho = m + 3 * n;
+	double *m = c0_alloc(5 * n, sizeof *m), *hm = m + n, *o = m + 2 * n, *ho = m + 3 * n, *m2 = m + 4 * n;
 	float *fr = c0_alloc(n, sizeof *fr);
 	int st = m && fr ? C0_OK : C0_ENOMEM;
 	for (int t = 0; !st && t < K; t++)
 		if (!(st = c0_frames_read(f, t, fr)))
 			for (size_t i = 0; i < n; i++)
-				m[i] += fr[i] / (double)K;
+				m[i] += fr[i] / (double)K, m2[i] += (double)fr[i] * fr[i] / K;
 	for (int t = 0; t < K; t++)   /* raw sums: the calibrated passes note their own */
 		f->sum[t] = NAN;
 	float *a = st ? NULL : c0_alloc(n, sizeof *a);
@@ -116,9 +131,12 @@ static int region_check(const char *path, struct c0_frames *f, const float *off,
 		for (size_t i = 0; i < n; i++)
 			a[i] = (float)fabs(hm[i]);
 		const double lim = 4 * 1.4826 * median(a, n), vmed = var ? median(var, n) : 0;
+		for (size_t i = 0; i < n; i++)
+			a[i] = (float)(m2[i] - m[i] * m[i]);
+		const double tmed = median(a, n);
 		double sxy = 0, sxx = 0, syy = 0;
 		for (size_t i = 0; i < n; i++)
-			if (fabs(hm[i]) <= lim && (!var || var[i] <= 4 * vmed))
+			if (fabs(hm[i]) <= lim && (!var || var[i] <= 4 * vmed) && quiet(a, W, H, i, tmed))
 				sxy += hm[i] * ho[i], sxx += ho[i] * ho[i], syy += hm[i] * hm[i];
 		if (pat >= REGION_PATTERN && sxx > 0 && syy > 0) {
 			*rho = sxy / sqrt(sxx * syy);

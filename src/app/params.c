@@ -24,6 +24,7 @@ static const struct c0_param table[] = {
 	/* support */
 	LIST(support_stacks, C0_P_INTS, "support-angles", "I,J", "1-based stack numbers of the support (pooled, or with --support-pool 0 each solved and the supports joined)", "every stack pooled; with --support-pool 0 the smallest angle"),
 	NUM(support_pool, C0_P_FLAG, "support-pool", "0|1", "1: one support from the support stacks' covariances pooled (one sample, the same emitters at every angle); 0: a support per stack, joined", "1"),
+	NUM(label_radius_nm, C0_P_DOUBLE, "label-radius", "NM", "radius of the labelled structures about their axis (tube and label; 0: as thin as a line): the support holds every fine pixel whose centre lies within it and half a fine pixel of a ridge it marks (docs/defaults.md#label_radius_nm)", "15"),
 	ENUM(penalty, "l1|cel0", "penalty", "support sparsity penalty", "l1"),
 	NUM(lambda, C0_P_DOUBLE, "lambda", "F", "support regularisation relative to lambda_max (the smallest that gives an empty support)",
 	    "automatic (--lambda-rule): for l1 4 noise sds of the correlation image; with --lambda-rule peaks a first solve at max(2e-2 of the correlation's 90th percentile, 4 noise sds), then max(0.28 of the median emitter peak, 4 noise sds)"),

@@ -114,6 +114,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 		if (st)
 			return st;
 	}
+	if (!(c->label_radius_nm >= 0 && c->label_radius_nm <= fwhm))
+		return c0_fail(C0_EINVAL, "label_radius_nm %g: must be a radius in nm, 0 to the PSF's FWHM (%g)", c->label_radius_nm, fwhm);
 	if (!(c->depth_pool_nm >= -1 && c->depth_pool_nm <= 100 * fwhm))
 		return c0_fail(C0_EINVAL, "depth_pool_nm %g: must be a window in nm (0: off, -1: the default, %g FWHM)", c->depth_pool_nm, C0_DEPTH_POOL_FWHM);
 	if (!(c->depth_pool_range_nm >= -1 && isfinite(c->depth_pool_range_nm)))
@@ -132,7 +134,8 @@ int c0_run_conf_stages(const struct c0_run_conf *c, double pixel_nm, struct c0_s
 					       .frc = c->frc, .tile = c->tile, .guard = c->pixel_guard,
 					       .lambda_cv = c->lambda_rule == C0_LAMBDA_CV,
 					       .lambda_noise = c->lambda_rule == C0_LAMBDA_NOISE,
-					       .fwhm_data = c->fwhm_rule == C0_FWHM_DATA };
+					       .fwhm_data = c->fwhm_rule == C0_FWHM_DATA,
+					       .label_radius_nm = c->label_radius_nm };
 	s->intensity = (struct c0_intensity_conf){ .grid = grid,
 						   .background = c->background, .beta = c->beta, .nu = c->nu, .mu = c->mu,
 						   .tol = c->cg_tol, .maxit = c->cg_iterations,

@@ -3,7 +3,7 @@
 #include "cli/commands.h"
 #include "cli/cmdkit.h"
 
-static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_stacks", "support_pool",
+static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_stacks", "support_pool", "label_radius_nm",
 				      "penalty", "lambda", "lambda_rule", "fwhm_rule", "support_solver", "tile", "drift", "no_drift", "pixel_guard", "frc", "beta", "nu", "discrepancy", "mu", "graph_radius", "graph_orient", "depth_pool_nm", "depth_pool_range_nm", "depth_noise_block",
 				      "bleach", "bleach_factors", "acquisition", "acquisition_order", "gaps_frames", "baseline",
 				      "offset_map", "variance_map", "gain_map", "common_pattern",

@@ -2,7 +2,7 @@
 #include "cli/commands.h"
 #include "cli/cmdkit.h"
 
-static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_pool", "penalty", "lambda", "lambda_rule", "fwhm_rule",
+static const char *const params[] = { "pixel_nm", "channel", "fwhm_nm", "psf_image", "emission_nm", "na", "srf", "support_pool", "label_radius_nm", "penalty", "lambda", "lambda_rule", "fwhm_rule",
 				      "iterations", "support_solver", "tol", "reweightings", "lag", "tile", "drift", "no_drift", "pixel_guard", "frc",
 				      "offset_map", "variance_map", "gain_map", NULL };
 

@@ -5,6 +5,7 @@
 #include <ctype.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* The CLI's own rows (not run parameters). */
@@ -60,7 +61,11 @@ void c0_conf_cli_init(struct c0_conf_cli *m)
 	c0_run_conf_init(&m->c);
 	int n;
 	const struct c0_param *t = c0_params(&n);
-	for (int i = 0; i < n && i < C0_CLI_MAXPARAMS; i++)
+	if (n > C0_CLI_MAXPARAMS) {   /* a row past the end would lose its option silently */
+		fprintf(stderr, "col0rme: internal error: %d parameters, C0_CLI_MAXPARAMS %d\n", n, C0_CLI_MAXPARAMS);
+		abort();
+	}
+	for (int i = 0; i < n; i++)
 		if (t[i].type == C0_P_ENUM)   /* the default's name: the help shows it */
 			m->choice[i] = choice_name(t[i].choices, *(int *)((char *)&m->c + t[i].off), m->names[i], sizeof m->names[i]);
 }

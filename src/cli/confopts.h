@@ -7,7 +7,8 @@
 
 #include <stddef.h>
 
-#define C0_CLI_MAXPARAMS 64
+/* at least the rows of the table (c0_conf_cli_init stops the program otherwise) */
+#define C0_CLI_MAXPARAMS 96
 
 /* The run parameters as options, by their row in app/params.h. */
 struct c0_conf_cli {

@@ -47,13 +47,14 @@ struct c0_sim_conf {
 	/* structure */
 	int filaments;             /* 5 worm-like chains crossing the field */
 	double persistence_nm;     /* 4000 */
-	double density_per_um;     /* 60 emitters per um of filament */
+	double density_per_um;     /* 250 emitters per um of filament (a labelled microtubule's fluorophores
+				    * hold every fine pixel of the tube: docs/defaults.md#label_radius_nm) */
 	double z_min_nm, z_max_nm; /* 0, 400: depth varies smoothly inside */
 	int pairs;                 /* 0; 1 adds a parallel partner pair_sep_nm away, pair_dz_nm deeper */
 	double pair_sep_nm;        /* 120: lateral distance of the partner */
 	double pair_dz_nm;         /* 100: how much deeper the partner runs */
-	double label_radius_nm;    /* 0: every emitter on its filament's axis; R: on a tube of radius R
-				    * around it (a labelled microtubule: 12.5 nm plus the label's reach) */
+	double label_radius_nm;    /* 15: on a tube of this radius around the filament's axis (a labelled
+				    * microtubule: 12.5 nm plus the label's reach); 0: on the axis */
 	const char *emitters_csv;  /* x_nm,y_nm,z_nm[,brightness] instead of filaments */
 	/* photophysics */
 	double tau_on_ms, tau_off_ms;  /* 20, 40 */

@@ -28,7 +28,7 @@ void c0_sim_defaults(struct c0_sim_conf *c)
 {
 	*c = (struct c0_sim_conf){
 		.seed = 1, .width = 64, .height = 64, .frames = 500, .pixel_nm = 100, .fwhm_nm = 229, .srf = 4,
-		.tirf = C0_TIRF_DEFAULTS, .filaments = 5, .persistence_nm = 4000, .density_per_um = 60,
+		.tirf = C0_TIRF_DEFAULTS, .filaments = 5, .persistence_nm = 4000, .density_per_um = 250, .label_radius_nm = 15,
 		.z_min_nm = 0, .z_max_nm = 400, .pair_sep_nm = 120, .pair_dz_nm = 100, .tau_on_ms = 20, .tau_off_ms = 40, .tau_bleach_s = 35, .fps = 100,
 		.brightness = 300, .brightness_cv = 0.3, .background = 40, .offset = 100, .gain = 1,
 		.read_noise = 0, .snr_db = 14.75, .hot_fraction = 0, .hot_sd = 30,

@@ -23,6 +23,7 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	memset(h, 0, sizeof h);
 	struct c0_support_conf cc = *c;
 	cc.lambda_rel = res->lambda_max > 0 ? res->lambda / res->lambda_max : c0_support_default_lambda(c->penalty);
+	cc.label_radius_nm = 0;   /* the precision matches the solves' own pixels */
 	if (cc.fista.maxit > C0_SUPPORT_FRC_MAXIT)
 		cc.fista.maxit = C0_SUPPORT_FRC_MAXIT;
 	int st = C0_OK;

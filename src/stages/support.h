@@ -43,8 +43,11 @@ struct c0_support_conf {
 				    * solve (the second step) */
 	int fwhm_data;             /* 1: where the covariance's PSF width (c0_lambda_psf_fwhm) differs from
 				    * grid.fwhm_nm by more than C0_LAMBDA_PSF_WARN, the solves use it */
+	double label_radius_nm;    /* 15; 0: the support is the l1 solve's; > 0: the labelled structures' radius
+				    * about their axis, and the support grows across their ridges to it
+				    * (c0_support_grow) */
 };
-#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0, 1, 0 }
+#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0, 1, 0, 15 }
 /* g of c0_cov_guard for this PSF: the smallest mean ratio of a point
  * source's signal in a pixel's 4 neighbours to its signal in the pixel,
  * over positions in and around the pixel (0.6 at 229 nm / 100 nm). */

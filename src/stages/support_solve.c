@@ -3,6 +3,7 @@
  * reweighting, the masked fit for the noise variance. */
 #include "stages/support_parts.h"
 #include "ops/covfit.h"
+#include "ops/ridge.h"
 #include "optics/psf.h"
 #include "core/c0math.h"
 #include "core/clock.h"
@@ -255,6 +256,23 @@ static int run(const struct c0_support_conf *c, const uint8_t *mask, struct c0_c
 	return C0_OK;
 }
 
+/* A labelled structure's fluorophores lie up to label_radius_nm from its
+ * axis, so every fine pixel whose centre is within that and half a fine
+ * pixel of the axis holds some. The l1 support marks about one pixel across
+ * a structure, near its axis; the axis is the crest of C = A^T R, the
+ * covariance correlated with the PSF's pairs (smooth, free of background).
+ * The support's 4-neighbours that close to a crest join it (their rx stays
+ * 0: the solve put no variance there). */
+int c0_support_grow(const struct c0_support_conf *c, const double *C, struct c0_support_result *res)
+{
+	const double fine = c->grid.pixel_nm / c->grid.srf;
+	const long n = c0_ridge_grow(C, res->Ly, res->Lx, c->label_radius_nm / fine + 0.5, res->mask);
+	if (n < 0)
+		return C0_ENOMEM;
+	res->support_pixels += (int)n;
+	return C0_OK;
+}
+
 int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
 			    double **band, const struct c0_support_scale *g, struct c0_support_result *res)
 {
@@ -280,6 +298,8 @@ int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov
 		st = normalise(c, cov, mask, band, g, &ctx, C, res);
 	if (!st)
 		st = run(c, mask, &ctx, x, res);
+	if (!st && !mask && c->label_radius_nm > 0)
+		st = c0_support_grow(c, C, res);
 	free(C), free(x), free(Ax), free(part);
 	c0_covop_free(&op);
 	res->t_solve = c0_now() - t0;

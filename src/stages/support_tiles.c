@@ -380,6 +380,7 @@ int c0_support_tiles_precision(const struct c0_support_conf *c, struct c0_suppor
 	struct c0_support_conf cc = *c;
 	if (cc.fista.maxit > C0_SUPPORT_FRC_MAXIT)
 		cc.fista.maxit = C0_SUPPORT_FRC_MAXIT;
+	cc.label_radius_nm = 0;   /* the precision matches the solves' own pixels */
 	/* work items: the two halves of each subset tile of this process */
 	int nw = 0;
 	int *item = c0_alloc(2 * (size_t)(k1 - k0) + 1, sizeof *item);
