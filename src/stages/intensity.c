@@ -49,6 +49,7 @@ struct prob {
 	const double *ybar;
 	const double *yw;         /* w ybar (ybar without weights) */
 	uint8_t *fixed;           /* n + nb */
+	int bfixed;               /* some of the background's fixed[] are set (else its masks are skipped) */
 	double *dinv;             /* Jacobi preconditioner */
 	double *psi2;             /* ||psi_k||^2 on the support */
 	double *deg;              /* weighted graph degree of each support pixel */
@@ -60,21 +61,24 @@ struct prob {
 	int cg_iters, solves, rounds;
 };
 
-/* the normal operator of the quadratic, on the free variables */
+/* the normal operator of the quadratic, on the free variables; the
+ * background's part is masked only when some of it is fixed (b >= 0 is
+ * rarely active: the camera offset is in it) */
 static void normal(void *ctx, const double *in, double *out)
 {
 	struct prob *p = ctx;
 	const int n = p->n, nb = p->nb, NN = p->NN;
 	double *v = p->v;
-	for (int i = 0; i < n + nb; i++)
+	const double *vb = p->bfixed ? v + n : in + n;   /* the free background */
+	for (int i = 0; i < (p->bfixed ? n + nb : n); i++)
 		v[i] = p->fixed[i] ? 0 : in[i];
 	c0_psi_omega_forward(&p->P, v, p->y);
 	if (nb == NN)
 		for (int i = 0; i < NN; i++)
-			p->y[i] += v[n + i];
+			p->y[i] += vb[i];
 	else if (nb == 1)
 		for (int i = 0; i < NN; i++)
-			p->y[i] += p->bscale * v[n];
+			p->y[i] += p->bscale * vb[0];
 	if (p->c->weight)
 		for (int i = 0; i < NN; i++)
 			p->y[i] *= p->c->weight[i];
@@ -85,7 +89,7 @@ static void normal(void *ctx, const double *in, double *out)
 	for (int i = 0; i < n; i++)
 		out[i] += p->mu * gx[i];
 	if (nb == NN) {   /* beta L^2 b */
-		c0_neumann_laplacian(p->P.Ny, p->P.Nx, v + n, p->lb);
+		c0_neumann_laplacian(p->P.Ny, p->P.Nx, vb, p->lb);
 		c0_neumann_laplacian(p->P.Ny, p->P.Nx, p->lb, out + n);
 		for (int i = 0; i < NN; i++)
 			out[n + i] = p->y[i] + p->c->beta * out[n + i];
@@ -95,7 +99,7 @@ static void normal(void *ctx, const double *in, double *out)
 			s += p->y[i];
 		out[n] = p->bscale * s;
 	}
-	for (int i = 0; i < n + nb; i++)
+	for (int i = 0; i < (p->bfixed ? n + nb : n); i++)
 		if (p->fixed[i])
 			out[i] = 0;
 }
@@ -112,10 +116,10 @@ static void precond(void *ctx, const double *in, double *out)
 		out[i] = p->dinv[i] * in[i];
 	if (!smooth)
 		return;
-	for (int i = 0; i < nb; i++)
+	for (int i = 0; p->bfixed && i < nb; i++)
 		p->lb[i] = p->fixed[n + i] ? 0 : in[n + i];
-	c0_neumann_solve(p->nm, 1, p->c->beta, 2, p->lb, out + n);
-	for (int i = 0; i < nb; i++)
+	c0_neumann_solve(p->nm, 1, p->c->beta, 2, p->bfixed ? p->lb : in + n, out + n);
+	for (int i = 0; p->bfixed && i < nb; i++)
 		if (p->fixed[n + i])
 			out[n + i] = 0;
 }
@@ -146,6 +150,7 @@ static int solve(struct prob *p, double *sol)
 	const int n = p->n, nb = p->nb, NN = p->NN;
 	double *b = p->rhs;
 	memset(p->fixed, 0, (size_t)(n + nb));
+	p->bfixed = 0;
 	for (int round = 0; round < 20; round++) {
 		/* rhs = A^T ybar on the free set */
 		c0_psi_omega_adjoint(&p->P, p->yw, b);
@@ -181,7 +186,7 @@ static int solve(struct prob *p, double *sol)
 		int neg = 0;
 		for (int i = 0; i < n + nb; i++)
 			if (!p->fixed[i] && sol[i] < 0)
-				p->fixed[i] = 1, sol[i] = 0, neg++;
+				p->fixed[i] = 1, sol[i] = 0, neg++, p->bfixed |= i >= n;
 		if (!neg)
 			break;
 	}
