@@ -181,6 +181,56 @@ static void lap_apply(void *c, const double *x, double *y)
 	c0_neumann_laplacian(g->Ny, g->Nx, x, y);
 }
 
+/* the Laplacian the obvious way, a pass for each direction's differences
+ * (c0_neumann_laplacian adds them in this order in one pass) */
+static void lap_slow(int Ny, int Nx, const double *in, double *out)
+{
+	for (int y = 0; y < Ny; y++)
+		for (int x = 0; x < Nx; x++) {
+			const double *c = in + (size_t)y * Nx;
+			double *o = out + (size_t)y * Nx;
+			o[x] = Nx == 1 ? 0 : x == 0 ? c[0] - c[1] : x == Nx - 1 ? c[x] - c[x - 1] : 2 * c[x] - c[x - 1] - c[x + 1];
+		}
+	for (int y = 1; y < Ny; y++)
+		for (int x = 0; x < Nx; x++)
+			out[(size_t)y * Nx + x] += in[(size_t)y * Nx + x] - in[(size_t)(y - 1) * Nx + x];
+	for (int y = 0; y < Ny - 1; y++)
+		for (int x = 0; x < Nx; x++)
+			out[(size_t)y * Nx + x] += in[(size_t)y * Nx + x] - in[(size_t)(y + 1) * Nx + x];
+}
+
+/* The one-pass Laplacian against the three passes, bit for bit, and the
+ * padded transform, which zeroes only its padding, giving on a used object
+ * what a fresh one gives */
+static void test_neumann_fast(void)
+{
+	struct c0_rng g;   /* its own: the later tests' draws stay as they were */
+	c0_rng_init(&g, 9, 0);
+	const int sizes[][2] = { { 1, 1 }, { 1, 7 }, { 6, 1 }, { 2, 2 }, { 9, 13 }, { 30, 23 } };
+	for (int t = 0; t < 6; t++) {
+		const int Ny = sizes[t][0], Nx = sizes[t][1], N = Ny * Nx;
+		double *in = malloc(sizeof *in * N), *a = malloc(sizeof *a * N), *b = malloc(sizeof *b * N);
+		for (int i = 0; i < N; i++)
+			in[i] = c0_rng_normal(&g);
+		c0_neumann_laplacian(Ny, Nx, in, a);
+		lap_slow(Ny, Nx, in, b);
+		CHECK_MSG(!memcmp(a, b, sizeof *a * N), "%d x %d: the one-pass Laplacian differs from three passes", Ny, Nx);
+		free(in), free(a), free(b);
+	}
+	const int Ny = 30, Nx = 23, N = Ny * Nx;
+	struct c0_neumann *used, *fresh;
+	CHECK(c0_neumann_new(Ny, Nx, 13, &used) == C0_OK && c0_neumann_new(Ny, Nx, 13, &fresh) == C0_OK);
+	double *x = malloc(sizeof *x * N), *y = malloc(sizeof *y * N), *u = malloc(sizeof *u * N), *v = malloc(sizeof *v * N);
+	for (int i = 0; i < N; i++)
+		x[i] = 1e3 * c0_rng_normal(&g), y[i] = c0_rng_normal(&g);
+	c0_neumann_solve(used, 1, 100, 2, x, u);
+	c0_neumann_solve(used, 1, 100, 2, y, u);
+	c0_neumann_solve(fresh, 1, 100, 2, y, v);
+	CHECK_MSG(!memcmp(u, v, sizeof *u * N), "padded: a used object's answer differs from a fresh one's");
+	c0_neumann_free(used), c0_neumann_free(fresh);
+	free(x), free(y), free(u), free(v);
+}
+
 /* The Laplacian is its own adjoint, and the cosine-transform inverse of
  * a I + beta L^k is the inverse of the operator applied the slow way. */
 static void test_neumann(void)
@@ -372,6 +422,48 @@ static void test_weights(const struct c0_intensity_conf *c0, const double *ybar,
 }
 
 /* simulated blinking data, fixed seed, true support */
+/* c0_intensity_solve_many (every image's tiles in one pool) against each
+ * image's own c0_intensity_solve, bit for bit: three images (the mean, the
+ * mean with a brighter corner, a linear solve at a given mu), one left out,
+ * on 1 and 2 threads */
+static void test_many(const struct c0_intensity_conf *ct, const double *ybar, int Ny, int Nx, int64_t T,
+		      const uint8_t *m, double sig2)
+{
+	const int N = Ny * Nx, L = N * ct->grid.srf * ct->grid.srf;
+	double *y2 = malloc(sizeof *y2 * N);
+	for (int i = 0; i < N; i++)
+		y2[i] = ybar[i] + (i / Nx < Ny / 3 && i % Nx < Nx / 3 ? 20 : 0);
+	struct c0_intensity_conf c[4] = { *ct, *ct, *ct, *ct };
+	c[2].mu = 0.05, c[2].linear = 1;
+	const double *y[4] = { ybar, y2, ybar, y2 };
+	const int64_t Ts[4] = { T, T / 2, T, T };
+	const double s2[4] = { sig2, sig2, sig2, sig2 };
+	const int skip[4] = { 0, 0, 0, 1 };
+	for (int th = 1; th <= 2; th++) {
+		omp_set_num_threads(th);
+		struct c0_intensity_result many[4], one;
+		int sts[4];
+		char msg[4][256];
+		CHECK(c0_intensity_solve_many(4, c, y, Ny, Nx, Ts, m, s2, skip, many, sts, msg) == C0_OK);
+		CHECK(!many[3].x && !sts[3]);
+		for (int i = 0; i < 3; i++) {
+			CHECK(sts[i] == C0_OK);
+			CHECK(c0_intensity_solve(&c[i], y[i], Ny, Nx, Ts[i], m, s2[i], &one) == C0_OK);
+			CHECK_MSG(!sts[i] && many[i].tiles == 4 && !memcmp(many[i].x, one.x, sizeof(float) * L) &&
+					  !memcmp(many[i].b, one.b, sizeof(float) * N) && many[i].mu == one.mu &&
+					  many[i].residual2 == one.residual2 && many[i].solves == one.solves &&
+					  many[i].cg_iters == one.cg_iters && many[i].dp_status == one.dp_status,
+				  "image %d on %d threads: pooled mu %.17g, %d CG steps; alone %.17g, %d", i, th, many[i].mu,
+				  many[i].cg_iters, one.mu, one.cg_iters);
+			c0_intensity_result_free(&one);
+		}
+		for (int i = 0; i < 4; i++)
+			c0_intensity_result_free(&many[i]);
+	}
+	omp_set_num_threads(2);
+	free(y2);
+}
+
 static void test_simulated(void)
 {
 	struct c0_sim_conf s;
@@ -467,6 +559,7 @@ static void test_simulated(void)
 	CHECK_MSG(sqrt(dx / nx) <= TILE_X_TOL, "tiles: x differs from one solve by %.1f%%", 100 * sqrt(dx / nx));
 	CHECK_MSG(db <= TILE_B_TOL, "tiles: background differs from one solve by %.1f%%", 100 * db);
 	c0_intensity_result_free(&tr[0]), c0_intensity_result_free(&tr[1]);
+	test_many(&ct, ybar, Ny, Nx, s.frames, m, sig2);
 	test_weights(&c, ybar, Ny, Nx, s.frames, m, sig2, xt, &res, pe);
 	c0_intensity_result_free(&res);
 	c0_sim_scene_free(sc);
@@ -562,6 +655,7 @@ int main(void)
 	RUN(test_operators);
 	RUN(test_orient);
 	RUN(test_neumann);
+	RUN(test_neumann_fast);
 	RUN(test_discrepancy);
 	RUN(test_linear);
 	RUN(test_simulated);

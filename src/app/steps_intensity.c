@@ -66,26 +66,41 @@ static int read_stack(const struct c0_support_conf *sc, void *hook, const float 
 }
 
 /* With the camera's read-noise map (less its median, noise): each pixel's
- * weight in the intensity fit, s2 over its own noise variance s2 + noise */
+ * weight in the intensity fit, s2 over its own noise variance s2 + noise
+ * (*w NULL without one) */
+static int solve_weights(double s2, const float *noise, int H, int W, float **w)
+{
+	*w = noise && s2 > 0 ? malloc((size_t)H * W * sizeof **w) : NULL;
+	if (noise && s2 > 0 && !*w)
+		return C0_ENOMEM;
+	for (size_t p = 0; *w && p < (size_t)H * W; p++)
+		(*w)[p] = (float)(s2 / fmax(0.5 * s2, s2 + noise[p]));
+	return C0_OK;
+}
+
+/* the mean less the background, for the corrected image */
+static int solve_corrected(const double *mean, const struct c0_intensity_result *res, size_t nc, float **corrected)
+{
+	if (!(*corrected = c0_alloc(nc, sizeof **corrected)))
+		return C0_ENOMEM;
+	for (size_t p = 0; p < nc; p++)
+		(*corrected)[p] = (float)(mean[p] - res->b[p]);
+	return C0_OK;
+}
+
 static int intensity_solve(const struct c0_intensity_conf *ic, const double *mean, int H, int W, int64_t frames,
 			   const uint8_t *mask, double s2, const float *noise, struct c0_intensity_result *res, float **corrected)
 {
 	struct c0_intensity_conf c = *ic;
-	float *w = noise && s2 > 0 ? malloc((size_t)H * W * sizeof *w) : NULL;
-	if (noise && s2 > 0 && !w)
-		return C0_ENOMEM;
-	for (size_t p = 0; w && p < (size_t)H * W; p++)
-		w[p] = (float)(s2 / fmax(0.5 * s2, s2 + noise[p]));
+	float *w;
+	int st = solve_weights(s2, noise, H, W, &w);
+	if (st)
+		return st;
 	c.weight = w;
-	int st = c0_intensity_solve(&c, mean, H, W, frames, mask, s2, res);
+	st = c0_intensity_solve(&c, mean, H, W, frames, mask, s2, res);
 	free(w);
-	if (!st && corrected) {
-		size_t nc = (size_t)H * W;
-		if (!(*corrected = c0_alloc(nc, sizeof **corrected)))
-			st = C0_ENOMEM;
-		for (size_t p = 0; !st && p < nc; p++)
-			(*corrected)[p] = (float)(mean[p] - res->b[p]);
-	}
+	if (!st && corrected)
+		st = solve_corrected(mean, res, (size_t)H * W, corrected);
 	return st;
 }
 
@@ -181,6 +196,36 @@ static void solve_one(struct c0_result *r, const struct c0_intensity_conf *ic, i
 		sts[i] = intensity_compact(r, i);
 	if (sts[i])
 		snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+}
+
+/* Every stack's first solve, when each is cut into tiles: all their tiles
+ * in one pool (stages/intensity.h), the same numbers as solve_one's */
+static void solve_pooled(struct c0_result *r, const struct c0_intensity_conf *ic, const double *const *mean, int H, int W,
+			 const int64_t *frames, const double *s2, int corrected, int *sts, char (*msg)[256])
+{
+	const int n = r->n;
+	struct c0_intensity_conf c[C0_MAX_STACKS];
+	float *w[C0_MAX_STACKS] = { 0 };
+	int bad = 0;
+	for (int i = 0; i < n; i++) {
+		c[i] = *ic;
+		if ((sts[i] = solve_weights(s2[i], c0_result_noise(r, i), H, W, &w[i])))
+			snprintf(msg[i], sizeof msg[i], "%s", "out of memory"), bad = 1;
+		c[i].weight = w[i];
+	}
+	if (!bad)
+		c0_intensity_solve_many(n, c, mean, H, W, frames, r->mask, s2, NULL, r->ires, sts, msg);
+	for (int i = 0; i < n; i++) {
+		free(w[i]);
+		if (bad || sts[i])
+			continue;
+		if (corrected)
+			sts[i] = solve_corrected(mean[i], &r->ires[i], (size_t)H * W, &r->corrected[i]);
+		if (!sts[i])
+			sts[i] = intensity_compact(r, i);
+		if (sts[i])
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+	}
 }
 
 /* Stack i's intensity on the mask's pixels (raster order): xs[i], or its
@@ -359,13 +404,68 @@ static int noise_draw(struct c0_result *r, const struct c0_intensity_conf *ic, i
 	return st;
 }
 
+/* Stack i's noise draw from its pooled solve res (freed here): on pl,
+ * scaled as noise_draw's */
+static int noise_keep(struct c0_result *r, int i, struct c0_intensity_result *res, const int64_t *count)
+{
+	float *x = pixlist_values(&r->pl, res->x);
+	const double scale = 1 / sqrt((double)(count[0] + count[1]) * (1.0 / count[0] + 1.0 / count[1]));
+	for (size_t k = 0; x && k < r->pl.M; k++)
+		x[k] = (float)(x[k] * scale);
+	r->xnoise[i] = x;
+	c0_intensity_result_free(res);
+	return x ? C0_OK : C0_ENOMEM;
+}
+
+/* noise_draws when each stack is cut into tiles: all their tiles in one
+ * pool, the same numbers as noise_draw's */
+static void noise_pooled(struct c0_result *r, const struct c0_intensity_conf *ic, const int *skip, float *(*half)[2],
+			 int64_t (*count)[2], const double *s2, int *sts, char (*msg)[256])
+{
+	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx;
+	const size_t N = (size_t)H * W;
+	struct c0_intensity_conf c[C0_MAX_STACKS];
+	struct c0_intensity_result res[C0_MAX_STACKS];
+	double *d[C0_MAX_STACKS] = { 0 };
+	float *w[C0_MAX_STACKS] = { 0 };
+	int64_t T[C0_MAX_STACKS];
+	int bad = 0;
+	for (int i = 0; i < n; i++) {
+		c[i] = *ic, c[i].mu = r->ires[i].mu, c[i].linear = 1, c[i].tol = fmax(c[i].tol, C0_NOISE_DRAW_TOL);
+		T[i] = count[i][0] + count[i][1];
+		if (skip[i])
+			continue;
+		if (solve_weights(s2[i], c0_result_noise(r, i), H, W, &w[i]) || !(d[i] = c0_alloc(N, sizeof *d[i])))
+			sts[i] = C0_ENOMEM, snprintf(msg[i], sizeof msg[i], "%s", "out of memory"), bad = 1;
+		for (size_t p = 0; d[i] && p < N; p++)
+			d[i][p] = (double)half[i][0][p] - half[i][1][p];
+		c[i].weight = w[i];
+	}
+	if (!bad)
+		c0_intensity_solve_many(n, c, (const double *const *)d, H, W, T, r->mask, s2, skip, res, sts, msg);
+	for (int i = 0; i < n; i++) {
+		free(d[i]), free(w[i]);
+		if (bad || skip[i] || sts[i])
+			continue;
+		if ((sts[i] = noise_keep(r, i, &res[i], count[i])))
+			snprintf(msg[i], sizeof msg[i], "%s", "out of memory");
+	}
+}
+
 /* The noise draws of the share[] stacks (all without share), side by side
- * when each is one tile */
+ * when each is one tile, else their tiles in one pool */
 static void noise_draws(struct c0_result *r, const struct c0_intensity_conf *ic, const int *share, float *(*half)[2],
 			int64_t (*count)[2], const double *s2, int *sts, char (*msg)[256])
 {
 	const int n = r->n, H = r->ires[0].Ny, W = r->ires[0].Nx, one_tile = !(ic->tile > 0 && ic->tile < (H > W ? H : W));
-#pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile)
+	if (!one_tile) {
+		int skip[C0_MAX_STACKS];
+		for (int i = 0; i < n; i++)
+			skip[i] = !half[i][0] || (share && !share[i]);
+		noise_pooled(r, ic, skip, half, count, s2, sts, msg);
+		return;
+	}
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
 	for (int i = 0; i < n; i++) {
 		if (!half[i][0] || (share && !share[i]))
 			continue;
@@ -407,11 +507,14 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 	int bad = 0;
 	for (int i = 0; i < n; i++)
 		bad |= sts[i], mean[i] = known[i] ? known[i]->mean : own[i];
+	if (!one_tile && !bad)
+		solve_pooled(r, ic, mean, H, W, frames, s2, corrected, sts, msg);
 #pragma omp parallel for schedule(dynamic, 1) if (n > 1 && one_tile && !bad)
 	for (int i = 0; i < n; i++) {
 		if (bad)
 			continue;
-		solve_one(r, ic, i, mean[i], H, W, frames, s2, corrected, sts, msg);
+		if (one_tile)
+			solve_one(r, ic, i, mean[i], H, W, frames, s2, corrected, sts, msg);
 		for (size_t p = 0; p < (size_t)H * W; p++)   /* kept for mean_qNN.tif and the report's error map */
 			r->mean[(size_t)i * H * W + p] = (float)mean[i][p];
 #pragma omp critical(c0_intensity_progress)

@@ -11,25 +11,37 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* one row: its horizontal differences, and the vertical ones to the rows
- * above and below where they exist (NULL at the edges) */
+/* one row: its horizontal differences, then the vertical ones to the rows
+ * above and below where they exist (NULL at the edges), added in that order
+ * (the sums of three passes, bit for bit) in one pass over the row */
 static void lap_row(int Nx, const double *restrict c, const double *restrict up, const double *restrict dn,
 		    double *restrict o)
 {
 	if (Nx == 1) {
 		o[0] = 0;
+		if (up)
+			o[0] += c[0] - up[0];
+		if (dn)
+			o[0] += c[0] - dn[0];
+		return;
+	}
+	if (up && dn) {
+		o[0] = c[0] - c[1] + (c[0] - up[0]) + (c[0] - dn[0]);
+		for (int x = 1; x < Nx - 1; x++)
+			o[x] = 2 * c[x] - c[x - 1] - c[x + 1] + (c[x] - up[x]) + (c[x] - dn[x]);
+		o[Nx - 1] = c[Nx - 1] - c[Nx - 2] + (c[Nx - 1] - up[Nx - 1]) + (c[Nx - 1] - dn[Nx - 1]);
+	} else if (up || dn) {
+		const double *e = up ? up : dn;
+		o[0] = c[0] - c[1] + (c[0] - e[0]);
+		for (int x = 1; x < Nx - 1; x++)
+			o[x] = 2 * c[x] - c[x - 1] - c[x + 1] + (c[x] - e[x]);
+		o[Nx - 1] = c[Nx - 1] - c[Nx - 2] + (c[Nx - 1] - e[Nx - 1]);
 	} else {
 		o[0] = c[0] - c[1];
 		for (int x = 1; x < Nx - 1; x++)
 			o[x] = 2 * c[x] - c[x - 1] - c[x + 1];
 		o[Nx - 1] = c[Nx - 1] - c[Nx - 2];
 	}
-	if (up)
-		for (int x = 0; x < Nx; x++)
-			o[x] += c[x] - up[x];
-	if (dn)
-		for (int x = 0; x < Nx; x++)
-			o[x] += c[x] - dn[x];
 }
 
 void c0_neumann_laplacian(int Ny, int Nx, const double *in, double *out)
@@ -114,10 +126,11 @@ void c0_neumann_solve(struct c0_neumann *s, double a, double beta, int k, const 
 			}
 		s->a = a, s->beta = beta, s->k = k;
 	}
-	if (Px != s->Nx || Py != s->Ny)
-		memset(s->work, 0, sizeof *s->work * n);
-	for (int y = 0; y < s->Ny; y++)
+	for (int y = 0; y < s->Ny; y++) {   /* the inverse transform wrote all of work: its padding zeroed again */
 		memcpy(s->work + (size_t)y * Px, in + (size_t)y * s->Nx, sizeof *in * s->Nx);
+		memset(s->work + (size_t)y * Px + s->Nx, 0, sizeof *s->work * (size_t)(Px - s->Nx));
+	}
+	memset(s->work + (size_t)s->Ny * Px, 0, sizeof *s->work * (size_t)(Py - s->Ny) * Px);
 	fftw_execute(s->fwd);
 	if (s->periodic)
 		for (size_t i = 0; i < nc; i++)

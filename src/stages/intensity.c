@@ -49,6 +49,7 @@ struct prob {
 	const double *ybar;
 	const double *yw;         /* w ybar (ybar without weights) */
 	uint8_t *fixed;           /* n + nb */
+	int bfixed;               /* some of the background's fixed[] are set (else its masks are skipped) */
 	double *dinv;             /* Jacobi preconditioner */
 	double *psi2;             /* ||psi_k||^2 on the support */
 	double *deg;              /* weighted graph degree of each support pixel */
@@ -60,21 +61,24 @@ struct prob {
 	int cg_iters, solves, rounds;
 };
 
-/* the normal operator of the quadratic, on the free variables */
+/* the normal operator of the quadratic, on the free variables; the
+ * background's part is masked only when some of it is fixed (b >= 0 is
+ * rarely active: the camera offset is in it) */
 static void normal(void *ctx, const double *in, double *out)
 {
 	struct prob *p = ctx;
 	const int n = p->n, nb = p->nb, NN = p->NN;
 	double *v = p->v;
-	for (int i = 0; i < n + nb; i++)
+	const double *vb = p->bfixed ? v + n : in + n;   /* the free background */
+	for (int i = 0; i < (p->bfixed ? n + nb : n); i++)
 		v[i] = p->fixed[i] ? 0 : in[i];
 	c0_psi_omega_forward(&p->P, v, p->y);
 	if (nb == NN)
 		for (int i = 0; i < NN; i++)
-			p->y[i] += v[n + i];
+			p->y[i] += vb[i];
 	else if (nb == 1)
 		for (int i = 0; i < NN; i++)
-			p->y[i] += p->bscale * v[n];
+			p->y[i] += p->bscale * vb[0];
 	if (p->c->weight)
 		for (int i = 0; i < NN; i++)
 			p->y[i] *= p->c->weight[i];
@@ -85,7 +89,7 @@ static void normal(void *ctx, const double *in, double *out)
 	for (int i = 0; i < n; i++)
 		out[i] += p->mu * gx[i];
 	if (nb == NN) {   /* beta L^2 b */
-		c0_neumann_laplacian(p->P.Ny, p->P.Nx, v + n, p->lb);
+		c0_neumann_laplacian(p->P.Ny, p->P.Nx, vb, p->lb);
 		c0_neumann_laplacian(p->P.Ny, p->P.Nx, p->lb, out + n);
 		for (int i = 0; i < NN; i++)
 			out[n + i] = p->y[i] + p->c->beta * out[n + i];
@@ -95,7 +99,7 @@ static void normal(void *ctx, const double *in, double *out)
 			s += p->y[i];
 		out[n] = p->bscale * s;
 	}
-	for (int i = 0; i < n + nb; i++)
+	for (int i = 0; i < (p->bfixed ? n + nb : n); i++)
 		if (p->fixed[i])
 			out[i] = 0;
 }
@@ -112,10 +116,10 @@ static void precond(void *ctx, const double *in, double *out)
 		out[i] = p->dinv[i] * in[i];
 	if (!smooth)
 		return;
-	for (int i = 0; i < nb; i++)
+	for (int i = 0; p->bfixed && i < nb; i++)
 		p->lb[i] = p->fixed[n + i] ? 0 : in[n + i];
-	c0_neumann_solve(p->nm, 1, p->c->beta, 2, p->lb, out + n);
-	for (int i = 0; i < nb; i++)
+	c0_neumann_solve(p->nm, 1, p->c->beta, 2, p->bfixed ? p->lb : in + n, out + n);
+	for (int i = 0; p->bfixed && i < nb; i++)
 		if (p->fixed[n + i])
 			out[n + i] = 0;
 }
@@ -146,6 +150,7 @@ static int solve(struct prob *p, double *sol)
 	const int n = p->n, nb = p->nb, NN = p->NN;
 	double *b = p->rhs;
 	memset(p->fixed, 0, (size_t)(n + nb));
+	p->bfixed = 0;
 	for (int round = 0; round < 20; round++) {
 		/* rhs = A^T ybar on the free set */
 		c0_psi_omega_adjoint(&p->P, p->yw, b);
@@ -181,7 +186,7 @@ static int solve(struct prob *p, double *sol)
 		int neg = 0;
 		for (int i = 0; i < n + nb; i++)
 			if (!p->fixed[i] && sol[i] < 0)
-				p->fixed[i] = 1, sol[i] = 0, neg++;
+				p->fixed[i] = 1, sol[i] = 0, neg++, p->bfixed |= i >= n;
 		if (!neg)
 			break;
 	}
@@ -266,14 +271,9 @@ static int background_only(const struct c0_intensity_conf *c, const double *ybar
 
 static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
-static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
-		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
 
-int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
-		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
+static int solve_check(const struct c0_intensity_conf *c, double sigma2)
 {
-	memset(res, 0, sizeof *res);
-	double t0 = c0_now();
 	int st = c0_intensity_check(c);
 	if (st)
 		return st;
@@ -281,98 +281,208 @@ int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, in
 		return c0_fail(C0_EINVAL, "linear intensity solve: needs a given mu (got %g)", c->mu);
 	if (c->mu == 0 && !(sigma2 > 0))
 		return c0_fail(C0_EINVAL, "noise variance %g: the discrepancy principle needs a positive noise variance (or give mu)", sigma2);
-	st = c->tile > 0 && c->tile < (Ny > Nx ? Ny : Nx) ? solve_tiled(c, ybar, Ny, Nx, T, mask, sigma2, res)
-							    : solve_whole(c, ybar, Ny, Nx, T, mask, sigma2, res);
+	return C0_OK;
+}
+
+static int tiled(const struct c0_intensity_conf *c, int Ny, int Nx)
+{
+	return c->tile > 0 && c->tile < (Ny > Nx ? Ny : Nx);
+}
+
+/* One image's tiles, solved one at a time (by any thread) and put together
+ * in tile order */
+struct c0_intensity_tiles {
+	struct c0_intensity_conf c;   /* tile 0: a tile is one solve */
+	const double *ybar;
+	const uint8_t *mask;
+	int Ny, Nx;
+	int64_t T;
+	double sigma2;
+	struct c0_tiling tl;
+	double *ts;   /* per tile: weight, mu, residual2, target2, floor2, status, solves, cg, seconds */
+	struct c0_intensity_result res;
+	struct c0_first_fail fail;
+};
+#define TILE_NUMBERS 9
+
+/* The tiles' windows overlap by two PSF lags (6 sigma each): the PSF and
+ * the background's smoothing length (beta^(1/4) ~ 3.2 coarse pixels) fit. */
+static int tiles_new(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T, const uint8_t *mask,
+		     double sigma2, struct c0_intensity_tiles **out)
+{
+	struct c0_intensity_tiles *s = c0_alloc(1, sizeof *s);
+	*out = NULL;
+	if (!s)
+		return C0_ENOMEM;
+	const int r = c->grid.srf;
+	int st = c0_tiling_make(Ny, Nx, c->tile, 2 * c0_grid_lag(&c->grid, 0), &s->tl);
+	if (st) {
+		free(s);
+		return st;
+	}
+	s->c = *c, s->c.tile = 0, s->ybar = ybar, s->mask = mask, s->Ny = Ny, s->Nx = Nx, s->T = T, s->sigma2 = sigma2;
+	struct c0_intensity_result *res = &s->res;
+	res->Ly = Ny * r, res->Lx = Nx * r, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2, res->tiles = s->tl.n;
+	res->x = c0_alloc((size_t)Ny * Nx * r * r, sizeof *res->x);
+	res->b = c0_alloc((size_t)Ny * Nx, sizeof *res->b);
+	s->ts = c0_alloc(TILE_NUMBERS * (size_t)s->tl.n, sizeof *s->ts);
+	*out = s;
+	return res->x && res->b && s->ts ? C0_OK : C0_ENOMEM;
+}
+
+/* tile k of s: each solve runs serially, so a tile's numbers do not depend
+ * on the thread count or on which thread solves it */
+static void tiles_solve(struct c0_intensity_tiles *s, int k)
+{
+	const struct c0_intensity_conf *c = &s->c;
+	const int r = c->grid.srf, Nx = s->Nx, Lx = Nx * r;
+	const struct c0_tile *t = &s->tl.t[k];
+	const size_t nw = (size_t)t->h * t->w, Lw = nw * r * r;
+	const double t0 = c0_now();
+	double *y = malloc(nw * sizeof *y);
+	uint8_t *m = malloc(Lw);
+	float *wt = c->weight ? malloc(nw * sizeof *wt) : NULL;
+	struct c0_intensity_result tr;
+	memset(&tr, 0, sizeof tr);
+	int tst = y && m && (wt || !c->weight) ? C0_OK : C0_ENOMEM, any = 0;
+	for (int a = 0; !tst && a < t->h; a++)
+		memcpy(y + (size_t)a * t->w, s->ybar + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *y);
+	for (int a = 0; !tst && wt && a < t->h; a++)
+		memcpy(wt + (size_t)a * t->w, c->weight + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *wt);
+	struct c0_intensity_conf tc = *c;   /* this tile's weights */
+	tc.weight = wt;
+	for (int a = 0; !tst && a < t->h * r; a++) {
+		memcpy(m + (size_t)a * t->w * r, s->mask + (size_t)(t->y0 * r + a) * Lx + (size_t)t->x0 * r, (size_t)t->w * r);
+		for (int b = 0; b < t->w * r && !any; b++)
+			any = m[(size_t)a * t->w * r + b];
+	}
+	if (!tst)
+		tst = any ? solve_whole(&tc, y, t->h, t->w, s->T, m, s->sigma2, &tr) : background_only(&tc, y, t->h, t->w, &tr);
+	if (!tst) {
+		struct c0_intensity_result *res = &s->res;
+		const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
+		for (int a = 0; a < t->ih * r; a++)
+			memcpy(res->x + (size_t)(t->iy0 * r + a) * Lx + (size_t)t->ix0 * r,
+			       tr.x + (size_t)(oy * r + a) * tr.Lx + (size_t)ox * r, (size_t)t->iw * r * sizeof *res->x);
+		for (int a = 0; a < t->ih; a++)
+			memcpy(res->b + (size_t)(t->iy0 + a) * Nx + t->ix0, tr.b + (size_t)(oy + a) * t->w + ox,
+			       (size_t)t->iw * sizeof *res->b);
+		double *n = s->ts + TILE_NUMBERS * (size_t)k;
+		n[0] = any ? (double)t->ih * t->iw / (double)nw : 0;   /* the interior's share of the window */
+		n[1] = tr.mu, n[2] = tr.residual2, n[3] = tr.target2, n[4] = tr.floor2;
+		n[5] = tr.dp_status, n[6] = tr.solves, n[7] = tr.cg_iters, n[8] = c0_now() - t0;
+	}
+	c0_first_fail_note(&s->fail, tst);
+	c0_intensity_result_free(&tr);
+	free(y), free(m), free(wt);
+}
+
+/* s's tiles put together (in tile order: the same sums whatever the
+ * schedule) into *res, and s freed; seconds: the tiles' own, summed */
+static int tiles_finish(struct c0_intensity_tiles *s, struct c0_intensity_result *res)
+{
+	int st = c0_first_fail_raise(&s->fail);
+	double lmu = 0, wmu = 0;
+	*res = s->res;
+	res->dp_status = s->c.mu > 0 ? -1 : 0;
+	for (int k = 0; !st && k < s->tl.n; k++) {
+		const double *n = s->ts + TILE_NUMBERS * (size_t)k;
+		const struct c0_tile *t = &s->tl.t[k];
+		res->solves += (int)n[6], res->cg_iters += (int)n[7], res->seconds += n[8];
+		if (!(n[0] > 0))
+			continue;   /* background only: no mu */
+		lmu += t->ih * t->iw * log(n[1]), wmu += t->ih * t->iw;
+		res->residual2 += n[0] * n[2], res->target2 += n[0] * n[3], res->floor2 += n[0] * n[4];
+		res->tiles_met += n[5] <= 0;
+		if (res->dp_status == 0 && n[5] > 0)
+			res->dp_status = (int)n[5];   /* the first tile whose principle failed says how */
+	}
+	res->mu = wmu > 0 ? exp(lmu / wmu) : 0;
+	free(s->ts);
+	c0_tiling_free(&s->tl);
+	free(s);
+	if (st)
+		c0_intensity_result_free(res);
+	return st;
+}
+
+static void tiles_free(struct c0_intensity_tiles *s)
+{
+	if (s) {
+		c0_intensity_result_free(&s->res);
+		free(s->ts);
+		c0_tiling_free(&s->tl);
+		free(s);
+	}
+}
+
+int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
+{
+	memset(res, 0, sizeof *res);
+	double t0 = c0_now();
+	int st = solve_check(c, sigma2);
+	if (st)
+		return st;
+	if (!tiled(c, Ny, Nx))
+		st = solve_whole(c, ybar, Ny, Nx, T, mask, sigma2, res);
+	else {
+		struct c0_intensity_tiles *s;
+		if ((st = tiles_new(c, ybar, Ny, Nx, T, mask, sigma2, &s))) {
+			tiles_free(s);
+			return st;
+		}
+#pragma omp parallel for schedule(dynamic, 1)
+		for (int k = 0; k < s->tl.n; k++)
+			tiles_solve(s, k);
+		st = tiles_finish(s, res);
+	}
 	res->seconds = c0_now() - t0;
 	if (st)
 		c0_intensity_result_free(res);
 	return st;
 }
 
-/* The tiles' windows overlap by two PSF lags (6 sigma each): the PSF and
- * the background's smoothing length (beta^(1/4) ~ 3.2 coarse pixels) fit. */
-static int solve_tiled(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
-		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res)
+int c0_intensity_solve_many(int n, const struct c0_intensity_conf *c, const double *const *ybar, int Ny, int Nx,
+			    const int64_t *T, const uint8_t *mask, const double *sigma2, const int *skip,
+			    struct c0_intensity_result *res, int *sts, char (*msg)[256])
 {
-	const int r = c->grid.srf, Lx = Nx * r, halo = 2 * c0_grid_lag(&c->grid, 0);
-	struct c0_tiling tl;
-	int st = c0_tiling_make(Ny, Nx, c->tile, halo, &tl);
-	if (st)
-		return st;
-	res->Ly = Ny * r, res->Lx = Lx, res->Ny = Ny, res->Nx = Nx, res->sigma2 = sigma2, res->tiles = tl.n;
-	res->x = c0_alloc((size_t)Ny * Nx * r * r, sizeof *res->x);
-	res->b = c0_alloc((size_t)Ny * Nx, sizeof *res->b);
-	double *ts = c0_alloc(8 * (size_t)tl.n, sizeof *ts);   /* per tile: weight, mu, residual2, target2, floor2, status, solves, cg */
-	if (!res->x || !res->b || !ts) {
-		free(ts);
-		c0_tiling_free(&tl);
-		return C0_ENOMEM;
+	struct c0_intensity_tiles *s[C0_MAX_STACKS] = { 0 };
+	int first[C0_MAX_STACKS + 1] = { 0 }, bad = 0;
+	if (n > C0_MAX_STACKS)
+		return c0_fail(C0_EINVAL, "%d images: at most %d", n, C0_MAX_STACKS);
+	for (int i = 0; i < n; i++) {
+		memset(&res[i], 0, sizeof res[i]);
+		sts[i] = skip && skip[i] ? C0_OK : solve_check(&c[i], sigma2[i]);
+		if (!sts[i] && !(skip && skip[i]) && !tiled(&c[i], Ny, Nx))
+			sts[i] = c0_fail(C0_EINVAL, "tile %d: the image (%d x %d) is one tile", c[i].tile, Nx, Ny);
+		if (!sts[i] && !(skip && skip[i]))
+			sts[i] = tiles_new(&c[i], ybar[i], Ny, Nx, T[i], mask, sigma2[i], &s[i]);
+		if (sts[i])
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+		bad |= sts[i];
+		first[i + 1] = first[i] + (s[i] ? s[i]->tl.n : 0);
 	}
-	struct c0_intensity_conf cc = *c;
-	cc.tile = 0;
-	struct c0_first_fail fail = { 0 };
-	/* one tile per thread: each solve then runs serially, so a tile's
-	 * numbers do not depend on the thread count */
+	if (!bad) {
 #pragma omp parallel for schedule(dynamic, 1)
-	for (int k = 0; k < tl.n; k++) {
-		const struct c0_tile *t = &tl.t[k];
-		const size_t nw = (size_t)t->h * t->w, Lw = nw * r * r;
-		double *y = malloc(nw * sizeof *y);
-		uint8_t *m = malloc(Lw);
-		float *wt = c->weight ? malloc(nw * sizeof *wt) : NULL;
-		struct c0_intensity_result tr;
-		memset(&tr, 0, sizeof tr);
-		int tst = y && m && (wt || !c->weight) ? C0_OK : C0_ENOMEM, any = 0;
-		for (int a = 0; !tst && a < t->h; a++)
-			memcpy(y + (size_t)a * t->w, ybar + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *y);
-		for (int a = 0; !tst && wt && a < t->h; a++)
-			memcpy(wt + (size_t)a * t->w, c->weight + (size_t)(t->y0 + a) * Nx + t->x0, (size_t)t->w * sizeof *wt);
-		struct c0_intensity_conf tc = cc;   /* this tile's weights */
-		tc.weight = wt;
-		for (int a = 0; !tst && a < t->h * r; a++) {
-			memcpy(m + (size_t)a * t->w * r, mask + (size_t)(t->y0 * r + a) * Lx + (size_t)t->x0 * r, (size_t)t->w * r);
-			for (int b = 0; b < t->w * r && !any; b++)
-				any = m[(size_t)a * t->w * r + b];
+		for (int j = 0; j < first[n]; j++) {
+			int i = 0;
+			while (j >= first[i + 1])
+				i++;
+			tiles_solve(s[i], j - first[i]);
 		}
-		if (!tst)
-			tst = any ? solve_whole(&tc, y, t->h, t->w, T, m, sigma2, &tr) : background_only(&tc, y, t->h, t->w, &tr);
-		if (!tst) {
-			const int oy = t->iy0 - t->y0, ox = t->ix0 - t->x0;
-			for (int a = 0; a < t->ih * r; a++)
-				memcpy(res->x + (size_t)(t->iy0 * r + a) * Lx + (size_t)t->ix0 * r,
-				       tr.x + (size_t)(oy * r + a) * tr.Lx + (size_t)ox * r, (size_t)t->iw * r * sizeof *res->x);
-			for (int a = 0; a < t->ih; a++)
-				memcpy(res->b + (size_t)(t->iy0 + a) * Nx + t->ix0, tr.b + (size_t)(oy + a) * t->w + ox,
-				       (size_t)t->iw * sizeof *res->b);
-			double *s = ts + 8 * (size_t)k;
-			s[0] = any ? (double)t->ih * t->iw / (double)nw : 0;   /* the interior's share of the window */
-			s[1] = tr.mu, s[2] = tr.residual2, s[3] = tr.target2, s[4] = tr.floor2;
-			s[5] = tr.dp_status, s[6] = tr.solves, s[7] = tr.cg_iters;
+	}
+	for (int i = 0; i < n; i++) {
+		if (!s[i])
+			continue;
+		if (bad) {
+			tiles_free(s[i]);
+			continue;
 		}
-		c0_first_fail_note(&fail, tst);
-		c0_intensity_result_free(&tr);
-		free(y), free(m), free(wt);
+		if ((sts[i] = tiles_finish(s[i], &res[i])))
+			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 	}
-	st = c0_first_fail_raise(&fail);
-	/* in tile order: the same sums whatever the schedule */
-	double lmu = 0, wmu = 0;
-	res->dp_status = c->mu > 0 ? -1 : 0;
-	for (int k = 0; !st && k < tl.n; k++) {
-		const double *s = ts + 8 * (size_t)k;
-		const struct c0_tile *t = &tl.t[k];
-		res->solves += (int)s[6], res->cg_iters += (int)s[7];
-		if (!(s[0] > 0))
-			continue;   /* background only: no mu */
-		lmu += t->ih * t->iw * log(s[1]), wmu += t->ih * t->iw;
-		res->residual2 += s[0] * s[2], res->target2 += s[0] * s[3], res->floor2 += s[0] * s[4];
-		res->tiles_met += s[5] <= 0;
-		if (res->dp_status == 0 && s[5] > 0)
-			res->dp_status = (int)s[5];   /* the first tile whose principle failed says how */
-	}
-	res->mu = wmu > 0 ? exp(lmu / wmu) : 0;
-	free(ts);
-	c0_tiling_free(&tl);
-	return st;
+	return C0_OK;
 }
 
 /* Psi_Omega and its graph; with graph_orient, the graph's differences along

@@ -73,4 +73,14 @@ int c0_intensity_check(const struct c0_intensity_conf *c);
  * A window without support pixels solves only the background. */
 int c0_intensity_solve(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
 		       const uint8_t *mask, double sigma2, struct c0_intensity_result *res);
+/* n images of one size solved as c0_intensity_solve does, each with its own
+ * conf (which must cut it into tiles), frames and noise variance, their
+ * tiles in one pool side by side: the numbers of each are those of its own
+ * c0_intensity_solve, and with n images a thread is idle only at the last
+ * tile, not at each image's. skip[i] (NULL: none): image i is left out.
+ * sts[i] and msg[i]: image i's status and error text; res[i].seconds is the
+ * sum of its tiles' solve times (thread seconds). */
+int c0_intensity_solve_many(int n, const struct c0_intensity_conf *c, const double *const *ybar, int Ny, int Nx,
+			    const int64_t *T, const uint8_t *mask, const double *sigma2, const int *skip,
+			    struct c0_intensity_result *res, int *sts, char (*msg)[256]);
 void c0_intensity_result_free(struct c0_intensity_result *r);
