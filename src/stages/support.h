@@ -71,7 +71,7 @@ double c0_support_tol(const struct c0_support_conf *c);
 struct c0_support_result {
 	int Ly, Lx, lag, nlag;
 	int64_t frames;
-	uint8_t *mask;             /* Ly x Lx, 1 where r_x > 0 */
+	uint8_t *mask;             /* Ly x Lx, 1 where r_x > 0 and where the support grew (label_radius_nm) */
 	float *rx;                 /* Ly x Lx, emitter variance in camera units^2 */
 	double *mean;              /* Ny x Nx temporal mean of the stack */
 	double sigma2;             /* noise variance, camera units^2 */
