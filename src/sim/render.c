@@ -191,16 +191,15 @@ void c0_sim_render(const struct c0_sim_scene *s, int t, double *ph)
 			c0_psf_pixel_weights(ey, s->sig, y0, K, dwy);
 			wx = dwx, wy = dwy;
 		}
-		for (int j = 0; j < K; j++) {
-			int y = y0 + j;
-			if (y < 0 || y >= H)
-				continue;
-			double ay = a * wy[j];
-			for (int k = 0; k < K; k++) {
-				int x = x0 + k;
-				if (x >= 0 && x < W)
-					ph[y * W + x] += ay * wx[k];
-			}
+		/* the window clipped to the frame first: a branch-free row the
+		 * compiler vectorises (the same sums, in the same order) */
+		const int j0 = y0 < 0 ? -y0 : 0, j1 = y0 + K > H ? H - y0 : K;
+		const int k0 = x0 < 0 ? -x0 : 0, k1 = x0 + K > W ? W - x0 : K;
+		for (int j = j0; j < j1; j++) {
+			const double ay = a * wy[j];
+			double *row = ph + (size_t)(y0 + j) * W;
+			for (int k = k0; k < k1; k++)
+				row[x0 + k] += ay * wx[k];
 		}
 	}
 }
