@@ -120,6 +120,13 @@ cJSON *c0_report_support_stack(const char *name, const struct c0_support_result 
 	cJSON_AddNumberToObject(o, "tiles", s->tiles);
 	cJSON_AddNumberToObject(o, "tile_px", s->tile);
 	cJSON_AddNumberToObject(o, "support_pixels", s->support_pixels);
+	if (c->label_radius_nm > 0) {   /* the pixels the growth added: in the support, no variance of their own */
+		int grown = 0;
+		for (size_t i = 0; s->mask && i < (size_t)s->Ly * s->Lx; i++)
+			grown += s->mask[i] && !(s->rx[i] > 0);
+		cJSON_AddNumberToObject(o, "label_radius_nm", c->label_radius_nm);
+		cJSON_AddNumberToObject(o, "grown_pixels", grown);
+	}
 	cJSON_AddNumberToObject(o, "covariance_s", s->t_cov);
 	cJSON_AddNumberToObject(o, "covariance_frames_per_s", s->t_cov > 0 ? (double)s->frames / s->t_cov : 0);
 	cJSON_AddNumberToObject(o, "solve_s", s->t_solve);

@@ -66,6 +66,11 @@ def test_contract(data, out):
     vf = tifffile.TiffFile(os.path.join(out, "volume.tif"))
     v = vf.asarray()
     rep = json.load(open(os.path.join(out, "report.json")))
+    # the support grown across the labelled tubes: its new pixels have no emitter variance
+    rx, st = tifffile.imread(os.path.join(out, "rx.tif")), rep["support"][0]
+    grown = int(((s > 0) & ~(rx.reshape(-1, *s.shape) > 0).any(axis=0)).sum())
+    check(st.get("label_radius_nm") == 15 and 0 < st.get("grown_pixels", 0) == grown < st["support_pixels"] == int(s.sum()),
+          "report.json: %s of %s support pixels grown (rx.tif: %d)" % (st.get("grown_pixels"), st["support_pixels"], grown))
     z = rep.get("z_nm", [])
     check(v.dtype == np.float32 and v.shape == (len(z), H * r, W * r), "volume.tif Nz x rH x rW float32 %s" % (v.shape,))
     check(np.allclose(z, np.arange(10, 400, 20)), "z_nm are the default bin centres")
