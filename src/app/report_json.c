@@ -193,6 +193,11 @@ void c0_report_bleach(cJSON *rep, const struct c0_bleach_conf *bc, const struct 
 		for (int q = 0; q < n; q++)
 			v[q] = br->k_stack[q] == br->k_stack[q] ? br->k_stack[q] : 0;
 		c0_report_add_array(o, "rate_per_frame_by_stack", v, n);
+		cJSON_AddBoolToObject(o, "first_stack_transient", br->first_left_out);
+		if (br->first_left_out)
+			cJSON_AddStringToObject(o, "first_stack_transient_meaning",
+						"the first stack recorded faded faster in its first half than in its second (a start-up "
+						"transient: the blinking not yet in its steady state); its rate is its second half's");
 		c0_report_add_array(o, "start_frame", br->start, n);
 		c0_report_add_array(o, "signal_per_frame", br->signal, n);
 	}

@@ -76,18 +76,17 @@ static void stack_rate(const double *S, int64_t T, double B, double *m, double *
 	*rho = rss > 0 ? lag / rss : 0;
 }
 
-int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res)
+/* res's k_fit, k, k_sd and rho from the stacks' rates k_stack (variances
+ * var, lag-1 autocorrelations r) */
+static int fit_rates(int n, const double *var, const double *r, const int64_t *T, struct c0_bleach_result *res)
 {
 	double wsum = 0, wk = 0, rho = 0, nrho = 0;
-	for (int q = 0; q < n; q++) {
-		double var, r;
-		stack_rate(S[q], T[q], B[q], &res->signal[q], &res->k_stack[q], &var, &r);
-		if (var > 0) {
-			wsum += 1 / var;
-			wk += res->k_stack[q] / var;
-			rho += r * (double)T[q], nrho += (double)T[q];
+	for (int q = 0; q < n; q++)
+		if (var[q] > 0) {
+			wsum += 1 / var[q];
+			wk += res->k_stack[q] / var[q];
+			rho += r[q] * (double)T[q], nrho += (double)T[q];
 		}
-	}
 	if (!(wsum > 0))
 		return c0_fail(C0_EINVAL, "bleaching: no stack has signal above its background to measure the fade from (set bleach off, or give bleach_factors)");
 	res->k_fit = wk / wsum;
@@ -99,6 +98,37 @@ int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double 
 	res->k_sd = sqrt((1 + rho) / (1 - rho) / wsum);
 	res->rho = rho;
 	return C0_OK;
+}
+
+/* A blinking population starts away from its steady state (every dye on
+ * when the light comes on), and the first frames recorded fade faster than
+ * bleaching: a start-up transient. Bleaching fades both halves of the first
+ * stack alike; where its first half's rate exceeds its second's by more
+ * than C0_BLEACH_TRANSIENT sds, the stack's rate is its second half's. */
+static void first_transient(const double *S, int64_t T, double B, double *k, double *var, double *r,
+			    struct c0_bleach_result *res)
+{
+	if (T < 8)
+		return;
+	const int64_t h = T / 2;
+	double m[2], kh[2], vh[2], rh[2];
+	stack_rate(S, h, B, &m[0], &kh[0], &vh[0], &rh[0]);
+	stack_rate(S + h, T - h, B, &m[1], &kh[1], &vh[1], &rh[1]);
+	if (!(vh[0] > 0 && vh[1] > 0))
+		return;
+	const double rho = fmin(0.9, fmax(0, 0.5 * (rh[0] + rh[1]))), ar = (1 + rho) / (1 - rho);
+	if (kh[0] - kh[1] > C0_BLEACH_TRANSIENT * sqrt(ar * (vh[0] + vh[1])))
+		*k = kh[1], *var = vh[1], *r = rh[1], res->first_left_out = 1;
+}
+
+int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, int first, struct c0_bleach_result *res)
+{
+	double var[C0_BLEACH_MAX] = { 0 }, r[C0_BLEACH_MAX] = { 0 };
+	for (int q = 0; q < n; q++)
+		stack_rate(S[q], T[q], B[q], &res->signal[q], &res->k_stack[q], &var[q], &r[q]);
+	if (first >= 0 && first < n && var[first] > 0)
+		first_transient(S[first], T[first], B[first], &res->k_stack[first], &var[first], &r[first], res);
+	return fit_rates(n, var, r, T, res);
 }
 
 void c0_bleach_clock(const struct c0_bleach_conf *c, int n, const int64_t *T, double *start)
@@ -236,7 +266,7 @@ int c0_bleach_run(const struct c0_bleach_conf *c, int n, struct c0_frames *f, co
 	if (fail)   /* the per-thread messages are lost: say which step failed */
 		st = c0_fail(C0_EIO, "bleach: could not read the frames of the stacks");
 	if (!st)
-		st = c0_bleach_fit(n, (const double *const *)S, T, B, res);
+		st = c0_bleach_fit(n, (const double *const *)S, T, B, c->interleaved ? -1 : c->norder ? c->order[0] : 0, res);
 	if (!st)
 		c0_bleach_factors(c, n, T, res);
 	res->significant = fabs(res->k_fit) >= C0_BLEACH_SIGNIF * res->k_sd;

@@ -24,6 +24,10 @@
 /* The estimated rate counts as measured when it is this many sds from zero;
  * below, the run warns that the stacks do not show the fade. */
 #define C0_BLEACH_SIGNIF 2
+/* The first stack recorded fades faster in its first half than in its
+ * second by this many sds: a start-up transient (blinking not yet in its
+ * steady state), and its rate is its second half's (docs/defaults.md#bleach). */
+#define C0_BLEACH_TRANSIENT 3
 
 /* repeat: the last stack recorded is a repeat of the first's angle; the ratio
  * of their intensity totals on the support is the fade between them,
@@ -52,6 +56,7 @@ struct c0_bleach_result {
 	double start[C0_BLEACH_MAX];  /* first frame's time on the acquisition clock (frames) */
 	double signal[C0_BLEACH_MAX]; /* m_q, mean signal part of a frame sum */
 	int significant;              /* 0: estimated, and |k_fit| within C0_BLEACH_SIGNIF sds of zero */
+	int first_left_out;           /* 1: the first stack's first half was a start-up transient, not in k */
 };
 
 /* The order is a permutation of the n stacks, the gap count 0, 1 or n - 1
@@ -59,8 +64,11 @@ struct c0_bleach_result {
  * parameter (acquisition_order, gaps_frames, bleach_factors). */
 int c0_bleach_check(const struct c0_bleach_conf *c, int n);
 /* k from the frame sums S[q] (T[q] values each) and the background's sum
- * per frame B[q] (n stacks): k_fit, and k = max(0, k_fit). */
-int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, struct c0_bleach_result *res);
+ * per frame B[q] (n stacks): k_fit, and k = max(0, k_fit). first: the stack
+ * recorded first (-1: none, interleaved), whose rate is its second half's
+ * after a start-up transient (first_left_out). */
+int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double *B, int first,
+		  struct c0_bleach_result *res);
 /* The acquisition's clock: stack q's first frame at start[q] (in frames;
  * frame t at start[q] + t), from the order, the gaps and the interleaving. */
 void c0_bleach_clock(const struct c0_bleach_conf *c, int n, const int64_t *T, double *start);
