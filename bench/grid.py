@@ -10,8 +10,8 @@ over the acquisition, run with the defaults and scored against its truth.
 Prints a Markdown table, one row per cell (the median over the seeds):
 Jaccard of the support (40 nm), median absolute and median SIGNED depth error
 (nm; positive = deeper than the truth), depth coverage, and with --sweep the
-best Jaccard of a 12-point sweep of --lambda on the support stacks (`support` on
-every stack: pooled, as the run's support is by default; 0.1x to 4x
+best Jaccard of a 14-point sweep of --lambda on the support stacks (`support` on
+every stack: pooled, as the run's support is by default; 0.1x to 8x
 the automatic lambda, ratio about 1.4) and its gap to the automatic choice.
 With a camera "scmos" and a col0rme that accepts --offset-map/--variance-map,
 a "scmos+maps" row runs the same stacks with the simulator's calibration maps.

@@ -17,8 +17,8 @@ reads as it reads the simulator's.
 Prints a Markdown table, one row per member: the Jaccard index of the support at 40 and
 25 nm (one-to-one matching, as COL0RME's code scores it), its fine pixels against the
 truth's, depth.tif's median absolute and median signed error (nm; positive = deeper than
-the truth), and with --sweep the best Jaccard (40 nm) of a 13-point sweep of --lambda
-(1/64x to 4x the automatic lambda, ratio 1.6; whole runs, so that the sweep is of the
+the truth), and with --sweep the best Jaccard (40 nm) of a 16-point sweep of --lambda
+(1/70x to 16x the automatic lambda, ratio 1.6; whole runs, so that the sweep is of the
 support the run makes, pooled or not) with its multiple of the automatic lambda and
 the gap to it."""
 import argparse
