@@ -495,7 +495,7 @@ static void test_simulated(void)
 	for (int e = 0; e < ne; e++) {
 		double mo = 0;
 		for (int t = 0; t < s.frames; t++)
-			mo += on[(size_t)e * s.frames + t];
+			mo += on[(size_t)t * ne + e];
 		int i = (int)(em[e].y / 25) * Nx * r + (int)(em[e].x / 25);
 		double p;
 		c0_tirf_p(&s.tirf, s.angles[0], &p);

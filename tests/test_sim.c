@@ -161,7 +161,7 @@ static void test_variance_image(void)
 			pred[i] += f * f * vb;
 			double mo = 0;
 			for (int t = 0; t < c.frames; t++)
-				mo += on[(size_t)e * c.frames + t];
+				mo += on[(size_t)t * ne + e];
 			m += f * mo / c.frames;
 		}
 		mean_ph[i] = m;

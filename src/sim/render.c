@@ -75,6 +75,34 @@ int c0_sim_excitation(const struct c0_sim_conf *c, int q, double *p, double *i0_
 	return 0;
 }
 
+/* on (frames x nem): every emitter's on-fraction per frame, frame-major so
+ * that a frame's render reads its emitters side by side; each emitter's
+ * frames drawn into a row, BLK emitters at a time, then written out a frame
+ * at a time (whole cache lines). 1 when out of memory. */
+#define BLK 16
+static int blink_frame_major(const struct c0_sim_conf *c, int qs, const int64_t *slot, int nem, float *on)
+{
+	const int T = c->frames;
+	int fail = 0;
+#pragma omp parallel for schedule(dynamic, 4)
+	for (int b = 0; b < nem; b += BLK) {
+		const int n = nem - b < BLK ? nem - b : BLK;
+		float *row = c0_alloc((size_t)n * T, sizeof *row);
+		if (!row) {
+#pragma omp atomic write
+			fail = 1;
+			continue;
+		}
+		for (int i = 0; i < n; i++)
+			c0_sim_blink_slots(c, STREAM(1, qs, b + i), slot, T, row + (size_t)i * T);
+		for (int t = 0; t < T; t++)
+			for (int i = 0; i < n; i++)
+				on[(size_t)t * nem + b + i] = row[(size_t)i * T + t];
+		free(row);
+	}
+	return fail;
+}
+
 int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, int nem, int q,
 		     struct c0_sim_scene **out)
 {
@@ -125,9 +153,13 @@ int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, i
 			c0_psf_pixel_weights(ey, sig, s->y0[e], s->K, s->wy + e * K);
 		}
 		s->amp[e] = em[e].brightness * rel * exp(-p * em[e].z);
-		c0_sim_blink_slots(c, STREAM(1, qs, e), slot, c->frames, s->on + (size_t)e * c->frames);
 	}
+	const int fail = blink_frame_major(c, qs, slot, nem, s->on);
 	free(slot);
+	if (fail) {
+		c0_sim_scene_free(s);
+		return C0_ENOMEM;
+	}
 	background(c, q, rel, s->bg);
 	s->sig = sig, s->em = em;
 	if ((c->drift_nm[0] != 0 || c->drift_nm[1] != 0) && s->K > 64) {
@@ -175,7 +207,7 @@ void c0_sim_render(const struct c0_sim_scene *s, int t, double *ph)
 		ph[i] = s->bg[i];
 	double dwx[64], dwy[64];   /* K <= 2 ceil(cutoff sigma) + 2 (checked by c0_grid_check) */
 	for (int e = 0; e < s->nem; e++) {
-		double a = s->amp[e] * s->on[(size_t)e * c->frames + t];
+		double a = s->amp[e] * s->on[(size_t)t * s->nem + e];
 		if (a == 0)
 			continue;
 		const double *wx = s->wx + (size_t)e * K, *wy = s->wy + (size_t)e * K;

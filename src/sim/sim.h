@@ -197,7 +197,7 @@ struct c0_sim_scene;
 int c0_sim_scene_new(const struct c0_sim_conf *c, const struct c0_emitter *em, int nem, int q,
 		     struct c0_sim_scene **out);
 void c0_sim_scene_free(struct c0_sim_scene *s);
-const float *c0_sim_scene_onfrac(const struct c0_sim_scene *s);   /* nem x frames */
+const float *c0_sim_scene_onfrac(const struct c0_sim_scene *s);   /* frames x nem: on[t nem + e] */
 const double *c0_sim_scene_background(const struct c0_sim_scene *s); /* photons, H x W */
 void c0_sim_render(const struct c0_sim_scene *s, int t, double *photons);
 /* Drift of the sample at frame t of angle q (nm), for every frame of that

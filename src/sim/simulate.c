@@ -240,7 +240,7 @@ int c0_simulate(const struct c0_sim_conf *c, struct c0_outdir *out, struct c0_si
 		for (int e = 0; e < res->nemitters; e++) {
 			double m = 0;
 			for (int t = 0; t < c->frames; t++)
-				m += on[(size_t)e * c->frames + t];
+				m += on[(size_t)t * res->nemitters + e];
 			a->mean_on[e] = m / c->frames;
 			all += a->mean_on[e];
 		}
