@@ -21,11 +21,8 @@ static int half_frc(const struct c0_support_conf *c, const struct c0_cov half[2]
 	double t0 = c0_now();
 	struct c0_support_result h[2];
 	memset(h, 0, sizeof h);
-	struct c0_support_conf cc = *c;
+	struct c0_support_conf cc = c0_support_halves_conf(c);
 	cc.lambda_rel = res->lambda_max > 0 ? res->lambda / res->lambda_max : c0_support_default_lambda(c->penalty);
-	cc.label_radius_nm = 0;   /* the precision matches the solves' own pixels */
-	if (cc.fista.maxit > C0_SUPPORT_FRC_MAXIT)
-		cc.fista.maxit = C0_SUPPORT_FRC_MAXIT;
 	int st = C0_OK;
 	for (int k = 0; k < 2 && !st; k++)
 		st = c0_support_solve(&cc, &half[k], &h[k]);

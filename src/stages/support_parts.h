@@ -16,6 +16,9 @@ struct c0_support_scale {
 /* The halves' solves for the FRC and the precision stop at this many
  * iterations. */
 #define C0_SUPPORT_FRC_MAXIT 300
+/* c for the halves' solves: at most C0_SUPPORT_FRC_MAXIT iterations, and
+ * no label radius (the precision matches the solves' own pixels) */
+struct c0_support_conf c0_support_halves_conf(const struct c0_support_conf *c);
 
 /* The covariance operator on cov's window for c's optics. */
 int c0_support_covop(const struct c0_support_conf *c, const struct c0_cov *cov, struct c0_covop *op);

@@ -273,6 +273,15 @@ int c0_support_grow(const struct c0_support_conf *c, const double *C, struct c0_
 	return C0_OK;
 }
 
+struct c0_support_conf c0_support_halves_conf(const struct c0_support_conf *c)
+{
+	struct c0_support_conf cc = *c;
+	if (cc.fista.maxit > C0_SUPPORT_FRC_MAXIT)
+		cc.fista.maxit = C0_SUPPORT_FRC_MAXIT;
+	cc.label_radius_nm = 0;
+	return cc;
+}
+
 int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
 			    double **band, const struct c0_support_scale *g, struct c0_support_result *res)
 {

@@ -377,10 +377,7 @@ int c0_support_tiles_precision(const struct c0_support_conf *c, struct c0_suppor
 	double t0 = c0_now();
 	const int rad = (int)ceil(0.5 * c->grid.fwhm_nm / c0_grid_fine_nm(&c->grid));
 	double *sums = c0_alloc(2 * (size_t)tl->n, sizeof *sums);   /* distance^2, matches */
-	struct c0_support_conf cc = *c;
-	if (cc.fista.maxit > C0_SUPPORT_FRC_MAXIT)
-		cc.fista.maxit = C0_SUPPORT_FRC_MAXIT;
-	cc.label_radius_nm = 0;   /* the precision matches the solves' own pixels */
+	const struct c0_support_conf cc = c0_support_halves_conf(c);
 	/* work items: the two halves of each subset tile of this process */
 	int nw = 0;
 	int *item = c0_alloc(2 * (size_t)(k1 - k0) + 1, sizeof *item);
