@@ -370,42 +370,24 @@ static void solve_again(struct c0_result *r, const struct c0_intensity_conf *ic,
  * the draw (docs/defaults.md#depth_noise_block) */
 #define C0_NOISE_DRAW_TOL 1e-2
 
-/* Stack i's noise draw (r->xnoise[i]): the difference of its two block
- * halves' means (float, freed by the caller) solved at its final mu without
- * bounds, which is the difference of the halves' own solves (the step is
- * linear where no bound is active), on pl, scaled to the whole stack's
- * noise: var(a - b) = var(frame) (1/n_a + 1/n_b) */
-static int noise_draw(struct c0_result *r, const struct c0_intensity_conf *ic, int i, float *const *half,
-		      const int64_t *count, double s2)
+/* the draw's solve: stack i's final mu, no bounds */
+static struct c0_intensity_conf noise_conf(const struct c0_intensity_conf *ic, const struct c0_result *r, int i)
 {
-	const int H = r->ires[i].Ny, W = r->ires[i].Nx;
-	const size_t N = (size_t)H * W;
 	struct c0_intensity_conf c = *ic;
 	c.mu = r->ires[i].mu, c.linear = 1, c.tol = fmax(c.tol, C0_NOISE_DRAW_TOL);
-	double *d = c0_alloc(N, sizeof *d);
-	if (!d)
-		return C0_ENOMEM;
-	for (size_t p = 0; p < N; p++)
-		d[p] = (double)half[0][p] - half[1][p];
-	struct c0_intensity_result res = { 0 };
-	int st = intensity_solve(&c, d, H, W, count[0] + count[1], r->mask, s2, c0_result_noise(r, i), &res, NULL);
-	float *x = st ? NULL : pixlist_values(&r->pl, res.x);
-	if (!st && !x)
-		st = C0_ENOMEM;
-	const double scale = 1 / sqrt((double)(count[0] + count[1]) * (1.0 / count[0] + 1.0 / count[1]));
-	for (size_t k = 0; !st && k < r->pl.M; k++)
-		x[k] = (float)(x[k] * scale);
-	if (!st)
-		r->xnoise[i] = x;
-	else
-		free(x);
-	c0_intensity_result_free(&res);
-	free(d);
-	return st;
+	return c;
 }
 
-/* Stack i's noise draw from its pooled solve res (freed here): on pl,
- * scaled as noise_draw's */
+/* the block halves' means' difference a - b (N pixels), or NULL */
+static double *half_difference(float *const *half, size_t N)
+{
+	double *d = c0_alloc(N, sizeof *d);
+	for (size_t p = 0; d && p < N; p++)
+		d[p] = (double)half[0][p] - half[1][p];
+	return d;
+}
+
+/* Stack i's draw from its solve res (freed here): on pl, scaled */
 static int noise_keep(struct c0_result *r, int i, struct c0_intensity_result *res, const int64_t *count)
 {
 	float *x = pixlist_values(&r->pl, res->x);
@@ -415,6 +397,29 @@ static int noise_keep(struct c0_result *r, int i, struct c0_intensity_result *re
 	r->xnoise[i] = x;
 	c0_intensity_result_free(res);
 	return x ? C0_OK : C0_ENOMEM;
+}
+
+/* Stack i's noise draw (r->xnoise[i]): the difference of its two block
+ * halves' means (float, freed by the caller) solved at its final mu without
+ * bounds, which is the difference of the halves' own solves (the step is
+ * linear where no bound is active), on pl, scaled to the whole stack's
+ * noise: var(a - b) = var(frame) (1/n_a + 1/n_b) */
+static int noise_draw(struct c0_result *r, const struct c0_intensity_conf *ic, int i, float *const *half,
+		      const int64_t *count, double s2)
+{
+	const int H = r->ires[i].Ny, W = r->ires[i].Nx;
+	const struct c0_intensity_conf c = noise_conf(ic, r, i);
+	double *d = half_difference(half, (size_t)H * W);
+	if (!d)
+		return C0_ENOMEM;
+	struct c0_intensity_result res = { 0 };
+	int st = intensity_solve(&c, d, H, W, count[0] + count[1], r->mask, s2, c0_result_noise(r, i), &res, NULL);
+	free(d);
+	if (st) {
+		c0_intensity_result_free(&res);
+		return st;
+	}
+	return noise_keep(r, i, &res, count);
 }
 
 /* noise_draws when each stack is cut into tiles: all their tiles in one
@@ -431,14 +436,12 @@ static void noise_pooled(struct c0_result *r, const struct c0_intensity_conf *ic
 	int64_t T[C0_MAX_STACKS];
 	int bad = 0;
 	for (int i = 0; i < n; i++) {
-		c[i] = *ic, c[i].mu = r->ires[i].mu, c[i].linear = 1, c[i].tol = fmax(c[i].tol, C0_NOISE_DRAW_TOL);
+		c[i] = noise_conf(ic, r, i);
 		T[i] = count[i][0] + count[i][1];
 		if (skip[i])
 			continue;
-		if (solve_weights(s2[i], c0_result_noise(r, i), H, W, &w[i]) || !(d[i] = c0_alloc(N, sizeof *d[i])))
+		if (solve_weights(s2[i], c0_result_noise(r, i), H, W, &w[i]) || !(d[i] = half_difference(half[i], N)))
 			sts[i] = C0_ENOMEM, snprintf(msg[i], sizeof msg[i], "%s", "out of memory"), bad = 1;
-		for (size_t p = 0; d[i] && p < N; p++)
-			d[i][p] = (double)half[i][0][p] - half[i][1][p];
 		c[i].weight = w[i];
 	}
 	if (!bad)
