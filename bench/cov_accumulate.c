@@ -5,27 +5,11 @@
  * products summed per second, and one variance so that two builds can be
  * compared (it is the same number, bit for bit, when their sums are).
  *   cov_accumulate [W [T [D]]]   (default 1024 128 6) */
-#define _POSIX_C_SOURCE 200809L
 #include "ops/covariance.h"
+#include "core/clock.h"
 
 #include <stdio.h>
 #include <stdlib.h>
-#include <sys/resource.h>
-#include <time.h>
-
-static double wall(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-
-static double cpu(void)
-{
-	struct rusage u;
-	getrusage(RUSAGE_SELF, &u);
-	return u.ru_utime.tv_sec + 1e-6 * u.ru_utime.tv_usec + u.ru_stime.tv_sec + 1e-6 * u.ru_stime.tv_usec;
-}
 
 int main(int argc, char **argv)
 {
@@ -40,11 +24,11 @@ int main(int argc, char **argv)
 	unsigned s = 1;
 	for (size_t i = 0; i < n * 8; i++)
 		s = s * 1103515245u + 12345u, f[i] = (float)(100 + (s >> 16) % 200);
-	const double w0 = wall(), c0 = cpu();
+	const double w0 = c0_now(), c0 = c0_cpu_seconds();
 	for (int t = 0; t < T; t++)
 		c0_cov_acc_add(a, f + (t % 8) * n);
 	c0_cov_acc_seal(a);
-	const double dw = wall() - w0, dc = cpu() - c0;
+	const double dw = c0_now() - w0, dc = c0_cpu_seconds() - c0;
 	printf("%dx%d, %d frames, %d lags: wall %.2f s, CPU %.2f s, %.2f G products/s (wall); variance %.17g\n", W, W, T,
 	       c0_cov_lag_count(D), dw, dc, (double)n * T * c0_cov_lag_count(D) / dw / 1e9, c0_cov_acc_variance(a, W / 2, W / 2));
 	c0_cov_acc_free(a);

@@ -5,28 +5,12 @@
  * can be compared (the same digits when their solves are).
  *   intensity_tiles MEAN.tif SUPPORT.tif SIGMA2 [FRAMES [TILE [FWHM_NM [PIXEL_NM]]]]
  *   (default 500 frames, tiles of 256 camera pixels, 229 nm, 100 nm) */
-#define _POSIX_C_SOURCE 200809L
 #include "stages/intensity.h"
+#include "core/clock.h"
 #include "io/tiff.h"
 
 #include <stdio.h>
 #include <stdlib.h>
-#include <sys/resource.h>
-#include <time.h>
-
-static double wall(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-
-static double cpu(void)
-{
-	struct rusage u;
-	getrusage(RUSAGE_SELF, &u);
-	return u.ru_utime.tv_sec + 1e-6 * u.ru_utime.tv_usec + u.ru_stime.tv_sec + 1e-6 * u.ru_stime.tv_usec;
-}
 
 int main(int argc, char **argv)
 {
@@ -55,9 +39,9 @@ int main(int argc, char **argv)
 	for (size_t p = 0; mask && p < (size_t)H * W * r * r; p++)
 		mask[p] = sup[p] != 0;
 	struct c0_intensity_result res;
-	const double w0 = wall(), c0 = cpu();
+	const double w0 = c0_now(), c0 = c0_cpu_seconds();
 	int st = y && mask ? c0_intensity_solve(&c, y, H, W, argc > 4 ? atoll(argv[4]) : 500, mask, atof(argv[3]), &res) : 1;
-	const double dw = wall() - w0, dc = cpu() - c0;
+	const double dw = c0_now() - w0, dc = c0_cpu_seconds() - c0;
 	if (st) {
 		fprintf(stderr, "intensity_tiles: solve failed (%d)\n", st);
 		return 1;
