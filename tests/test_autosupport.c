@@ -291,7 +291,7 @@ static void simulate(const char *sub, int size, int frames, double drift_x, doub
 	if (sim_cv > 0)
 		s.brightness_cv = sim_cv;
 	s.seed = sim_seed ? sim_seed : 5, s.nangles = 1, s.angles[0] = 65, s.z_min_nm = 0, s.z_max_nm = 200;
-	s.density_per_um = 60;   /* the panel of docs/history/lambda-drift.md, before issue 52's labelled default */
+	c0_sim_lines(&s);   /* the panel of docs/history/lambda-drift.md (sim_label below: its tube) */
 	if (sim_sparse)
 		s.density_per_um = sim_sparse == 1 ? 15 : 150, s.filaments = sim_sparse == 1 ? 3 : 8;
 	if (sim_brightness > 0)

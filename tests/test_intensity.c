@@ -472,7 +472,7 @@ static void test_simulated(void)
 	/* lines at 60 a um, where these bars were set: on the default's labelled
 	 * tubes (4x the signal, supports 2-3 pixels wide) the tiles' background
 	 * differs by 3.3 % and 50-ADU pixels cost the plain fit only 0.6 dB */
-	s.density_per_um = 60, s.label_radius_nm = 0;
+	c0_sim_lines(&s);
 	struct c0_emitter *em;
 	int ne;
 	c0_sim_structure(&s, &em, &ne);

@@ -644,7 +644,7 @@ static void test_noise_variance(void)
 	/* lines at 60 a um, as this bar was set: on the default's 4x denser tubes the
 	 * l1 iterate's shrinkage leaves 20 % more in the residual (173 against 144),
 	 * which the masked fit below takes out */
-	s.density_per_um = 60, s.label_radius_nm = 0;
+	c0_sim_lines(&s);
 	struct c0_emitter *em;
 	int ne;
 	CHECK(c0_sim_structure(&s, &em, &ne) == C0_OK);

@@ -5,6 +5,7 @@
 #include "core/err.h"
 #include "core/mem.h"
 #include "io/tiff.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -116,4 +117,9 @@ uint8_t *c0_truth_mask(const char *path, int *w, int *h)
 	free(t);
 	*w = in.width, *h = in.height;
 	return m;
+}
+
+void c0_sim_lines(struct c0_sim_conf *s)
+{
+	s->density_per_um = 60, s->label_radius_nm = 0;
 }

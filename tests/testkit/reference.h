@@ -24,6 +24,11 @@ int c0_pool_guided(const float *const *x, int nq, const uint8_t *mask, const flo
 /* f (nz x M, the columns at raster indices pixel[0..M)) scaled by
  * sum_q x_q / sum_q pooled_q at each column's pixel (images on the grid). */
 void c0_pool_rescale(float *f, int nz, const int *pixel, size_t M, int nq, const float *const *x, const float *const *pooled);
+/* s's structure set to the simulator's before issue 52: emitters on each
+ * filament's axis, 60 a um (the Python tests' LINES_SIM), for tests whose
+ * bars were set on it. */
+struct c0_sim_conf;
+void c0_sim_lines(struct c0_sim_conf *s);
 /* A simulation's truth_support.tif as a 0/1 mask (allocated; NULL when the
  * file cannot be read), its size into *w and *h. */
 uint8_t *c0_truth_mask(const char *path, int *w, int *h);
