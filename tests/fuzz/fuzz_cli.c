@@ -1,7 +1,7 @@
 /* libFuzzer target over command lines: the input's first byte picks run,
  * support or matirf, the rest is split at newlines and NULs into options,
  * and the harness appends -o and tiny stacks (written once, in a scratch
- * directory). Any options must end in a status (0, 1 or 2) without a crash,
+ * directory, removed at exit). Any options must end in a status (0, 1 or 2) without a crash,
  * a leak or undefined behaviour, and leave no staging directory behind.
  * Options that name other output directories or files are dropped (the
  * fuzzer must not write or replace anything outside its scratch), and
@@ -38,6 +38,19 @@ static void write_stack(const char *path, int frames, int channels, uint64_t see
 	free(v);
 }
 
+static void remove_out(void);
+
+/* The scratch directory goes when the fuzzer exits (libFuzzer ends with exit()). */
+static void remove_scratch(void)
+{
+	remove_out();
+	for (int q = 0; q < 2; q++)
+		unlink(stk[q]), unlink(img[q]);
+	unlink(hyp);
+	if (chdir("/") == 0)
+		rmdir(dir);
+}
+
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
 	(void)argc, (void)argv;
@@ -54,6 +67,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
 	snprintf(hyp, sizeof hyp, "%s/hyper.tif", dir);
 	write_stack(hyp, 12, 2, 11);
 	c0_progress_enable(0);
+	atexit(remove_scratch);
 	return 0;
 }
 
