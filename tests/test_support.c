@@ -10,6 +10,7 @@
 #include "ops/covariance.h"
 #include "optics/psf.h"
 #include "stages/support.h"
+#include "stages/lambda.h"
 #include "sim/sim.h"
 #include "eval/metrics.h"
 #include "io/outdir.h"
@@ -988,6 +989,65 @@ static void test_block_means(void)
 	c0_frames_close(&f);
 }
 
+/* c0_lambda_width_share: on a straight tube three fine pixels wide (the
+ * model's exact covariance, no noise) the l1 support puts the tube on one
+ * column of fine pixels where lambda is 1.2 times the share of the axis's
+ * correlation, and on its three at 0.8 times (measured: one at 1.0, three
+ * at 0.8, 0.65, 0.5). Along the tube l1 keeps every few rows: adjacent
+ * pixels have nearly the same PSF either way. */
+static void test_width_share(void)
+{
+	enum { W = 16, F = 4, LW = W * F };
+	struct c0_support_conf c = C0_SUPPORT_DEFAULTS;
+	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229, c.grid.srf = F, c.solver = C0_SUPPORT_PRUNED;
+	c.fista.maxit = 10000, c.fista.tol = 1e-8;
+	/* weights b, 1, b across: w^2 = 2 b / (1 + 2 b) fine pixels^2, a ring of radius sqrt(2) w */
+	const double b = 0.35, fine = 25, w2 = 2 * b / (1 + 2 * b) * fine * fine;
+	c.label_radius_nm = sqrt(2 * w2);
+	const double share = c0_lambda_width_share(&c);
+	struct c0_covop op;
+	CHECK(c0_covop_init(&op, W, W, F, c0_grid_sigma_px(&c.grid), c0_support_lag(&c)) == C0_OK);
+	struct c0_cov_acc *a;
+	CHECK(c0_cov_acc_new(W, W, c0_support_lag(&c), &a) == C0_OK);
+	float fr[W * W];
+	for (int t = 0; t < 3; t++) {
+		for (int i = 0; i < W * W; i++)
+			fr[i] = (float)c0_rng_normal(&rng);
+		c0_cov_acc_add(a, fr);
+	}
+	struct c0_cov cov;
+	CHECK(c0_cov_acc_finish(a, &cov) == C0_OK);
+	double *x = calloc(LW * LW, sizeof *x);
+	for (int y = 0; y < LW; y++)
+		x[y * LW + LW / 2 - 1] = x[y * LW + LW / 2 + 1] = b, x[y * LW + LW / 2] = 1;
+	c0_covop_forward(&op, &cov, x, cov.r);
+	int width[2];
+	const double f[2] = { 1.2, 0.8 };
+	for (int k = 0; k < 2; k++) {
+		struct c0_support_result res = { 0 };
+		c.lambda_rel = f[k] * share;   /* lambda_max is the axis's correlation, away from the ends */
+		c.label_radius_nm = 0;         /* the l1 support alone */
+		CHECK(c0_support_solve(&c, &cov, &res) == C0_OK);
+		c.label_radius_nm = sqrt(2 * w2);
+		int n = 0;   /* columns used, away from the ends */
+		for (int xx = 0; xx < LW; xx++) {
+			int used = 0;
+			for (int y = LW / 4; y < 3 * LW / 4; y++)
+				used |= res.rx[y * LW + xx] > 0;
+			n += used;
+		}
+		width[k] = n;
+		fprintf(stderr, "lambda %.2f x share (%.4f): %d columns, %d pixels, converged %d\n", f[k], share, n,
+			res.support_pixels, res.converged);
+		c0_support_result_free(&res);
+	}
+	CHECK_MSG(width[0] == 1 && width[1] == 3, "a tube's l1 support is %d and %d columns wide at 1.2 and 0.8 times "
+		  "the width share", width[0], width[1]);
+	free(x);
+	c0_cov_free(&cov);
+	c0_covop_free(&op);
+}
+
 int main(void)
 {
 	c0_rng_init(&rng, 42, 0);
@@ -1007,6 +1067,7 @@ int main(void)
 	RUN(test_block_means);
 	RUN(test_noise_variance);
 	RUN(test_solver_converges);
+	RUN(test_width_share);
 	RUN(test_accuracy);
 	return CHECK_DONE();
 }

@@ -36,9 +36,11 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 				? "cross-validation of the interleaved frame halves along a path of lambda (cross_validation); "
 				  "rho, q90, kappa and sigma_C below are the peaks rule's first step, for reference"
 				: v->noise
-				? "kappa sigma_C; sigma_C: noise sd of the correlation image, from the lower quartile "
-				  "of the interleaved frame halves' difference (rho and q90 below: the peaks rule's "
-				  "first step, for reference)"
+				? "max(kappa sigma_C, width_share median); sigma_C: noise sd of the correlation image, "
+				  "from the lower quartile of the interleaved frame halves' difference; median: of the "
+				  "correlation image over the pixels above kappa sigma_C; width_share: the share of a "
+				  "tube's correlation its label radius leaves beside its axis (rho and q90 below: the "
+				  "peaks rule's first step, for reference)"
 				: v->second
 				? "max(share median peak, kappa sigma_C) from a first solve at max(rho q90, kappa "
 				  "sigma_C); peak: x ||a||^2 at the first support's local maxima; sigma_C: noise "
@@ -60,8 +62,12 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 	cJSON_AddNumberToObject(l, "signal_relative", v->signal_rel);
 	cJSON_AddNumberToObject(l, "kappa", v->kappa);
 	cJSON_AddNumberToObject(l, "noise_relative", v->noise_rel);
+	if (v->noise) {
+		cJSON_AddNumberToObject(l, "median_relative", v->median_rel);
+		cJSON_AddNumberToObject(l, "width_share", v->width_share);
+	}
 	if (!v->cv)
-		cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : "signal");
+		cJSON_AddStringToObject(l, "bound_by", v->noise_bound ? "noise" : v->noise ? "width" : "signal");
 	/* tiles: sigma_C from a subset of the tiles' interiors (stages/support_tiles.c) */
 	cJSON_AddNumberToObject(l, "noise_tiles", v->noise_tiles ? v->noise_tiles : s->tiles);
 	cJSON_AddNumberToObject(l, "seconds", v->seconds);

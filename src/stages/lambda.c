@@ -53,17 +53,26 @@ static void correlate(struct c0_covop *op, const struct c0_cov *cov, double norm
 	c0_covop_adjoint(op, cov, R, C);
 }
 
-/* The rule, from sigma_C, the signal quantile sq, lambda_max on the l1 and
- * the l0 scale and the median column norm. */
-static void choose(const struct c0_support_conf *c, double sig, double sq, double lmax, double lmax0, double nm,
-		   struct c0_lambda_result *out)
+double c0_lambda_width_share(const struct c0_support_conf *c)
+{
+	const double s = c0_grid_sigma_px(&c->grid) * c->grid.pixel_nm, R = fmax(0, c->label_radius_nm);
+	return 0.5 * R * R / (s * s + c->grid.pixel_nm * c->grid.pixel_nm / 12);
+}
+
+/* The rule, from sigma_C, the signal quantiles sq (QUANT) and sm (the
+ * median), lambda_max on the l1 and the l0 scale and the median column
+ * norm. */
+static void choose(const struct c0_support_conf *c, double sig, double sq, double sm, double lmax, double lmax0,
+		   double nm, struct c0_lambda_result *out)
 {
 	out->noise_rel = sig / lmax, out->signal_rel = sq / lmax, out->rho = RHO, out->kappa = KAPPA;
+	out->median_rel = sm / lmax, out->width_share = c0_lambda_width_share(c);
 	out->noise_bound = KAPPA * sig >= RHO * sq;
-	const double t = fmax(RHO * sq, KAPPA * sig);
-	if (c->penalty == C0_PENALTY_L1 && c->lambda_noise && !c->lambda_cv)
-		out->noise = out->noise_bound = 1, out->chosen_rel = KAPPA * sig / lmax;
-	else if (c->penalty == C0_PENALTY_L1)
+	const double t = fmax(RHO * sq, KAPPA * sig), w = out->width_share * sm;
+	if (c->penalty == C0_PENALTY_L1 && c->lambda_noise && !c->lambda_cv) {
+		out->noise = 1, out->noise_bound = KAPPA * sig >= w;
+		out->chosen_rel = fmax(KAPPA * sig, w) / lmax;
+	} else if (c->penalty == C0_PENALTY_L1)
 		out->chosen_rel = t / lmax;
 	else
 		out->chosen_rel = fmin(CEL0_GAMMA * t * t / (2 * nm * nm) / lmax0, 0.5);
@@ -209,9 +218,9 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	for (size_t i = 0; i < L; i++)
 		bin(h, ca[i] - s0 * op.n[i]), bin(hn, d[i]);
 	const double sig = noise_sd(hn);
-	const double sq = hquantile_above(h, KAPPA * sig, QUANT);
+	const double sq = hquantile_above(h, KAPPA * sig, QUANT), sm = hquantile_above(h, KAPPA * sig, 0.5);
 	memcpy(d, op.n, L * sizeof *d);
-	choose(c, sig, sq, lmax, lmax0, median(d, L), out);
+	choose(c, sig, sq, sm, lmax, lmax0, median(d, L), out);
 	curve(h, hn, lmax, out);
 	free(h);
 	/* a check of the stated PSF, not a part of the rule: none when the band is too short */
@@ -338,7 +347,8 @@ void c0_lambda_tiles_choose(const struct c0_support_conf *c, const double *hist,
 {
 	memset(out, 0, sizeof *out);
 	const double sig = noise_sd(hist);
-	choose(c, sig, hquantile_above(hist + 2 * C0_LAMBDA_BINS, KAPPA * sig, QUANT), lmax, lmax0,
+	const double *h = hist + 2 * C0_LAMBDA_BINS;
+	choose(c, sig, hquantile_above(h, KAPPA * sig, QUANT), hquantile_above(h, KAPPA * sig, 0.5), lmax, lmax0,
 	       hmedian(hist + C0_LAMBDA_BINS), out);
 	curve(hist + 2 * C0_LAMBDA_BINS, hist, lmax, out);
 }

@@ -5,9 +5,13 @@
  * D = (A^T R_A - A^T R_B) / 2 has the noise of C = A^T R (all frames) and no
  * signal: its robust sd (from the lower quartile of |D| over the fine pixels)
  * is sigma_C. With lambda_noise (the run's default) the l1 solve runs at
- * kappa * sigma_C alone: a labelled structure is wider than a fine pixel,
- * and the pixels beside its axis, which hold a fraction of its variance,
- * enter once they stand above the noise (docs/defaults.md#lambda_rule).
+ * kappa * sigma_C: a labelled structure is wider than a fine pixel, and the
+ * pixels beside its axis, which hold a fraction of its variance, enter once
+ * they stand above the noise (docs/defaults.md#lambda_rule). Where the
+ * support grows across the structures (label_radius_nm R > 0) the growth
+ * gives that width, and lambda is never below the correlation a tube's
+ * width leaves beside its axis: c0_lambda_width_share times the median
+ * correlation over the pixels above kappa sigma_C.
  * Otherwise (the peaks rule) a pixel enters the l1 support where its
  * correlation exceeds the threshold
  *   t = max(rho * q90, kappa * sigma_C),
@@ -41,6 +45,8 @@ struct c0_lambda_result {
 	double chosen_rel;    /* lambda / lambda_max for the solve on all frames */
 	double noise_rel;     /* sigma_C / lambda_max (l1 scale) */
 	double signal_rel;    /* q90 / lambda_max (l1 scale) */
+	double median_rel;    /* the median over the same pixels / lambda_max */
+	double width_share;   /* c0_lambda_width_share: the noise rule's floor is this times median_rel */
 	double rho, kappa;
 	int noise_bound;      /* 1 when kappa sigma_C set the threshold */
 	int noise;            /* 1: the noise rule, lambda = kappa sigma_C (l1, lambda_noise) */
@@ -78,6 +84,15 @@ void c0_lambda_psf_row_sums(const struct c0_cov *cov, int y, double s[2]);
 #define C0_LAMBDA_PSF_WARN 0.05
 
 struct c0_support_conf;
+/* The share of a straight tube's correlation (C across it) that its width
+ * leaves beside its axis once l1 has put it on one fine pixel: a tube of
+ * radius R labelled on its surface spreads its emitters w^2 = R^2 / 2
+ * across the axis; C across a line is a Gaussian of variance s^2 = sigma^2
+ * + p^2 / 12 (the PSF's and the camera pixel's), and the tube's is the
+ * line's widened by w^2. A pixel beside the axis enters the l1 support while
+ * lambda is below (w^2 / s^2) C_axis to second order in w / s, whatever its
+ * distance. 0 when R is 0. */
+double c0_lambda_width_share(const struct c0_support_conf *c);
 /* Uses c's optics, lag and penalty. */
 int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, const struct c0_cov *b,
 		   struct c0_lambda_result *out);
