@@ -8,7 +8,7 @@
 #include <stdlib.h>
 
 enum { N = 40 };
-static const double S = 3;   /* the ridge's sd, pixels: about C's at 25 nm fine pixels */
+static const double S = 3;   /* the ridge's sd, pixels: about the pixel variances' at 25 nm fine pixels (69 nm) */
 
 /* signed distance of pixel (y, x) from the line through (cy, cx) along (sin t, cos t) */
 static double across(double y, double x, double cy, double cx, double t)

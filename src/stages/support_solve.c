@@ -7,11 +7,13 @@
 #include "optics/psf.h"
 #include "core/c0math.h"
 #include "core/clock.h"
+#include "core/spline.h"
 #include "core/err.h"
 #include "core/mem.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* join: a gradient g that would move the pixel by more than rounding
  * (1e-3 lambda); leave: at 0 and not pushed up. 1 when a pixel joined. */
@@ -259,15 +261,21 @@ static int run(const struct c0_support_conf *c, const uint8_t *mask, struct c0_c
 /* A labelled structure's fluorophores lie up to label_radius_nm from its
  * axis, so every fine pixel whose centre is within that and half a fine
  * pixel of the axis holds some. The l1 support marks about one pixel across
- * a structure, near its axis; the axis is the crest of C = A^T R, the
- * covariance correlated with the PSF's pairs (smooth, free of background).
- * The support's 4-neighbours that close to a crest join it (their rx stays
- * 0: the solve put no variance there). */
-int c0_support_grow(const struct c0_support_conf *c, const double *C, struct c0_support_result *res)
+ * a structure, near its axis; the axis is the crest of the pixels' variance
+ * (the covariance's lag 0, free of background), spline-interpolated onto
+ * the fine grid. Its profile across a line is the PSF's squared, sd
+ * sigma / sqrt 2, where C = A^T R's is sigma: a neighbouring structure
+ * pulls its crest less (docs/history/support-width.md). The support's
+ * 4-neighbours that close to a crest join it (their rx stays 0: the solve
+ * put no variance there). */
+int c0_support_grow(const struct c0_support_conf *c, const double *var, int H, int W, struct c0_support_result *res)
 {
 	const double fine = c->grid.pixel_nm / c->grid.srf;
-	const long n = c0_ridge_grow(C, res->Ly, res->Lx, c->label_radius_nm / fine + 0.5, res->mask);
-	if (n < 0)
+	double *f = c0_alloc((size_t)res->Ly * res->Lx, sizeof *f);
+	int st = f ? c0_spline_upsample(var, H, W, c->grid.srf, f) : C0_ENOMEM;
+	const long n = st ? 0 : c0_ridge_grow(f, res->Ly, res->Lx, c->label_radius_nm / fine + 0.5, res->mask);
+	free(f);
+	if (st || n < 0)
 		return C0_ENOMEM;
 	res->support_pixels += (int)n;
 	return C0_OK;
@@ -294,6 +302,10 @@ int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov
 		return st;
 	double *C = c0_alloc(L, sizeof *C);
 	double *x = c0_alloc(L, sizeof *x), *Ax = c0_alloc(L, sizeof *Ax);
+	const int grow = !mask && c->label_radius_nm > 0;
+	double *var = grow ? c0_alloc(n, sizeof *var) : NULL;   /* lag 0, before the band is freed */
+	if (var)
+		memcpy(var, cov->r, n * sizeof *var);
 	double *part = c0_alloc(4 * ((L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK), sizeof *part);
 	res->Ly = H * r, res->Lx = W * r, res->lag = cov->d, res->nlag = cov->nlag, res->frames = cov->frames;
 	res->mask = c0_alloc(L, 1);
@@ -301,15 +313,15 @@ int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
 	struct c0_covfit ctx = { &op, C, 0, 0, (double)n, Ax, 0, part };
-	if (!C || !x || !Ax || !part || !res->mask || !res->rx || !res->hist)
+	if (!C || !x || !Ax || !part || !res->mask || !res->rx || !res->hist || (grow && !var))
 		st = C0_ENOMEM;
 	if (!st)
 		st = normalise(c, cov, mask, band, g, &ctx, C, res);
 	if (!st)
 		st = run(c, mask, &ctx, x, res);
-	if (!st && !mask && c->label_radius_nm > 0)
-		st = c0_support_grow(c, C, res);
-	free(C), free(x), free(Ax), free(part);
+	if (!st && grow)
+		st = c0_support_grow(c, var, H, W, res);
+	free(C), free(x), free(Ax), free(part), free(var);
 	c0_covop_free(&op);
 	res->t_solve = c0_now() - t0;
 	return st;
