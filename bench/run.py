@@ -10,9 +10,9 @@ with --psf-fwhm against its converged answer;
 run on 5 angles of 512x512x500, each against the single-tile path measured in
 the same run where it fits, thread scaling and a run next to a busy process;
 --large-only runs just those. They take tens of minutes on 2 cores;
---lambda runs only the cross-validated lambda's rows (--lambda-rule cv): at
-64x64x500 and 256x256x1000, its path against a solve at the lambda it
-chose, given.)
+--lambda runs only the automatic lambda's rows, one pair per rule (noise, the
+default; peaks; cv): at 64x64x500 and 256x256x1000, the command against the
+same command with the lambda it chose given.)
 
 Each timed command runs in its own process; peak memory is that process's
 maximum resident set size."""
