@@ -1,8 +1,8 @@
 /* Cubic B-spline interpolation onto a grid r times finer: the C2-smooth
  * interpolant through an image's samples (Unser's recursive prefilter, then
  * the cubic B-spline's weights), with half-sample symmetric edges. Its
- * second derivatives are continuous, which a Newton step on them needs; the
- * cubic convolution kernel's jump at every sample. */
+ * second derivatives are continuous, which a Newton step on them needs
+ * (cubic convolution's jump at every sample). */
 #pragma once
 
 /* in (H x W, row-major) -> out (H r x W r): fine pixel k of sample i sits
