@@ -7,7 +7,9 @@
 # without what changes from one run to the next (timings, creation time,
 # argv, the binary's versions and the progress-free wall clocks); report.html,
 # made from the other files with the timings and paths, is left out.
-# Exits 1 and names each differing file when the builds disagree.
+# Exits 1 and names each differing file when the builds disagree, with how
+# far apart a differing TIFF is (max and median |new - old| over the pixels
+# either sets, relative L2; with numpy and tifffile).
 set -euo pipefail
 OLD=$(readlink -f "$1"); NEW=$(readlink -f "$2")
 W=${3:-$(mktemp -d)}
@@ -41,6 +43,19 @@ def strip(x, root):   # the two builds wrote under different folders
     if isinstance(x, list):
         return [strip(v, root) for v in x]
     return x.replace(root, "DIR") if isinstance(x, str) else x
+def tiff_numbers(a, b):   # how far apart: max and median |new - old| where either is set, relative L2
+    try:
+        import numpy as np, tifffile
+        x, y = tifffile.imread(a).astype(float), tifffile.imread(b).astype(float)
+    except Exception:
+        return ""
+    if x.shape != y.shape:
+        return f" (shapes {x.shape} and {y.shape})"
+    m = np.isfinite(x) & np.isfinite(y) & ((x != 0) | (y != 0))
+    d = np.abs(y - x)[m]
+    if not d.size:
+        return ""
+    return f" (max {d.max():.4g}, median {np.median(d):.4g}, relative L2 {np.linalg.norm(d) / max(np.linalg.norm(x[m]), 1e-300):.3g})"
 files = sorted(os.path.relpath(os.path.join(r, f), old) for r, _, fs in os.walk(old) for f in fs)
 newfiles = sorted(os.path.relpath(os.path.join(r, f), new) for r, _, fs in os.walk(new) for f in fs)
 bad = [f"only in one build: {f}" for f in sorted(set(files) ^ set(newfiles))]
@@ -53,7 +68,7 @@ for f in sorted(set(files) & set(newfiles)):
     else:
         same = open(a, "rb").read() == open(b, "rb").read()
     if not same:
-        bad.append(f"differs: {f}")
+        bad.append(f"differs: {f}" + (tiff_numbers(a, b) if f.endswith(".tif") else ""))
 print("\n".join(bad) if bad else f"identical: {len(files)} files")
 sys.exit(1 if bad else 0)
 PY

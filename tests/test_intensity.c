@@ -11,6 +11,7 @@
 #include "stages/intensity.h"
 #include "stages/pattern.h"
 #include "sim/sim.h"
+#include "solve/root.h"
 #include "eval/metrics.h"
 #include "core/rng.h"
 #include "core/err.h"
@@ -23,6 +24,15 @@
 
 #define TILE_X_TOL 0.12   /* measured 7.9 % (L2): each tile has its own mu (0.0046 vs 0.024) */
 #define TILE_B_TOL 0.02   /* measured 0.85 % (max) */
+/* the root search against bisection on cold solves: measured 0.44 % (mu), 3.8 % (x, L2),
+ * 0.052 ADU (b, max); the decades before it 0.52 %, 3.8 %, 0.051 ADU */
+#define DP_MU_TOL 0.02
+#define DP_X_TOL 0.06
+#define DP_B_TOL 0.1
+/* out of reach, against the converged solve at mu 1e8: measured 2.4 % and 5.7 ADU;
+ * the decades before it 2.1 % and 5.4 ADU */
+#define DP_FAR_X_TOL 0.04
+#define DP_FAR_B_TOL 8
 
 static struct c0_rng rng;
 
@@ -464,6 +474,70 @@ static void test_many(const struct c0_intensity_conf *ct, const double *ybar, in
 	free(y2);
 }
 
+/* The root search for mu (stages/intensity.c: a first step by the expected
+ * slope and secants on log(residual^2 - floor^2), far trials started from
+ * the last one) against the slow obvious one: bisection in log mu to 0.1 %
+ * on the residual, each mu a solve of its own from the cold start. Where
+ * the principle cannot be met (the noise variance 1e4 times): the largest mu
+ * in at most 4 solves (the decades took 11), against the converged solve
+ * there (at 1e8 CG's tolerance leaves x and b far from it from any start). */
+static double dp_excess(const struct c0_intensity_conf *c0, const double *ybar, int Ny, int Nx, int64_t T,
+			const uint8_t *m, double sig2, double mu, double floor2, struct c0_intensity_result *r)
+{
+	struct c0_intensity_conf c = *c0;
+	c.mu = mu;
+	CHECK(c0_intensity_solve(&c, ybar, Ny, Nx, T, m, sig2, r) == C0_OK);
+	return r->residual2 - floor2 - r->target2;
+}
+
+/* ||x - xr|| / ||xr|| and max |b - br| */
+static void dp_diff(const struct c0_intensity_result *a, const struct c0_intensity_result *r, double *dx, double *db)
+{
+	const int N = r->Ny * r->Nx, L = r->Ly * r->Lx;
+	double d = 0, n = 0;
+	*db = 0;
+	for (int i = 0; i < L; i++)
+		d += pow(a->x[i] - r->x[i], 2), n += pow(r->x[i], 2);
+	for (int i = 0; i < N; i++)
+		*db = fmax(*db, fabs(a->b[i] - r->b[i]));
+	*dx = sqrt(d / n);
+}
+
+static void test_root_search(const struct c0_intensity_conf *c, const double *ybar, int Ny, int Nx, int64_t T,
+			     const uint8_t *m, double sig2, const struct c0_intensity_result *res)
+{
+	struct c0_intensity_result r, a;
+	dp_excess(c, ybar, Ny, Nx, T, m, sig2, C0_INTENSITY_MU_MIN, 0, &r);
+	const double floor2 = r.residual2;
+	c0_intensity_result_free(&r);
+	CHECK(res->dp_status == 0 && res->floor2 == floor2);
+	double lo = log(C0_INTENSITY_MU_MIN), hi = log(1e8), dx, db;
+	while (hi - lo > 1e-3) {
+		const double t = 0.5 * (lo + hi);
+		const double e = dp_excess(c, ybar, Ny, Nx, T, m, sig2, exp(t), floor2, &r);
+		c0_intensity_result_free(&r);
+		*(e < 0 ? &lo : &hi) = t;
+	}
+	const double mu = exp(0.5 * (lo + hi));
+	dp_excess(c, ybar, Ny, Nx, T, m, sig2, mu, floor2, &r);
+	dp_diff(res, &r, &dx, &db);
+	fprintf(stderr, "root search: mu %.5g (%d solves), bisection %.5g: %.2f %%; x %.2f %% (L2), b %.3f ADU (max)\n",
+		res->mu, res->solves, mu, 100 * fabs(log(res->mu / mu)), 100 * dx, db);
+	CHECK_MSG(fabs(log(res->mu / mu)) <= DP_MU_TOL && dx <= DP_X_TOL && db <= DP_B_TOL,
+		  "root search: mu %g vs %g, x %.3g (L2), b %.3g ADU", res->mu, mu, dx, db);
+	c0_intensity_result_free(&r);
+	CHECK(c0_intensity_solve(c, ybar, Ny, Nx, T, m, 1e4 * sig2, &a) == C0_OK);
+	struct c0_intensity_conf cc = *c;
+	cc.tol = 1e-9, cc.maxit = 100000;
+	dp_excess(&cc, ybar, Ny, Nx, T, m, 1e4 * sig2, 1e8, floor2, &r);
+	dp_diff(&a, &r, &dx, &db);
+	fprintf(stderr, "out of reach: mu %g (%d solves); x %.2f %% (L2), b %.2f ADU (max) from the converged solve\n", a.mu,
+		a.solves, 100 * dx, db);
+	CHECK_MSG(a.dp_status == C0_ROOT_ABOVE && fabs(log(a.mu / 1e8)) < 1e-9 && a.solves <= 4 && dx <= DP_FAR_X_TOL && db <= DP_FAR_B_TOL,
+		  "out of reach: status %d, mu %g, %d solves, x %.3g, b %.3g ADU", a.dp_status, a.mu, a.solves, dx, db);
+	c0_intensity_result_free(&a), c0_intensity_result_free(&r);
+}
+
 static void test_simulated(void)
 {
 	struct c0_sim_conf s;
@@ -561,6 +635,7 @@ static void test_simulated(void)
 	c0_intensity_result_free(&tr[0]), c0_intensity_result_free(&tr[1]);
 	test_many(&ct, ybar, Ny, Nx, s.frames, m, sig2);
 	test_weights(&c, ybar, Ny, Nx, s.frames, m, sig2, xt, &res, pe);
+	test_root_search(&c, ybar, Ny, Nx, s.frames, m, sig2, &res);
 	c0_intensity_result_free(&res);
 	c0_sim_scene_free(sc);
 	free(em), free(ph), free(ybar), free(adu), free(xt), free(m), free(naive);

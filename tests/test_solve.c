@@ -240,22 +240,31 @@ static void test_pdhg(void)
 
 static double exp_minus(void *c, double t) { return exp(t) - *(const double *)c; }
 
+static double flat_below(void *c, double t) { (void)c; return -1 - exp(-t); }
+static double line3(void *c, double t) { (void)c; return 0.7 * (t - 3); }
+
 static void test_root(void)
 {
 	double v = 5, t;
 	int evals;
-	CHECK(c0_root_increasing(exp_minus, &v, 0, -30, 30, 1e-10, 100, &t, &evals) == C0_ROOT_FOUND);
+	CHECK(c0_root_increasing(exp_minus, &v, 0, 0, -30, 30, 1e-10, 100, &t, &evals) == C0_ROOT_FOUND);
 	CHECK_CLOSE(t, log(5), 1e-9);
 	CHECK(evals < 40);
 	v = 1e-6;                                    /* root far below the start: found by walking down */
-	CHECK(c0_root_increasing(exp_minus, &v, 3, -30, 30, 1e-14, 200, &t, &evals) == C0_ROOT_FOUND);
+	CHECK(c0_root_increasing(exp_minus, &v, 3, 0, -30, 30, 1e-14, 200, &t, &evals) == C0_ROOT_FOUND);
 	CHECK_CLOSE(t, log(1e-6), 1e-6);
 	v = -1;                                      /* g > 0 everywhere: the smallest t */
-	CHECK(c0_root_increasing(exp_minus, &v, 0, -5, 5, 1e-10, 100, &t, &evals) == C0_ROOT_BELOW);
+	CHECK(c0_root_increasing(exp_minus, &v, 0, 0, -5, 5, 1e-10, 100, &t, &evals) == C0_ROOT_BELOW);
 	CHECK(t >= -5 && t < -4);
 	v = 1e30;                                    /* g < 0 everywhere in range: the largest t */
-	CHECK(c0_root_increasing(exp_minus, &v, 0, -5, 5, 1e-10, 100, &t, &evals) == C0_ROOT_ABOVE);
+	CHECK(c0_root_increasing(exp_minus, &v, 0, 0, -5, 5, 1e-10, 100, &t, &evals) == C0_ROOT_ABOVE);
 	CHECK(t <= 5 && t > 4);
+	/* the expected slope: a straight g in two evaluations; a g flattening
+	 * below zero at the range's end in four (by decades: 14) */
+	CHECK(c0_root_increasing(line3, NULL, 0, 0.7, -30, 30, 1e-12, 100, &t, &evals) == C0_ROOT_FOUND);
+	CHECK(evals == 2 && fabs(t - 3) < 1e-12);
+	CHECK(c0_root_increasing(flat_below, NULL, 0, 0.7, -5, 30, 1e-10, 100, &t, &evals) == C0_ROOT_ABOVE);
+	CHECK_MSG(t == 30 && evals <= 4, "flat below zero: t %g after %d evaluations", t, evals);
 }
 
 /* The eigenvalues of a symmetric 3x3 matrix, ascending, by the

@@ -2,7 +2,7 @@
 
 #include <math.h>
 
-int c0_root_increasing(c0_scalar_fn g, void *ctx, double t0, double tmin, double tmax, double ftol,
+int c0_root_increasing(c0_scalar_fn g, void *ctx, double t0, double slope, double tmin, double tmax, double ftol,
 		       int maxeval, double *t, int *evals)
 {
 	const double step = log(10.0);
@@ -14,19 +14,24 @@ int c0_root_increasing(c0_scalar_fn g, void *ctx, double t0, double tmin, double
 		*evals = n;
 		return C0_ROOT_FOUND;
 	}
-	/* bracket: walk downhill or uphill in decades */
-	double b = a, fb = fa;
+	/* bracket: walk downhill or uphill, first by the expected slope (or a
+	 * decade), then half again as far as the secant through the last two
+	 * values puts the root (or a decade), at most to the range's end: a g
+	 * that flattens below zero reaches the end in a step or two */
+	double b = a, fb = fa, p = NAN, fp = NAN;
 	while ((fa > 0) == (fb > 0)) {
 		if (n >= maxeval) {
 			*t = b, *evals = n;
 			return C0_ROOT_MAXIT;
 		}
-		a = b, fa = fb;
-		b = fa > 0 ? a - step : a + step;
-		if (b < tmin - 1e-9 || b > tmax + 1e-9) {   /* the ends themselves are in range */
+		p = a, fp = fa, a = b, fa = fb;
+		const double end = fa > 0 ? tmin : tmax, s = n > 1 ? (fa - fp) / (a - p) : slope;
+		if (fabs(a - end) <= 1e-9) {   /* the ends themselves are in range */
 			*t = a, *evals = n;
 			return fa > 0 ? C0_ROOT_BELOW : C0_ROOT_ABOVE;
 		}
+		const double d = s > 0 ? (n > 1 ? 1.5 : 1) * fabs(fa) / s : step;
+		b = a + (fa > 0 ? -1 : 1) * fmin(d, fabs(end - a));
 		fb = g(ctx, b);
 		n++;
 		*t = b;

@@ -211,8 +211,17 @@ static double residual2(struct prob *p, const double *sol)
  * set, is not smooth enough in mu for the root finder's residual test when
  * the floor is large, and it would try mu after mu */
 #define DP_LOGMU_TOL 0.01
+/* The root search runs on log((residual^2 - floor^2) / target^2), met
+ * within 1 % (as |residual^2 - floor^2 - target^2| <= 1 % of target^2 was):
+ * nearly straight in log mu, its slope 0.5-0.9 at the crossing (26 tiles of
+ * two 1024^2 x 500 stacks), so that the first step (by that slope) and the
+ * secants land near the root, and a tile whose residual never rises that
+ * far (x smooth at no cost) reaches the largest mu in two steps, not one a
+ * decade (docs/speed.md, "The intensity step's root search") */
+#define DP_RES_TOL 0.01
+#define DP_SLOPE 0.7
 
-struct dp { struct prob *p; double *sol, target, tprev, tmin, lo, hi; int fail; const double *floor; };
+struct dp { struct prob *p; double *sol, floor2, target2, tprev, tmin, lo, hi; int fail; const double *floor; };
 
 static double discrepancy(void *ctx, double t)
 {
@@ -220,7 +229,11 @@ static double discrepancy(void *ctx, double t)
 	d->p->mu = exp(t);
 	/* Warm start from the last mu only when it is far (a factor e or more):
 	 * from a near one the start may already meet the CG tolerance and not
-	 * move, and the residual would step instead of rising with mu. */
+	 * move, and the residual would step instead of rising with mu. Near
+	 * trials started from the nearest one's solution with CG run on until
+	 * the start's residual fell 10x (docs/speed.md) met the principle 2-6 %
+	 * off in mu when they kept its fixed variables (the active set only
+	 * grows), and took more steps than from cold when they freed them. */
 	const size_t nv = (size_t)(d->p->n + d->p->nb);
 	if (t <= d->tmin && d->floor)   /* the smallest mu: the floor's solve */
 		memcpy(d->sol, d->floor, sizeof *d->sol * nv);
@@ -231,7 +244,8 @@ static double discrepancy(void *ctx, double t)
 			d->fail = 1;
 	}
 	d->tprev = t;
-	const double f = residual2(d->p, d->sol) - d->target;
+	/* at the floor's own mu the excess is 0 (-inf): any large negative will do */
+	const double f = log(fmax(residual2(d->p, d->sol) - d->floor2, 1e-12 * d->target2) / d->target2);
 	if (f < 0)
 		d->lo = fmax(d->lo, t);
 	else
@@ -574,10 +588,10 @@ static int solve_whole(const struct c0_intensity_conf *c, const double *ybar, in
 			if (st)
 				goto out;
 		}
-		struct dp d = { &p, sol, res->floor2 + res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0, fsol };
+		struct dp d = { &p, sol, res->floor2, res->target2, NAN, tmin + 1e-9, -INFINITY, INFINITY, 0, fsol };
 		double t;
 		int evals;
-		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), tmin, log(1e8), 0.01 * res->target2, 40, &t, &evals);
+		res->dp_status = c0_root_increasing(discrepancy, &d, log(1e-1), DP_SLOPE, tmin, log(1e8), DP_RES_TOL, 40, &t, &evals);
 		st = d.fail ? C0_ENOMEM : C0_OK;
 		if (!st && fabs(p.mu - exp(t)) > 1e-12 * p.mu) {   /* make sol belong to the returned mu */
 			p.mu = exp(t);
