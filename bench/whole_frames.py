@@ -127,7 +127,7 @@ def roofline_rows(r, files, w, T, bw, peak):
             ("support: covariance", supb, (2 * nlag + 4) * px * nsup / 1e9, cov_s,
              "double FMAs (exact float products), rows converted once, chunks in L1"),
             ("support: solve (tiles)", None, None, max(solve_s, 0), "FISTA on the tiles' working sets"),
-            ("support: lambda rule", None, None, lam_s, "a first solve and its peaks"),
+            ("support: lambda rule", None, None, lam_s, "the halves' correlation images (the noise rule: no first solve)"),
             ("intensity (means and solves)", allb if pooled else allb - supb, 2 * px * nint / 1e9, t.get("intensity", 0),
              "the stacks read again (pooled: all, each for its own noise variance), then CG solves for mu"),
             ("bleaching", None, None, t.get("bleaching", 0), ""),
@@ -192,8 +192,8 @@ def main():
                          "%.1f" % (work / r["wall"] / 1e6), ratio))
             print(" | ".join(rows[-1]), file=sys.stderr, flush=True)
             if r["rc"] == 0 and r["lam"] > 0:   # issue 36: the lambda rule's extra solves on their own row
-                rows.append(("  of which lambda rule", "", "%.1f" % r["lam"], "", "inside support: the automatic lambda's "
-                             "first solve and peaks", "", "wall less it: %.1f s" % (r["wall"] - r["lam"])))
+                rows.append(("  of which lambda rule", "", "%.1f" % r["lam"], "", "inside support: the automatic lambda "
+                             "(the halves' correlation images)", "", "wall less it: %.1f s" % (r["wall"] - r["lam"])))
             if not a.data:
                 shutil.rmtree(d)
     finally:
