@@ -60,3 +60,13 @@ static inline int c0_fft_size(int n, int p, int even)
 			return n;
 	}
 }
+
+/* Index i of a sequence of n extended half-sample symmetrically (v[-1-k] =
+ * v[k], v[n+k] = v[n-1-k]: period 2n), as an index in [0, n). */
+static inline int c0_mirror(int i, int n)
+{
+	i %= 2 * n;
+	if (i < 0)
+		i += 2 * n;
+	return i < n ? i : 2 * n - 1 - i;
+}

@@ -1,4 +1,5 @@
 #include "core/spline.h"
+#include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -9,15 +10,6 @@
  * z^K < 1e-17 */
 #define POLE (-0.26794919243112270)   /* sqrt(3) - 2 */
 #define K 30
-
-/* the extended sequence's index: half-sample symmetric */
-static int mirror(int i, int n)
-{
-	i %= 2 * n;
-	if (i < 0)
-		i += 2 * n;
-	return i < n ? i : 2 * n - 1 - i;
-}
 
 /* The coefficients of the interpolating spline of v[0], v[s], ..
  * v[(n-1) s], in place. The sample sequence is extended half-sample
@@ -30,7 +22,7 @@ static void prefilter(double *v, int n, long s)
 	const double z = POLE;
 	double c0 = 0, zk = 1;
 	for (int k = 0; k < K; k++, zk *= z)   /* sum_k z^k v[-k] over the extension */
-		c0 += zk * 6 * v[mirror(-k, n) * s];
+		c0 += zk * 6 * v[c0_mirror(-k, n) * s];
 	v[0] = c0;
 	for (long i = 1; i < n; i++)
 		v[i * s] = 6 * v[i * s] + z * v[(i - 1) * s];
@@ -53,7 +45,7 @@ static void evaluate(const double *c, int n, long cs, int r, double *out, long o
 		const int i0 = (int)floor(u);
 		double a = 0;
 		for (int i = i0 - 1; i <= i0 + 2; i++)
-			a += c[(long)mirror(i, n) * cs] * beta3(u - i);
+			a += c[(long)c0_mirror(i, n) * cs] * beta3(u - i);
 		out[j * os] = a;
 	}
 }

@@ -219,14 +219,6 @@ static void kernel2(int n, double f, double *k2)
 		k2[j] /= s;
 }
 
-/* half-sample mirror, as the shift's extension */
-static int mirror(int i, int n)
-{
-	while (i < 0 || i >= n)
-		i = i < 0 ? -1 - i : 2 * n - 1 - i;
-	return i;
-}
-
 int c0_fshift_variance(int H, int W, const float *var, double dx, double dy, double w, double *out)
 {
 	const int ix = (int)floor(dx), iy = (int)floor(dy), P = W + 2 * FS_R;
@@ -247,12 +239,12 @@ int c0_fshift_variance(int H, int W, const float *var, double dx, double dy, dou
 			for (int x = 0; x < W; x++)
 				t[x] = 0;
 			for (int j = -FS_R; j <= FS_R; j++) {
-				const float *v = var + (size_t)mirror(y + iy + j, H) * W;
+				const float *v = var + (size_t)c0_mirror(y + iy + j, H) * W;
 				for (int x = 0; x < W; x++)
 					t[x] += ky[j + FS_R] * v[x];
 			}
 			for (int i = 0; i < P; i++)
-				row[i] = t[mirror(i - FS_R + ix, W)];
+				row[i] = t[c0_mirror(i - FS_R + ix, W)];
 			for (int x = 0; x < W; x++) {
 				double s = 0;
 				for (int j = 0; j <= 2 * FS_R; j++)
