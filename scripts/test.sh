@@ -32,7 +32,7 @@ fuzz() {
   cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo \
         -DCOL0RME_FUZZ=ON -DC0_FUZZ_SECONDS="${C0_FUZZ_SECONDS:-30}" >/dev/null &&
   cmake --build build-fuzz -j"$J" --target fuzz_tiff fuzz_cli >/dev/null &&
-  ctest --test-dir build-fuzz --output-on-failure -R "fuzz_(tiff|cli)_run"
+  ctest --test-dir build-fuzz --output-on-failure -j"$J" -R "fuzz_(tiff|cli)_run"
 }
 stage "libFuzzer: TIFF reader and command-line arguments" fuzz
 

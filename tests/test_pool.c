@@ -170,8 +170,10 @@ static double jaccard(const char *sub, const uint8_t *mask, int Ly, int Lx)
  * (tiles cut at the iteration cap: 0.88-0.94 of their pixels shared) */
 static void test_pooled_support(void)
 {
+	/* C0_QUICK (the sanitizer build): seed 3 only, the same paths */
+	const int quick = getenv("C0_QUICK") != NULL, last = quick ? 3 : 5;
 	double g = 0;
-	for (int seed = 3; seed <= 5; seed++) {
+	for (int seed = 3; seed <= last; seed++) {
 		simulate("tube", seed);
 		struct c0_support_result one, pooled, tiled;
 		support("tube", 1, 0, &one);
@@ -192,7 +194,7 @@ static void test_pooled_support(void)
 		}
 		c0_support_result_free(&one), c0_support_result_free(&pooled);
 	}
-	CHECK_MSG(g >= 0.005, "pooled supports gain %.3f on average", g);
+	CHECK_MSG(quick || g >= 0.005, "pooled supports gain %.3f on average", g);
 	/* stacks of another field size are refused, by name */
 	struct c0_frames f[2];
 	struct c0_support_conf c[2] = { C0_SUPPORT_DEFAULTS, C0_SUPPORT_DEFAULTS };
