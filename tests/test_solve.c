@@ -2,18 +2,21 @@
  * form: CG on an SPD system, FISTA on a non-negative lasso built to have a
  * given solution, PDHG on pairwise total variation denoising, the root
  * finder on a monotone function; the Schatten pieces (eig3, the spectral
- * clip) against the closed-form eigenvalues of a symmetric 3x3 matrix. Also:
- * the adjoint checker catches a wrong adjoint. */
+ * clip) against the closed-form eigenvalues of a symmetric 3x3 matrix; the
+ * batched NNQP steps against one column at a time and the active-set NNQP.
+ * Also: the adjoint checker catches a wrong adjoint. */
 #include "check.h"
 #include "check_adjoint.h"
 #include "solve/cg.h"
 #include "solve/fista.h"
+#include "solve/nnqp.h"
 #include "solve/pdhg.h"
 #include "solve/prox_schatten.h"
 #include "solve/root.h"
 #include "core/err.h"
 #include "core/rng.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -393,6 +396,65 @@ static void test_schatten(void)
 	CHECK(kept == 400 - clipped);                /* inside the ball: untouched */
 }
 
+/* c0_nnqp_batch against the same steps one column at a time, written the
+ * plain way (the same numbers, bit for bit), and, run long, against the
+ * active-set solver's exact answers */
+static void test_nnqp_batch(void)
+{
+	enum { N = 15, B = C0_NNQP_BATCH };
+	double A[N * N], H[N * N], Hi[N * N];
+	float Hf[N * N];
+	for (int i = 0; i < N * N; i++)
+		A[i] = c0_rng_normal(&rng);
+	double L = 0;
+	for (int i = 0; i < N; i++) {
+		double row = 0;
+		for (int j = 0; j < N; j++) {
+			double h = i == j ? 2 : 0;   /* smallest eigenvalue >= 2 */
+			for (int k = 0; k < N; k++)
+				h += A[k * N + i] * A[k * N + j];
+			H[i * N + j] = h, Hf[i * N + j] = (float)h, row += fabs(h);
+		}
+		L = fmax(L, row);   /* Gershgorin: >= the largest eigenvalue */
+	}
+	CHECK(c0_spd_inverse(N, H, Hi) == 0);
+	const float step = (float)(1 / L), q = (float)sqrt(2 / L), beta = (1 - q) / (1 + q);
+	float *g = malloc(sizeof *g * N * B), *u = calloc(N * B, sizeof *u), *r = calloc(N * B, sizeof *r);
+	for (int i = 0; i < N * B; i++)
+		g[i] = (float)(10 * c0_rng_normal(&rng));   /* about half the bounds active */
+	c0_nnqp_batch(N, Hf, step, beta, 7, g, u);
+	for (int i = 0; i < B; i++) {   /* column i alone */
+		float v[N], w[N], *ui = r;
+		for (int l = 0; l < N; l++)
+			v[l] = 0;
+		for (int it = 0; it < 7; it++) {
+			for (int l = 0; l < N; l++) {
+				float acc = -g[l * B + i];
+				for (int m = 0; m < N; m++)
+					acc += Hf[l * N + m] * v[m];
+				float p = v[l] - step * acc;
+				w[l] = 0.5f * (p + fabsf(p));
+			}
+			for (int l = 0; l < N; l++)
+				v[l] = w[l] + beta * (w[l] - ui[l * B + i]), ui[l * B + i] = w[l];
+		}
+	}
+	CHECK_MSG(!memcmp(u, r, sizeof *u * N * B), "batched steps differ from one column at a time");
+	c0_nnqp_batch(N, Hf, step, beta, 3000, g, u);
+	double worst = 0;
+	for (int i = 0; i < B; i++) {
+		double gi[N], x[N] = { 0 }, d = 0, n2 = 0;
+		for (int l = 0; l < N; l++)
+			gi[l] = g[l * B + i];
+		CHECK(c0_nnqp(N, H, Hi, gi, x) >= 0);
+		for (int l = 0; l < N; l++)
+			d += (u[l * B + i] - x[l]) * (u[l * B + i] - x[l]), n2 += x[l] * x[l];
+		worst = fmax(worst, sqrt(d / fmax(n2, 1e-30)));
+	}
+	CHECK_MSG(worst < 1e-4, "batched steps, run long: %.2g from the exact answer (relative)", worst);
+	free(g), free(u), free(r);
+}
+
 int main(void)
 {
 	c0_rng_init(&rng, 7, 0);
@@ -402,5 +464,6 @@ int main(void)
 	RUN(test_pdhg);
 	RUN(test_root);
 	RUN(test_schatten);
+	RUN(test_nnqp_batch);
 	return CHECK_DONE();
 }

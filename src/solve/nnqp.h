@@ -9,7 +9,8 @@
  * the size of F finish. Each solve factors the smaller of the free block of
  * H and the bound block of H^-1 (x = H^-1 g corrected on the bound set), so
  * that it costs little whether the solution is sparse or dense. Knows
- * nothing about the problem. */
+ * nothing about the problem. c0_nnqp_batch: many programs of one H at once,
+ * approximately. */
 #pragma once
 
 #define C0_NNQP_MAX 64
@@ -21,3 +22,11 @@ int c0_nnqp(int n, const double *H, const double *Hi, const double *g, double *x
 /* Ai = A^-1 for A symmetric positive definite (n <= C0_NNQP_MAX), by
  * Cholesky; -1 if A is not numerically positive definite. */
 int c0_spd_inverse(int n, const double *A, double *Ai);
+
+/* C0_NNQP_BATCH programs of one H (n x n, float row-major), each with its own
+ * g, approximately: `steps` projected gradient steps with constant momentum
+ * beta and step `step` (1/L, L >= H's largest eigenvalue), from u and into
+ * it. Column i's variable l is at [l * C0_NNQP_BATCH + i] in g and u. No
+ * branches and no sums across columns: vectorised across them. */
+#define C0_NNQP_BATCH 256
+void c0_nnqp_batch(int n, const float *H, float step, float beta, int steps, const float *g, float *u);

@@ -95,63 +95,17 @@ void matirf_primal_step_exact(void *vc, float *x, float *t, float rho, double su
 
 /* The apg solver's primal step: the exact solver's per-pixel NNQP,
  *   min_{u >= 0} 1/2 u^T H u - g^T u,  g = c + (x - tau K^T y) / tau,
- * solved only approximately, by APG_ITS projected gradient steps with
- * constant momentum (H's eigenvalues lie in [1/tau, L], well conditioned),
- * warm-started from the column's current values: branch-free and
- * vectorised across a chunk of columns (the active-set NNQP branches per
- * pixel and was 2/3 of the exact solver's time). x moves little per
+ * solved only approximately by c0_nnqp_batch: APG_ITS projected gradient
+ * steps with constant momentum (H's eigenvalues lie in [1/tau, L], well
+ * conditioned), warm-started from the column's current values, branch-free
+ * and vectorised across a chunk of columns (the active-set NNQP branches
+ * per pixel and was 2/3 of the exact solver's time). x moves little per
  * iteration, so a few steps keep up with it, and at a fixed point of PDHG
  * the warm start is already the prox: the solution is the exact solver's.
  * 6 steps: 4 left the depths 1.4 nm from diag's on the 350x350 phantom, 6
  * and 8 0.7 nm (docs/defaults.md#matirf_solver). */
-#define APG_CHUNK 256
+#define APG_CHUNK C0_NNQP_BATCH
 #define APG_ITS 6
-/* 16 floats: one AVX-512 register (lowered to narrower ones elsewhere) */
-typedef float c0_vf16 __attribute__((vector_size(64)));
-typedef int c0_vi16 __attribute__((vector_size(64)));
-#define VLOAD(v, p) memcpy(&(v), (p), sizeof(v))
-#define VSTORE(p, v) memcpy((p), &(v), sizeof(v))
-/* max(p, 0) as the scalar loop wrote it, 1/2 (p + |p|), |p| by clearing the sign bit as fabsf does */
-#define project(p) (0.5f * ((p) + (c0_vf16)((c0_vi16)(p) & 0x7fffffff)))
-
-/* most of the step's time */
-C0_HOT_SAME static void apg_chunk(const struct matirf_ctx *c, const float *g, float *u)
-{
-	const int nz = c->nz;
-	const float st = c->apg_step, be = c->apg_beta;
-	float v[C0_NNQP_MAX * APG_CHUNK], w[C0_NNQP_MAX * APG_CHUNK];
-	memcpy(v, u, sizeof(float) * nz * APG_CHUNK);
-	for (int it = 0; it < APG_ITS; it++) {
-		for (int l = 0; l < nz; l++)
-			/* 64 columns at a time, their H v in four vectors (registers
-			 * on AVX-512): the same sums in the same order as one column
-			 * at a time */
-			for (int i0 = 0; i0 < APG_CHUNK; i0 += 4 * 16) {
-				const float *gl = g + l * APG_CHUNK + i0, *vl = v + l * APG_CHUNK + i0;
-				float *wl = w + l * APG_CHUNK + i0;
-				c0_vf16 a0, a1, a2, a3, t0, t1, t2, t3;
-				VLOAD(a0, gl), VLOAD(a1, gl + 16), VLOAD(a2, gl + 32), VLOAD(a3, gl + 48);
-				a0 = -a0, a1 = -a1, a2 = -a2, a3 = -a3;
-				for (int m = 0; m < nz; m++) {
-					const float h = c->Hf[l * nz + m], *vm = v + m * APG_CHUNK + i0;
-					VLOAD(t0, vm), VLOAD(t1, vm + 16), VLOAD(t2, vm + 32), VLOAD(t3, vm + 48);
-					a0 += h * t0, a1 += h * t1, a2 += h * t2, a3 += h * t3;
-				}
-				VLOAD(t0, vl), VLOAD(t1, vl + 16), VLOAD(t2, vl + 32), VLOAD(t3, vl + 48);
-				t0 = project(t0 - st * a0), t1 = project(t1 - st * a1);
-				t2 = project(t2 - st * a2), t3 = project(t3 - st * a3);
-				VSTORE(wl, t0), VSTORE(wl + 16, t1), VSTORE(wl + 32, t2), VSTORE(wl + 48, t3);
-			}
-		for (int l = 0; l < nz; l++) {
-			float *ul = u + l * APG_CHUNK, *vl = v + l * APG_CHUNK;
-			const float *wl = w + l * APG_CHUNK;
-			for (int i = 0; i < APG_CHUNK; i++) {
-				vl[i] = wl[i] + be * (wl[i] - ul[i]);
-				ul[i] = wl[i];
-			}
-		}
-	}
-}
 
 /* The n columns from k0 into a chunk: u = x and the NNQP's linear term
  * g = c + x / tau - K^T y (+ the blur's correction), zero past n */
@@ -198,7 +152,7 @@ static void apg_step(struct matirf_ctx *c, const float *y, float *x, float *t, f
 		const size_t n = k0 + APG_CHUNK < M ? APG_CHUNK : M - k0;
 		float g[C0_NNQP_MAX * APG_CHUNK], u[C0_NNQP_MAX * APG_CHUNK];
 		apg_gather(c, y, x, t, k0, n, g, u);
-		apg_chunk(c, g, u);
+		c0_nnqp_batch(nz, c->Hf, c->apg_step, c->apg_beta, APG_ITS, g, u);
 		for (int l = 0; l < nz; l++) {
 			float *xl = x + l * M + k0, *tl = t + l * M + k0;
 			const float *ul = u + l * APG_CHUNK;
