@@ -133,7 +133,7 @@ C0_HOT_SAME static void apg_gather(const struct matirf_ctx *c, const float *y, c
 			for (size_t i = 0; i < n; i++)
 				gl[i] += cr[i];
 		}
-		for (size_t i = n; i < APG_CHUNK; i++)   /* the last chunk's tail: apg_chunk takes whole blocks */
+		for (size_t i = n; i < APG_CHUNK; i++)   /* the last chunk's tail: c0_nnqp_batch takes whole chunks */
 			gl[i] = ul[i] = 0;
 	}
 }
