@@ -11,11 +11,12 @@
 #else
 #define C0_HOT
 #endif
-/* AVX2 without FMA: the same operations in the same order as the baseline
- * build, so the same numbers (ISO C does not contract them into FMAs); for
- * loops whose results must not move (an OpenMP loop calls it, as C0_HOT) */
+/* AVX-512 and AVX2 without FMA: the same operations in the same order as
+ * the baseline build, so the same numbers (ISO C does not contract them
+ * into FMAs); for loops whose results must not move (an OpenMP loop calls
+ * it, as C0_HOT) */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_ADDRESS__) && (!defined(__clang__) || __clang_major__ >= 14)
-#define C0_HOT_SAME __attribute__((target_clones("avx2", "default")))
+#define C0_HOT_SAME __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
 #define C0_HOT_SAME
 #endif

@@ -7,8 +7,7 @@
 
 /* One version a vector width, each with vectors of its own size, chosen at
  * run time: GCC splits a vector wider than the target's into slow pieces (16
- * floats on SSE2 took 2.5x the time of 4). AVX-512's 16 took the time of
- * AVX2's 8 (the authors' example, 14.5 against 15.0 CPU-s). */
+ * floats on SSE2 took 2.5x the time of 4). */
 #define NNQP_NAME batch4
 #define NNQP_LANES 4
 #define NNQP_TARGET
@@ -26,13 +25,22 @@
 #undef NNQP_LANES
 #undef NNQP_TARGET
 
+#define NNQP_NAME batch16
+#define NNQP_LANES 16
+#define NNQP_TARGET __attribute__((target("avx512f")))
+#include "solve/nnqp_batch_kernel.h"
+#undef NNQP_NAME
+#undef NNQP_LANES
+#undef NNQP_TARGET
 #define C0_NNQP_WIDE 1
 #endif
 
 void c0_nnqp_batch(int n, const float *H, float step, float beta, int steps, const float *g, float *u)
 {
 #ifdef C0_NNQP_WIDE
-	if (__builtin_cpu_supports("avx2"))
+	if (__builtin_cpu_supports("avx512f"))
+		batch16(n, H, step, beta, steps, g, u);
+	else if (__builtin_cpu_supports("avx2"))
 		batch8(n, H, step, beta, steps, g, u);
 	else
 #endif
