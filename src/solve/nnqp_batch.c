@@ -1,21 +1,44 @@
 #include "solve/nnqp.h"
 
+#include <math.h>
 #include <string.h>
 
 #define VLOAD(v, p) memcpy(&(v), (p), sizeof(v))
 #define VSTORE(p, v) memcpy((p), &(v), sizeof(v))
 
-/* One version a vector width, each with vectors of its own size, chosen at
- * run time: GCC splits a vector wider than the target's into slow pieces (16
- * floats on SSE2 took 2.5x the time of 4). */
-#define NNQP_NAME batch4
-#define NNQP_LANES 4
-#define NNQP_TARGET
-#include "solve/nnqp_batch_kernel.h"
-#undef NNQP_NAME
-#undef NNQP_LANES
-#undef NNQP_TARGET
+/* Baseline: plain loops over a row of the chunk, which the compiler
+ * vectorises at the target's width (the blocked kernel below, split into
+ * SSE2 vectors, took 1.2x as long: a CPU without AVX2, and the sanitizer
+ * build); the same sums in the same order as the others */
+static void batch_plain(int n, const float *H, float step, float beta, int steps, const float *g, float *u)
+{
+	enum { B = C0_NNQP_BATCH };
+	float v[C0_NNQP_MAX * B], w[C0_NNQP_MAX * B], acc[B];
+	memcpy(v, u, sizeof(float) * n * B);
+	for (int it = 0; it < steps; it++) {
+		for (int l = 0; l < n; l++) {
+			for (int i = 0; i < B; i++)
+				acc[i] = -g[l * B + i];
+			for (int m = 0; m < n; m++) {
+				const float h = H[l * n + m], *vm = v + m * B;
+				for (int i = 0; i < B; i++)
+					acc[i] += h * vm[i];
+			}
+			for (int i = 0; i < B; i++) {
+				const float p = v[l * B + i] - step * acc[i];
+				w[l * B + i] = 0.5f * (p + fabsf(p));
+			}
+		}
+		for (int i = 0; i < n * B; i++) {   /* the momentum step */
+			v[i] = w[i] + beta * (w[i] - u[i]);
+			u[i] = w[i];
+		}
+	}
+}
 
+/* AVX2 and AVX-512: the blocked kernel at the CPU's width, chosen at run
+ * time, each with vectors of its own size (one 16-float version split into
+ * SSE2 vectors took 2.5x as long) */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_ADDRESS__) && (!defined(__clang__) || __clang_major__ >= 14)
 #define NNQP_NAME batch8
 #define NNQP_LANES 8
@@ -44,5 +67,5 @@ void c0_nnqp_batch(int n, const float *H, float step, float beta, int steps, con
 		batch8(n, H, step, beta, steps, g, u);
 	else
 #endif
-		batch4(n, H, step, beta, steps, g, u);
+		batch_plain(n, H, step, beta, steps, g, u);
 }
