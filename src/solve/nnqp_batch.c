@@ -6,10 +6,9 @@
 #define VLOAD(v, p) memcpy(&(v), (p), sizeof(v))
 #define VSTORE(p, v) memcpy((p), &(v), sizeof(v))
 
-/* Baseline: plain loops over a row of the chunk, which the compiler
- * vectorises at the target's width (the blocked kernel below, split into
- * SSE2 vectors, took 1.2x as long: a CPU without AVX2, and the sanitizer
- * build); the same sums in the same order as the others */
+/* Baseline (a CPU without AVX2, the sanitizer build): plain loops over a
+ * row of the chunk, which the compiler vectorises at the target's width;
+ * the same sums in the same order as the blocked kernel */
 static void batch_plain(int n, const float *H, float step, float beta, int steps, const float *g, float *u)
 {
 	enum { B = C0_NNQP_BATCH };
@@ -36,9 +35,10 @@ static void batch_plain(int n, const float *H, float step, float beta, int steps
 	}
 }
 
-/* AVX2 and AVX-512: the blocked kernel at the CPU's width, chosen at run
- * time, each with vectors of its own size (one 16-float version split into
- * SSE2 vectors took 2.5x as long) */
+/* AVX2 and AVX-512: the blocked kernel (its accumulators in registers,
+ * where the loops above store them every term) at the CPU's width, chosen at
+ * run time, each with vectors of its own size (one 16-float version split
+ * into SSE2 vectors took twice as long as the loops) */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_ADDRESS__) && (!defined(__clang__) || __clang_major__ >= 14)
 #define NNQP_NAME batch8
 #define NNQP_LANES 8
