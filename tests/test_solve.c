@@ -424,7 +424,7 @@ static void test_nnqp_batch(void)
 		g[i] = (float)(10 * c0_rng_normal(&rng));   /* about half the bounds active */
 	c0_nnqp_batch(N, Hf, step, beta, 7, g, u);
 	for (int i = 0; i < B; i++) {   /* column i alone */
-		float v[N], w[N], *ui = r;
+		float v[N], w[N];
 		for (int l = 0; l < N; l++)
 			v[l] = 0;
 		for (int it = 0; it < 7; it++) {
@@ -436,7 +436,7 @@ static void test_nnqp_batch(void)
 				w[l] = 0.5f * (p + fabsf(p));
 			}
 			for (int l = 0; l < N; l++)
-				v[l] = w[l] + beta * (w[l] - ui[l * B + i]), ui[l * B + i] = w[l];
+				v[l] = w[l] + beta * (w[l] - r[l * B + i]), r[l * B + i] = w[l];
 		}
 	}
 	CHECK_MSG(!memcmp(u, r, sizeof *u * N * B), "batched steps differ from one column at a time");
