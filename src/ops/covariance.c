@@ -77,6 +77,10 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 		c0_cov_acc_free(a);
 		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, a->nlag);
 	}
+	/* written once now: the flushes add to it, and a first touch that reads
+	 * maps the zero page, whose copy on the write then costs every thread a
+	 * TLB flush (7 % of `support`'s CPU time on a 1024^2 frame) */
+	memset(a->sum, 0, sizeof *a->sum * (size_t)a->nlag * n);
 	int l = 0;
 	for (int dy = 0; dy <= d; dy++)
 		for (int dx = -d; dx <= d; dx++)
