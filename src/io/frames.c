@@ -60,22 +60,50 @@ static double sum_floats(const float *v, size_t n)
 	return s;
 }
 
+/* A row's sum as sum_floats gives it, its values added to the column sums
+ * c in the same pass; *exact cleared unless the row took the exact path */
+static double row_sum(const float *v, int n, double *c, int *exact)
+{
+	const float K = 4194304.f, M = 12582912.f;
+	double p[8] = { 0 }, s = 0;
+	int ok = 1, i = 0;
+	for (; i + 8 <= n; i += 8)
+		for (int k = 0; k < 8; k++) {
+			const float u = v[i + k];
+			p[k] += u, c[i + k] += u;
+			ok &= (fabsf(u) <= K) & ((u + M) - M == u);
+		}
+	for (int k = 0; k < 8; k++)
+		s += p[k];
+	for (; i < n; i++)
+		s += v[i], c[i] += v[i], ok &= (fabsf(v[i]) <= K) & ((v[i] + M) - M == v[i]);
+	*exact &= ok;
+	if (ok)
+		return s;
+	s = 0;
+	for (i = 0; i < n; i++)
+		s += v[i];
+	return s;
+}
+
 static void note_sum(struct c0_frames *f, int64_t t, const float *v)
 {
 	if (!isnan(f->sum[t]))
 		return;   /* noted by an earlier pass: the same raw frame */
 	const size_t n = (size_t)f->height * f->width;
-	f->sum[t] = sum_floats(v, n);
-	if (!f->rows)
+	if (!f->rows) {
+		f->sum[t] = sum_floats(v, n);
 		return;
-	double *r = f->rows + (size_t)t * f->height, *c = f->cols + (size_t)t * f->width;
-	memset(c, 0, (size_t)f->width * sizeof *c);
-	for (int y = 0; y < f->height; y++) {
-		const float *row = v + (size_t)y * f->width;
-		r[y] = sum_floats(row, (size_t)f->width);
-		for (int x = 0; x < f->width; x++)
-			c[x] += row[x];
 	}
+	/* one pass: the rows' sums and the columns'; where every row's values
+	 * are exact integers so is every partial sum of the frame's, and the
+	 * rows' sums add up to sum_floats's bit for bit */
+	double *r = f->rows + (size_t)t * f->height, *c = f->cols + (size_t)t * f->width, s = 0;
+	int exact = n < ((size_t)1 << 28);
+	memset(c, 0, (size_t)f->width * sizeof *c);
+	for (int y = 0; y < f->height; y++)
+		s += r[y] = row_sum(v + (size_t)y * f->width, f->width, c, &exact);
+	f->sum[t] = exact ? s : sum_floats(v, n);
 }
 
 int c0_frames_keep_profiles(struct c0_frames *f)
