@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-PKGS=(build-essential cmake pkg-config libtiff-dev libtiff-tools libcjson-dev libpng-dev libfftw3-dev
+PKGS=(build-essential cmake pkg-config libtiff-dev libtiff-tools libcjson-dev libpng-dev libfftw3-dev libdeflate-dev
       python3-numpy python3-tifffile python3-tqdm clang libclang-rt-14-dev libomp-14-dev
       libopenmpi-dev openmpi-bin
       python3-venv python3-pip python3-setuptools python3-wheel python3-pytest binutils

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <tiffio.h>
 #include <unistd.h>
 
 static char dir[256];
@@ -115,6 +116,65 @@ static void test_deflate(void)
 	struct stat st;
 	CHECK(stat(path, &st) == 0 && st.st_size < (off_t)W * H * Z * 4 / 20);
 	free(b), free(v);
+}
+
+/* the raw strips of a file, concatenated, with each strip's length */
+static uint8_t *raw_strips(const char *path, uint32_t *n, uint64_t *len)
+{
+	TIFF *t = TIFFOpen(path, "r");
+	*n = t ? TIFFNumberOfStrips(t) : 0;
+	uint64_t total = 0;
+	for (uint32_t s = 0; s < *n && s < 64; s++)
+		total += len[s] = (uint64_t)TIFFRawStripSize(t, s);
+	uint8_t *b = malloc(total + 1), *at = b;
+	for (uint32_t s = 0; b && s < *n && s < 64; at += len[s], s++)
+		if (TIFFReadRawStrip(t, s, at, (tmsize_t)len[s]) != (tmsize_t)len[s])
+			*n = 0;
+	if (t)
+		TIFFClose(t);
+	return b;
+}
+
+/* the plane's strips are deflated side by side (io/tiff_write.c): more
+ * strips than one batch and a short last one, each strip's bytes the ones
+ * libtiff's own codec writes for it (ZIPQUALITY 1) */
+static void test_deflate_strips(void)
+{
+	enum { W = 1024, H = 256 * 17 + 5 };   /* rows of 4 KiB: 256 a strip, 18 strips */
+	char path[512], ref[512];
+	snprintf(path, sizeof path, "%s/strips.tif", dir), snprintf(ref, sizeof ref, "%s/strips_ref.tif", dir);
+	float *v = calloc((size_t)W * H, sizeof *v);
+	for (int i = 0; i < 20000; i++)
+		v[(size_t)i * 7919 % ((size_t)W * H)] = (float)(i % 97) * 0.25f - 3;
+	struct c0_tiff_wopts o = { .width = W, .height = H, .dtype = C0_F32, .deflate = 1 };
+	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
+	TIFF *t = TIFFOpen(ref, "w");
+	CHECK(t != NULL);
+	uint32_t rps = 0, ns = 0, nr = 0;
+	TIFF *f = TIFFOpen(path, "r");
+	CHECK(f && TIFFGetField(f, TIFFTAG_ROWSPERSTRIP, &rps) && rps == 256);
+	if (f)
+		TIFFClose(f);
+	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)W), TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)H);
+	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 32), TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE), TIFFSetField(t, TIFFTAG_ZIPQUALITY, 1);
+	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
+	for (uint32_t y = 0; y < H; y += rps)
+		CHECK(TIFFWriteEncodedStrip(t, TIFFComputeStrip(t, y, 0), v + (size_t)y * W,
+					    (tmsize_t)((H - y < rps ? H - y : rps) * W * sizeof *v)) > 0);
+	TIFFClose(t);
+	uint64_t la[64], lb[64];
+	uint8_t *a = raw_strips(path, &ns, la), *b = raw_strips(ref, &nr, lb);
+	int same = ns == 18 && nr == ns;
+	for (uint32_t s = 0, at = 0; same && s < ns; at += (uint32_t)la[s], s++)
+		same = la[s] == lb[s] && memcmp(a + at, b + at, la[s]) == 0;
+	CHECK_MSG(same, "the deflated strips differ from libtiff's own (%u and %u strips)", ns, nr);
+	struct c0_tiff_info in;
+	float *back = NULL;
+	CHECK(c0_tiff_load_f32(path, &in, &back) == C0_OK && back && memcmp(back, v, sizeof *v * W * H) == 0);
+	free(a), free(b), free(v), free(back);
 }
 
 static void test_abort_leaves_nothing(void)
@@ -287,6 +347,7 @@ int main(void)
 	RUN(test_integer_clamp);
 	RUN(test_bigtiff);
 	RUN(test_deflate);
+	RUN(test_deflate_strips);
 	RUN(test_abort_leaves_nothing);
 	RUN(test_bad_input);
 	RUN(test_imagej_meta);
