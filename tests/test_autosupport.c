@@ -791,6 +791,29 @@ static void test_drift_angles(void)
 	c0_drift_free(d);
 }
 
+/* The drift pass sums each batch of frames read ahead a chunk of pixels at
+ * a time: batches of 7 frames, which split the blocks of 50, give the
+ * trajectory of one batch a stack, bit for bit (the angles' stacks above) */
+static void test_drift_batches(void)
+{
+	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS, d7 = C0_DRIFT_DEFAULTS;
+	struct c0_sim_conf s;
+	c0_sim_defaults(&s);
+	dc.psf_sigma_px = d7.psf_sigma_px = c0_psf_sigma_px(s.fwhm_nm, s.pixel_nm);
+	d7.read_ahead = 7;
+	struct c0_drift *a = estimate_3("angles", &dc), *b = estimate_3("angles", &d7);
+	int same = a && b;
+	double ax = 0, ay = 0, bx, by;
+	for (int q = 0; same && q < 3; q++)
+		for (int64_t t = 0; t < 300; t++) {
+			c0_drift_at(a, q, t, &ax, &ay), c0_drift_at(b, q, t, &bx, &by);
+			same &= ax == bx && ay == by;
+		}
+	CHECK_MSG(same, "the drift depends on how many frames are read ahead");
+	CHECK_MSG(hypot(ax, ay) > 0.5, "the stacks' drift was not measured (%.2f, %.2f px at the end)", ax, ay);
+	c0_drift_free(a), c0_drift_free(b);
+}
+
 /* Interleaved stacks (frame t of each in turn) share one clock: their
  * trajectory is their mean. Read as one after another (before), the same
  * stacks were joined end to end. Seeds 3-7: RMS 6.3, 1.9, 2.9, 6.5, 2.4 nm.
@@ -861,6 +884,7 @@ int main(void)
 	CHECK(mkdtemp(dir) != NULL);
 	RUN(test_drift);
 	RUN(test_drift_angles);
+	RUN(test_drift_batches);
 	RUN(test_drift_interleaved);
 	RUN(test_drift_scmos);
 	RUN(test_auto_lambda);

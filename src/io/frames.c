@@ -1,4 +1,5 @@
 #include "io/frames.h"
+#include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -36,7 +37,7 @@ static void calibrate(const struct c0_frames *f, int y0, int ny, float *v)
  * then it comes from 8 interleaved parts (vectorised, and one pass over v
  * with the test); otherwise v is added again in order. In that range
  * v + M - M (float) rounds v to an integer; NaN and infinity fail the bound. */
-static double sum_floats(const float *v, size_t n)
+C0_HOT_SAME static double sum_floats(const float *v, size_t n)
 {
 	const float K = 4194304.f, M = 12582912.f;   /* 2^22, 1.5 2^23 */
 	double p[8] = { 0 }, s = 0;
@@ -61,8 +62,9 @@ static double sum_floats(const float *v, size_t n)
 }
 
 /* A row's sum as sum_floats gives it, its values added to the column sums
- * c in the same pass; *exact cleared unless the row took the exact path */
-static double row_sum(const float *v, int n, double *c, int *exact)
+ * c in the same pass; *exact cleared unless the row took the exact path
+ * (element by element, without FMA: the same bits in every build) */
+C0_HOT_SAME static double row_sum(const float *v, int n, double *c, int *exact)
 {
 	const float K = 4194304.f, M = 12582912.f;
 	double p[8] = { 0 }, s = 0;

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "io/tiff.h"
 #include "io/imagej.h"
+#include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -423,8 +424,9 @@ static int ensure_buf(struct c0_tiff_reader *r, size_t n)
 	return r->buf ? C0_OK : C0_ENOMEM;
 }
 
-/* Convert n samples of the file's type at src to float (dst32) or double (dst64). */
-static void convert(enum c0_dtype t, const uint8_t *src, size_t n, float *d32, double *d64)
+/* Convert n samples of the file's type at src to float (dst32) or double (dst64):
+ * exact for every type but float64 to float32, which rounds the same in each build. */
+C0_HOT_SAME static void convert(enum c0_dtype t, const uint8_t *src, size_t n, float *d32, double *d64)
 {
 #define CONV(T) do { const T *s = (const T *)(const void *)src; \
 	if (d32) for (size_t i = 0; i < n; i++) d32[i] = (float)s[i]; \

@@ -26,8 +26,9 @@ struct c0_drift_conf {
 	double start[C0_DRIFT_MAX];   /* stack q's first frame on the acquisition's clock, in frames (stages/bleach.h's */
 	int nstart;                   /* c0_bleach_clock: order and gaps); nstart 0: one after another as given */
 	double psf_sigma_px;          /* 0: the block means correlated as they are; > 0: both filtered by this PSF */
+	int read_ahead;               /* 0: frames read ahead in batches of 32 MiB; > 0: this many frames a batch */
 };
-#define C0_DRIFT_DEFAULTS { 50, 0, { 0 }, 0, 0 }
+#define C0_DRIFT_DEFAULTS { 50, 0, { 0 }, 0, 0, 0 }
 
 struct c0_drift;
 
