@@ -15,11 +15,11 @@
 #include <errno.h>
 #include <libdeflate.h>
 #include <math.h>
+#include <omp.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <omp.h>
 #include <tiffio.h>
 
 struct c0_tiff_writer {
@@ -260,7 +260,9 @@ static int write_deflated(struct c0_tiff_writer *w, uint32_t rps, size_t row)
 		errno = 0;
 		for (int b = 0; b < nb; b++) {
 			const uint32_t s = TIFFComputeStrip(t, (uint32_t)(y0 + (int64_t)b * rps), 0);
-			if (!z->len[b] || TIFFWriteRawStrip(t, s, z->out + (size_t)b * z->cap, (tmsize_t)z->len[b]) < 0)
+			if (!z->len[b])   /* the output's bound was its room: not expected */
+				return c0_fail(C0_EIO, "%s: deflate failed at plane %lld", w->path, (long long)w->written + 1);
+			if (TIFFWriteRawStrip(t, s, z->out + (size_t)b * z->cap, (tmsize_t)z->len[b]) < 0)
 				return write_error(w, errno);
 		}
 	}
@@ -290,7 +292,7 @@ int c0_tiff_write_plane(struct c0_tiff_writer *w, const float *plane)
 	if (o->deflate && (st = write_deflated(w, rps, row)))
 		return st;
 	errno = 0;
-	for (int64_t y0 = 0; !o->deflate && y0 < o->height; y0 += rps) {
+	for (int64_t y0 = 0; !o->deflate && y0 < o->height; y0 += rps) {   /* uncompressed */
 		int64_t ny = o->height - y0 < rps ? o->height - y0 : rps;
 		uint32_t s = TIFFComputeStrip(t, (uint32_t)y0, 0);
 		if (TIFFWriteEncodedStrip(t, s, w->buf + (size_t)y0 * row, (tmsize_t)(ny * row)) < 0)
