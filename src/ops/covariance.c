@@ -25,6 +25,7 @@ struct c0_cov_acc {
 	float *blk;         /* up to `block` frames, shifted */
 	int nb, block;
 	int dropped;        /* rows [0, dropped) of sum are given back */
+	int fresh;          /* sum untouched since calloc: the first flush writes each sum before adding (add_span) */
 	double guard;       /* c0_cov_acc_set_guard's g; 0: none */
 	const float *noise; /* c0_cov_acc_set_noise's map (NULL: none), its width and this accumulator's origin in it */
 	int noise_w, noise_x0, noise_y0;
@@ -77,10 +78,7 @@ int c0_cov_acc_new(int W, int H, int d, struct c0_cov_acc **out)
 		c0_cov_acc_free(a);
 		return c0_fail(C0_ENOMEM, "covariance: out of memory for %dx%d pixels x %d lags", W, H, a->nlag);
 	}
-	/* written once now: the flushes add to it, and a first touch that reads
-	 * maps the zero page, whose copy on the write then costs every thread a
-	 * TLB flush (7 % of `support`'s CPU time on a 1024^2 frame) */
-	memset(a->sum, 0, sizeof *a->sum * (size_t)a->nlag * n);
+	a->fresh = 1;
 	int l = 0;
 	for (int dy = 0; dy <= d; dy++)
 		for (int dx = -d; dx <= d; dx++)
@@ -227,9 +225,21 @@ static void row_moments(struct c0_cov_acc *a, int y, const double *p, size_t S)
 			s1[x] += p[b * S + x], st[x] += (t0 + b) * p[b * S + x];
 }
 
+/* acc[0..m) += the products; on the first flush the sums are zeroed first.
+ * A first touch that read would map the zero page, whose copy on the
+ * write then flushes every thread's TLB (7 % of `support`'s CPU time on a
+ * 1024^2 frame); zeroing only what is added keeps the pages a region
+ * leaves out (c0_cov_acc_set_region) unmade, as calloc left them. */
+static void add_span(float *acc, const double *p, const double *q, int m, int nb, size_t S, int fresh)
+{
+	if (fresh)
+		memset(acc, 0, sizeof *acc * (size_t)m);
+	c0_covsum_span(acc, p, q, m, nb, S);
+}
+
 /* flush's work on row y, the ring holding rows y..y+d: chunk by chunk of
  * columns, every lag's products */
-static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw)
+static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw, int fresh)
 {
 	const int W = a->W, H = a->H, nb = a->nb, nr = a->d + 1 < H - y ? a->d + 1 : H - y;
 	const size_t n = (size_t)W * H, S = g->S;
@@ -255,14 +265,14 @@ static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw)
 			const double *q = ring_row(g, a, y + dy) + dx;   /* q[x]: column x + dx */
 			if (whole) {
 				if (x1 > x0)
-					c0_covsum_span(acc + x0, p + x0, q + x0, x1 - x0, nb, S);
+					add_span(acc + x0, p + x0, q + x0, x1 - x0, nb, S, fresh);
 				continue;
 			}
 			for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++) {
 				const int s0 = a->span[2 * k] > x0 ? a->span[2 * k] : x0;
 				const int s1 = a->span[2 * k + 1] < x1 ? a->span[2 * k + 1] : x1;
 				if (s1 > s0)
-					c0_covsum_span(acc + s0, p + s0, q + s0, s1 - s0, nb, S);
+					add_span(acc + s0, p + s0, q + s0, s1 - s0, nb, S, fresh);
 			}
 		}
 	}
@@ -286,11 +296,11 @@ static void flush(struct c0_cov_acc *a)
 			for (int y = y0; g.v && y < (y0 + G < H ? y0 + G : H); y++) {
 				for (int r = y == y0 ? y : y + a->d; r <= y + a->d && r < H; r++)
 					ring_fill(&g, a, r);
-				flush_row(a, y, &g, cw);
+				flush_row(a, y, &g, cw, a->fresh);
 			}
 		free(g.v);
 	}
-	a->nb = 0;
+	a->nb = 0, a->fresh = 0;
 }
 
 int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
