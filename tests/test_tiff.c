@@ -150,6 +150,10 @@ static void test_deflate_strips(void)
 	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
 	TIFF *t = TIFFOpen(ref, "w");
 	CHECK(t != NULL);
+	if (!t) {
+		free(v);
+		return;
+	}
 	uint32_t rps = 0, ns = 0, nr = 0;
 	TIFF *f = TIFFOpen(path, "r");
 	CHECK(f && TIFFGetField(f, TIFFTAG_ROWSPERSTRIP, &rps) && rps == 256);
