@@ -31,6 +31,42 @@ static void calibrate(const struct c0_frames *f, int y0, int ny, float *v)
 			v[i] *= f->cal_scale[o + i];
 }
 
+/* v's 8 interleaved parts' sum, its values also added to c where cols (a
+ * constant at each call, so that each caller's loop has no test in it);
+ * *ok cleared unless every value passed the bound below */
+static inline __attribute__((always_inline)) double sum_parts(const float *v, size_t n, int cols, double *c, int *ok)
+{
+	const float K = 4194304.f, M = 12582912.f;   /* 2^22, 1.5 2^23 */
+	double p[8] = { 0 }, s = 0;
+	int good = 1;
+	size_t i = 0;
+	for (; i + 8 <= n; i += 8)
+		for (int k = 0; k < 8; k++) {
+			const float u = v[i + k];
+			p[k] += u;
+			if (cols)
+				c[i + k] += u;
+			good &= (fabsf(u) <= K) & ((u + M) - M == u);
+		}
+	for (int k = 0; k < 8; k++)
+		s += p[k];
+	for (; i < n; i++) {
+		s += v[i], good &= (fabsf(v[i]) <= K) & ((v[i] + M) - M == v[i]);
+		if (cols)
+			c[i] += v[i];
+	}
+	*ok &= good;
+	return s;
+}
+
+static double sum_in_order(const float *v, size_t n)
+{
+	double s = 0;
+	for (size_t i = 0; i < n; i++)
+		s += v[i];
+	return s;
+}
+
 /* The sum of v in double, as added in order. Where all values are integers
  * of at most 2^22 in magnitude (n < 2^28) every partial sum is exact, so
  * any order gives that sum bit for bit (uint8/16 frames, uncalibrated):
@@ -39,26 +75,9 @@ static void calibrate(const struct c0_frames *f, int y0, int ny, float *v)
  * v + M - M (float) rounds v to an integer; NaN and infinity fail the bound. */
 C0_HOT_SAME static double sum_floats(const float *v, size_t n)
 {
-	const float K = 4194304.f, M = 12582912.f;   /* 2^22, 1.5 2^23 */
-	double p[8] = { 0 }, s = 0;
 	int ok = n < ((size_t)1 << 28);
-	size_t i = 0;
-	for (; i + 8 <= n; i += 8)
-		for (int k = 0; k < 8; k++) {
-			const float u = v[i + k];
-			p[k] += u;
-			ok &= (fabsf(u) <= K) & ((u + M) - M == u);
-		}
-	for (int k = 0; k < 8; k++)
-		s += p[k];
-	for (; i < n; i++)
-		s += v[i], ok &= (fabsf(v[i]) <= K) & ((v[i] + M) - M == v[i]);
-	if (ok)
-		return s;
-	s = 0;
-	for (i = 0; i < n; i++)
-		s += v[i];
-	return s;
+	const double s = sum_parts(v, n, 0, NULL, &ok);
+	return ok ? s : sum_in_order(v, n);
 }
 
 /* A row's sum as sum_floats gives it, its values added to the column sums
@@ -66,26 +85,10 @@ C0_HOT_SAME static double sum_floats(const float *v, size_t n)
  * (element by element, without FMA: the same bits in every build) */
 C0_HOT_SAME static double row_sum(const float *v, int n, double *c, int *exact)
 {
-	const float K = 4194304.f, M = 12582912.f;
-	double p[8] = { 0 }, s = 0;
-	int ok = 1, i = 0;
-	for (; i + 8 <= n; i += 8)
-		for (int k = 0; k < 8; k++) {
-			const float u = v[i + k];
-			p[k] += u, c[i + k] += u;
-			ok &= (fabsf(u) <= K) & ((u + M) - M == u);
-		}
-	for (int k = 0; k < 8; k++)
-		s += p[k];
-	for (; i < n; i++)
-		s += v[i], c[i] += v[i], ok &= (fabsf(v[i]) <= K) & ((v[i] + M) - M == v[i]);
+	int ok = 1;
+	const double s = sum_parts(v, (size_t)n, 1, c, &ok);
 	*exact &= ok;
-	if (ok)
-		return s;
-	s = 0;
-	for (i = 0; i < n; i++)
-		s += v[i];
-	return s;
+	return ok ? s : sum_in_order(v, (size_t)n);
 }
 
 static void note_sum(struct c0_frames *f, int64_t t, const float *v)
