@@ -16,8 +16,10 @@
  * into FMAs); for loops whose results must not move (an OpenMP loop calls
  * it, as C0_HOT) */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_ADDRESS__) && (!defined(__clang__) || __clang_major__ >= 14)
+#define C0_WIDE 1   /* AVX2 and AVX-512 versions may be built beside the baseline (also by hand) */
 #define C0_HOT_SAME __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
+#define C0_WIDE 0
 #define C0_HOT_SAME
 #endif
 /* four doubles in one vector (GCC's vector extension): a C0_HOT loop's lanes */

@@ -1,4 +1,5 @@
 #include "solve/nnqp.h"
+#include "core/c0math.h"
 
 #include <math.h>
 #include <string.h>
@@ -39,7 +40,7 @@ static void batch_plain(int n, const float *H, float step, float beta, int steps
  * where the loops above store them every term) at the CPU's width, chosen at
  * run time, each with vectors of its own size (one 16-float version split
  * into SSE2 vectors took twice as long as the loops) */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_ADDRESS__) && (!defined(__clang__) || __clang_major__ >= 14)
+#if C0_WIDE
 #define NNQP_NAME batch8
 #define NNQP_LANES 8
 #define NNQP_TARGET __attribute__((target("avx2")))
@@ -55,12 +56,11 @@ static void batch_plain(int n, const float *H, float step, float beta, int steps
 #undef NNQP_NAME
 #undef NNQP_LANES
 #undef NNQP_TARGET
-#define C0_NNQP_WIDE 1
 #endif
 
 void c0_nnqp_batch(int n, const float *H, float step, float beta, int steps, const float *g, float *u)
 {
-#ifdef C0_NNQP_WIDE
+#if C0_WIDE
 	if (__builtin_cpu_supports("avx512f"))
 		batch16(n, H, step, beta, steps, g, u);
 	else if (__builtin_cpu_supports("avx2"))
