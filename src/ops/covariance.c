@@ -239,8 +239,9 @@ static void add_span(float *acc, const double *p, const double *q, int m, int nb
 
 /* flush's work on row y, the ring holding rows y..y+d: chunk by chunk of
  * columns, every lag's products */
-static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw, int fresh)
+static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw)
 {
+	const int fresh = a->fresh;
 	const int W = a->W, H = a->H, nb = a->nb, nr = a->d + 1 < H - y ? a->d + 1 : H - y;
 	const size_t n = (size_t)W * H, S = g->S;
 	const double *p = ring_row(g, a, y);
@@ -296,7 +297,7 @@ static void flush(struct c0_cov_acc *a)
 			for (int y = y0; g.v && y < (y0 + G < H ? y0 + G : H); y++) {
 				for (int r = y == y0 ? y : y + a->d; r <= y + a->d && r < H; r++)
 					ring_fill(&g, a, r);
-				flush_row(a, y, &g, cw, a->fresh);
+				flush_row(a, y, &g, cw);
 			}
 		free(g.v);
 	}
