@@ -44,6 +44,44 @@ static uint8_t *random_mask(int L, double frac)
 	return m;
 }
 
+/* Psi_Omega^T y, each pixel's own double sum over its footprint */
+static void adjoint_direct(const struct c0_psi_omega *p, const double *y, double *x)
+{
+	for (int k = 0; k < p->n; k++) {
+		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
+		const double *gy = p->GyT.v + (size_t)a * p->GyT.w, *gx = p->GxT.v + (size_t)b * p->GxT.w;
+		double s = 0;
+		for (int i = 0; i < p->GyT.w; i++)
+			for (int j = 0; j < p->GxT.w; j++)
+				s += gy[i] * gx[j] * y[(size_t)(p->GyT.start[a] + i) * p->Nx + p->GxT.start[b] + j];
+		x[k] = s;
+	}
+}
+
+/* The adjoint shares a fine column's row sums among its pixels, and splits
+ * the support among threads: on a support of every shape (random pixels,
+ * full columns, lines) large enough to be split, against the direct sums. */
+static void test_adjoint_shared(void)
+{
+	const int Ny = 40, Nx = 36, r = 4, Lx = Nx * r, L = Ny * r * Lx;
+	uint8_t *m = random_mask(L, 0.2);
+	for (int a = 0; a < Ny * r; a++)
+		m[a * Lx + 17] = m[a * Lx + 18] = m[a * Lx + (a * 3) % Lx] = 1;
+	struct c0_psi_omega P;
+	CHECK(c0_psi_omega_init(&P, Ny, Nx, r, 1.1, m, 1) == C0_OK && P.n > 4096);
+	double *y = malloc(sizeof(double) * Ny * Nx), *x = malloc(sizeof(double) * P.n), *ref = malloc(sizeof(double) * P.n);
+	for (int i = 0; i < Ny * Nx; i++)
+		y[i] = c0_rng_normal(&rng);
+	c0_psi_omega_adjoint(&P, y, x);
+	adjoint_direct(&P, y, ref);
+	double d = 0, n = 0;
+	for (int k = 0; k < P.n; k++)
+		d = fmax(d, fabs(x[k] - ref[k])), n = fmax(n, fabs(ref[k]));
+	CHECK_MSG(d <= 1e-12 * n, "adjoint: %g off the direct sums (largest %g), %d pixels", d, n, P.n);
+	c0_psi_omega_free(&P);
+	free(m), free(y), free(x), free(ref);
+}
+
 static void test_operators(void)
 {
 	const int Ny = 9, Nx = 7, r = 3, L = Ny * r * Nx * r;
@@ -278,8 +316,9 @@ static void test_neumann(void)
 		c0_neumann_free(nm);
 		free(in), free(u), free(l1), free(l2);
 	}
-	/* the padded periodic preconditioner: symmetric, positive, and near the
-	 * exact inverse on a smooth input */
+	/* the padded periodic preconditioner: symmetric to its single
+	 * precision (float's epsilon 6e-8; measured 5e-9), positive, and near
+	 * the exact inverse on a smooth input */
 	const int Ny = 30, Nx = 23, N = Ny * Nx;
 	struct c0_neumann *ex, *pc;
 	CHECK(c0_neumann_new(Ny, Nx, 0, &ex) == C0_OK && c0_neumann_new(Ny, Nx, 13, &pc) == C0_OK);
@@ -289,7 +328,7 @@ static void test_neumann(void)
 	c0_neumann_solve(pc, 1, 100, 2, x, mx);
 	c0_neumann_solve(pc, 1, 100, 2, y, my);
 	const double gap = fabs(dot(mx, y, N) - dot(x, my, N)) / sqrt(dot(mx, mx, N) * dot(y, y, N));
-	CHECK_MSG(gap < 1e-12 && dot(x, mx, N) > 0, "padded: symmetry gap %g, x^T M x %g", gap, dot(x, mx, N));
+	CHECK_MSG(gap < 1e-6 && dot(x, mx, N) > 0, "padded: symmetry gap %g, x^T M x %g", gap, dot(x, mx, N));
 	for (int i = 0; i < N; i++)
 		x[i] = 120 + 5 * sin(0.1 * (i / Nx)) + 3 * cos(0.07 * (i % Nx));   /* a background */
 	c0_neumann_solve(pc, 1, 100, 2, x, mx);
@@ -735,5 +774,6 @@ int main(void)
 	RUN(test_linear);
 	RUN(test_simulated);
 	RUN(test_pattern);
+	RUN(test_adjoint_shared);
 	return CHECK_DONE();
 }

@@ -14,3 +14,12 @@ static inline void c0_fftw_destroy(fftw_plan p)
 #pragma omp critical(c0_fftw_plan)
 	fftw_destroy_plan(p);
 }
+
+/* The same for a single-precision plan. */
+static inline void c0_fftwf_destroy(fftwf_plan p)
+{
+	if (!p)
+		return;
+#pragma omp critical(c0_fftw_plan)
+	fftwf_destroy_plan(p);
+}

@@ -55,11 +55,14 @@ void c0_neumann_laplacian(int Ny, int Nx, const double *in, double *out)
 struct c0_neumann {
 	int Ny, Nx, Py, Px;      /* the grid, and the one transformed (padded: Py x Px) */
 	int periodic;            /* the padded preconditioner: real FFTs on a periodic grid */
-	fftw_plan fwd, inv;      /* DCT-II and DCT-III in place, or r2c and c2r */
-	double *work;            /* Py x Px */
-	fftw_complex *spec;      /* periodic: Py x (Px/2 + 1) */
+	fftw_plan fwd, inv;      /* exact: DCT-II and DCT-III in place */
+	double *work;            /* exact: Py x Px */
+	fftwf_plan pfwd, pinv;   /* periodic: r2c and c2r, in single precision */
+	float *pwork;            /* periodic: Py x Px */
+	fftwf_complex *spec;     /* periodic: Py x (Px/2 + 1) */
 	double *ly, *lx;         /* eigenvalues of the 1-D second differences */
 	double *scale, a, beta;  /* 1 / ((a + beta l^k) norm) for the last a, beta, k */
+	float *fscale;           /* periodic: scale in single precision */
 	int k;
 };
 
@@ -68,7 +71,9 @@ void c0_neumann_free(struct c0_neumann *s)
 	if (!s)
 		return;
 	c0_fftw_destroy(s->fwd), c0_fftw_destroy(s->inv);
-	fftw_free(s->work), fftw_free(s->spec), free(s->ly), free(s->lx), free(s->scale), free(s);
+	c0_fftwf_destroy(s->pfwd), c0_fftwf_destroy(s->pinv);
+	fftw_free(s->work), fftwf_free(s->pwork), fftwf_free(s->spec), free(s->ly), free(s->lx), free(s->scale);
+	free(s->fscale), free(s);
 }
 
 /* mirrored edges: 4 sin^2(pi k / 2n); periodic: 4 sin^2(pi k / n) */
@@ -87,29 +92,62 @@ int c0_neumann_new(int Ny, int Nx, int pad, struct c0_neumann **out)
 	if (!s)
 		return C0_ENOMEM;
 	s->Ny = Ny, s->Nx = Nx, s->periodic = pad > 0;
-	s->Py = pad ? c0_fft_size(Ny + 2 * pad, 7, 1) : Ny, s->Px = pad ? c0_fft_size(Nx + 2 * pad, 7, 1) : Nx;
+	s->Py = pad ? c0_fft_size(Ny + 2 * pad, 5, 1) : Ny, s->Px = pad ? c0_fft_size(Nx + 2 * pad, 5, 1) : Nx;
 	const int Py = s->Py, Px = s->Px, Pc = s->periodic ? Px / 2 + 1 : Px;
-	s->work = fftw_malloc(sizeof *s->work * (size_t)Py * Px);
-	s->spec = s->periodic ? fftw_malloc(sizeof *s->spec * (size_t)Py * Pc) : NULL;
+	const size_t n = (size_t)Py * Px, nc = (size_t)Py * Pc;
 	s->ly = c0_alloc((size_t)Py, sizeof *s->ly), s->lx = c0_alloc((size_t)Px, sizeof *s->lx);
-	s->scale = c0_alloc((size_t)Py * Pc, sizeof *s->scale);
-	if (s->work && s->ly && s->lx && s->scale && (s->spec || !s->periodic)) {
+	s->scale = c0_alloc(nc, sizeof *s->scale);
+	int ok = s->ly && s->lx && s->scale;
+	if (s->periodic) {
+		s->pwork = fftwf_malloc(sizeof *s->pwork * n), s->spec = fftwf_malloc(sizeof *s->spec * nc);
+		s->fscale = c0_alloc(nc, sizeof *s->fscale);
+		ok = ok && s->pwork && s->spec && s->fscale;
+	} else
+		ok = ok && (s->work = fftw_malloc(sizeof *s->work * n));
+	if (ok) {
 #pragma omp critical(c0_fftw_plan)   /* fftw's planner is not thread-safe */
 		if (s->periodic) {
-			s->fwd = fftw_plan_dft_r2c_2d(Py, Px, s->work, s->spec, FFTW_ESTIMATE);
-			s->inv = fftw_plan_dft_c2r_2d(Py, Px, s->spec, s->work, FFTW_ESTIMATE);
+			s->pfwd = fftwf_plan_dft_r2c_2d(Py, Px, s->pwork, s->spec, FFTW_ESTIMATE);
+			s->pinv = fftwf_plan_dft_c2r_2d(Py, Px, s->spec, s->pwork, FFTW_ESTIMATE);
 		} else {
 			s->fwd = fftw_plan_r2r_2d(Py, Px, s->work, s->work, FFTW_REDFT10, FFTW_REDFT10, FFTW_ESTIMATE);
 			s->inv = fftw_plan_r2r_2d(Py, Px, s->work, s->work, FFTW_REDFT01, FFTW_REDFT01, FFTW_ESTIMATE);
 		}
 	}
-	if (!s->fwd || !s->inv) {
+	if (s->periodic ? !s->pfwd || !s->pinv : !s->fwd || !s->inv) {
 		c0_neumann_free(s);
 		return c0_fail(C0_ENOMEM, "cannot plan the transforms of a %d x %d grid", Ny, Nx);
 	}
 	eig(Py, s->periodic, s->ly), eig(Px, s->periodic, s->lx);
 	*out = s;
 	return C0_OK;
+}
+
+/* the padded preconditioner: in set into the zero-padded grid, transformed,
+ * scaled and back, all in single precision */
+static void solve_periodic(struct c0_neumann *s, const double *in, double *out)
+{
+	const int Py = s->Py, Px = s->Px, Ny = s->Ny, Nx = s->Nx;
+	const size_t nc = (size_t)Py * (Px / 2 + 1);
+	float *w = s->pwork;
+	for (int y = 0; y < Ny; y++) {   /* the inverse transform wrote all of work: its padding zeroed again */
+		float *wr = w + (size_t)y * Px;
+		const double *ir = in + (size_t)y * Nx;
+		for (int x = 0; x < Nx; x++)
+			wr[x] = (float)ir[x];
+		memset(wr + Nx, 0, sizeof *w * (size_t)(Px - Nx));
+	}
+	memset(w + (size_t)Ny * Px, 0, sizeof *w * (size_t)(Py - Ny) * Px);
+	fftwf_execute(s->pfwd);
+	for (size_t i = 0; i < nc; i++)
+		s->spec[i] *= s->fscale[i];
+	fftwf_execute(s->pinv);
+	for (int y = 0; y < Ny; y++) {
+		const float *wr = w + (size_t)y * Px;
+		double *or = out + (size_t)y * Nx;
+		for (int x = 0; x < Nx; x++)
+			or[x] = wr[x];
+	}
 }
 
 void c0_neumann_solve(struct c0_neumann *s, double a, double beta, int k, const double *in, double *out)
@@ -124,21 +162,18 @@ void c0_neumann_solve(struct c0_neumann *s, double a, double beta, int k, const 
 				double l = s->ly[y] + s->lx[x], d = a + beta * (k == 1 ? l : pow(l, k));
 				s->scale[(size_t)y * Pc + x] = d > 0 ? 1 / (d * norm) : 0;   /* the constant mode when a = 0 */
 			}
+		for (size_t i = 0; s->periodic && i < nc; i++)
+			s->fscale[i] = (float)s->scale[i];
 		s->a = a, s->beta = beta, s->k = k;
 	}
-	for (int y = 0; y < s->Ny; y++) {   /* the inverse transform wrote all of work: its padding zeroed again */
-		memcpy(s->work + (size_t)y * Px, in + (size_t)y * s->Nx, sizeof *in * s->Nx);
-		memset(s->work + (size_t)y * Px + s->Nx, 0, sizeof *s->work * (size_t)(Px - s->Nx));
+	if (s->periodic) {
+		solve_periodic(s, in, out);
+		return;
 	}
-	memset(s->work + (size_t)s->Ny * Px, 0, sizeof *s->work * (size_t)(Py - s->Ny) * Px);
+	memcpy(s->work, in, sizeof *in * n);
 	fftw_execute(s->fwd);
-	if (s->periodic)
-		for (size_t i = 0; i < nc; i++)
-			s->spec[i] *= s->scale[i];
-	else
-		for (size_t i = 0; i < n; i++)
-			s->work[i] *= s->scale[i];
+	for (size_t i = 0; i < n; i++)
+		s->work[i] *= s->scale[i];
 	fftw_execute(s->inv);
-	for (int y = 0; y < s->Ny; y++)
-		memcpy(out + (size_t)y * s->Nx, s->work + (size_t)y * Px, sizeof *out * s->Nx);
+	memcpy(out, s->work, sizeof *out * n);
 }

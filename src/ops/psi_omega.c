@@ -5,6 +5,7 @@
 #include "core/mem.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -98,12 +99,22 @@ int c0_psi_omega_init_dir(struct c0_psi_omega *p, int Ny, int Nx, int r, double 
 			p->idx[pos[i]] = (int)i;
 	p->ne = graph_edges(p, pos, radius, dir, power);
 	free(pos);
+	/* inside another team (tiles side by side) the adjoint runs alone */
+	for (p->ring = 1; p->ring < p->GyT.w; p->ring *= 2)
+		;
+	p->nws = omp_in_parallel() ? 1 : omp_get_max_threads();
+	p->ws_t = c0_alloc((size_t)p->nws * p->Lx * p->ring, sizeof *p->ws_t);
+	p->ws_hi = c0_alloc((size_t)p->nws * p->Lx, sizeof *p->ws_hi);
+	if (!p->ws_t || !p->ws_hi) {
+		c0_psi_omega_free(p);
+		return C0_ENOMEM;
+	}
 	return C0_OK;
 }
 
 void c0_psi_omega_free(struct c0_psi_omega *p)
 {
-	free(p->idx), free(p->e0), free(p->e1), free(p->ew);
+	free(p->idx), free(p->e0), free(p->e1), free(p->ew), free(p->ws_t), free(p->ws_hi);
 	c0_band_free(&p->GyT), c0_band_free(&p->GxT);
 	memset(p, 0, sizeof *p);
 }
@@ -157,33 +168,45 @@ void c0_psi_omega_forward(const struct c0_psi_omega *p, const double *x, double 
 	}
 }
 
-/* y gathered at support pixels k0..k1 */
-C0_HOT static void gather(const struct c0_psi_omega *p, int k0, int k1, const double *y, double *x)
+/* y gathered at support pixels k0..k1. Support pixels of one fine column
+ * share their row sums t_i = sum_j y(i, j0 + j) gx(j) (they differ only in
+ * gy): each is made once and kept in the column's ring of rows. Footprints
+ * start at nondecreasing rows (raster order), so a column's rows still
+ * needed are the last ones made, [i0, hi). The sums are the ones a pixel's
+ * own double loop would make, in the same order: the same bits. */
+C0_HOT static void gather(const struct c0_psi_omega *p, int k0, int k1, const double *y, double *x, double *T, int *hi)
 {
-	const int wy = p->GyT.w, wx = p->GxT.w;
+	const int wy = p->GyT.w, wx = p->GxT.w, m = p->ring - 1;
+	memset(hi, 0, sizeof *hi * (size_t)p->Lx);
 	for (int k = k0; k < k1; k++) {
 		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
 		const double *gy = p->GyT.v + (size_t)a * wy, *gx = p->GxT.v + (size_t)b * wx;
 		const int i0 = p->GyT.start[a], j0 = p->GxT.start[b];
-		double s = 0;
-		for (int i = 0; i < wy; i++) {
-			const double *row = y + (size_t)(i0 + i) * p->Nx + j0;
+		double *tb = T + (size_t)b * p->ring;
+		for (int i = i0 > hi[b] ? i0 : hi[b]; i < i0 + wy; i++) {
+			const double *row = y + (size_t)i * p->Nx + j0;
 			double t = 0;
 			for (int j = 0; j < wx; j++)
 				t += row[j] * gx[j];
-			s += gy[i] * t;
+			tb[i & m] = t;
 		}
+		hi[b] = i0 + wy;
+		double s = 0;
+		for (int i = 0; i < wy; i++)
+			s += gy[i] * tb[(i0 + i) & m];
 		x[k] = s;
 	}
 }
 
+/* each thread a contiguous run of the support (and its own workspace) */
 void c0_psi_omega_adjoint(const struct c0_psi_omega *p, const double *y, double *x)
 {
-	enum { CHUNK = 1024 };
-	const int nc = (p->n + CHUNK - 1) / CHUNK;
-#pragma omp parallel for schedule(static) if (p->n > 4096)
-	for (int c = 0; c < nc; c++)
-		gather(p, c * CHUNK, c * CHUNK + CHUNK < p->n ? c * CHUNK + CHUNK : p->n, y, x);
+#pragma omp parallel num_threads(p->nws) if (p->n > 4096)
+	{
+		const int nt = omp_get_num_threads(), id = omp_get_thread_num();
+		const int k0 = (int)((long long)p->n * id / nt), k1 = (int)((long long)p->n * (id + 1) / nt);
+		gather(p, k0, k1, y, x, p->ws_t + (size_t)id * p->Lx * p->ring, p->ws_hi + (size_t)id * p->Lx);
+	}
 }
 
 void c0_grad_omega(const struct c0_psi_omega *p, const double *x, double *g)

@@ -16,6 +16,12 @@ struct c0_psi_omega {
 	struct c0_band GyT, GxT;    /* L x N: row a is column a of G */
 	int ne, *e0, *e1;           /* graph edges as positions in 0..n-1 */
 	double *ew;                 /* edge weights: 1 / distance */
+	/* the adjoint's row sums kept per fine column (one workspace per
+	 * thread that may run it): ring rows of each column, a power of 2 >=
+	 * GyT.w; nws x Lx x ring sums and nws x Lx marks */
+	int ring, nws;
+	double *ws_t;
+	int *ws_hi;
 };
 
 int c0_psi_omega_init(struct c0_psi_omega *p, int Ny, int Nx, int r, double sigma_px, const uint8_t *mask, double radius);
