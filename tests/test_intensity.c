@@ -58,10 +58,24 @@ static void adjoint_direct(const struct c0_psi_omega *p, const double *y, double
 	}
 }
 
-/* The adjoint shares a fine column's row sums among its pixels, and splits
- * the support among threads: on a support of every shape (random pixels,
- * full columns, lines) large enough to be split, against the direct sums. */
-static void test_adjoint_shared(void)
+/* Psi_Omega x, each pixel's footprint added in turn */
+static void forward_direct(const struct c0_psi_omega *p, const double *x, double *y)
+{
+	memset(y, 0, sizeof *y * (size_t)p->Ny * p->Nx);
+	for (int k = 0; k < p->n; k++) {
+		const int a = p->idx[k] / p->Lx, b = p->idx[k] % p->Lx;
+		const double *gy = p->GyT.v + (size_t)a * p->GyT.w, *gx = p->GxT.v + (size_t)b * p->GxT.w;
+		for (int i = 0; i < p->GyT.w; i++)
+			for (int j = 0; j < p->GxT.w; j++)
+				y[(size_t)(p->GyT.start[a] + i) * p->Nx + p->GxT.start[b] + j] += x[k] * gy[i] * gx[j];
+	}
+}
+
+/* Psi_Omega's adjoint shares a fine column's row sums among its pixels, and
+ * both directions split the support among threads: on a support of every
+ * shape (random pixels, full columns, lines, some pixels at 0) large enough
+ * to be split, against the direct sums. */
+static void test_shared_columns(void)
 {
 	const int Ny = 40, Nx = 36, r = 4, Lx = Nx * r, L = Ny * r * Lx;
 	uint8_t *m = random_mask(L, 0.2);
@@ -78,8 +92,17 @@ static void test_adjoint_shared(void)
 	for (int k = 0; k < P.n; k++)
 		d = fmax(d, fabs(x[k] - ref[k])), n = fmax(n, fabs(ref[k]));
 	CHECK_MSG(d <= 1e-12 * n, "adjoint: %g off the direct sums (largest %g), %d pixels", d, n, P.n);
+	for (int k = 0; k < P.n; k++)
+		x[k] = k % 7 ? c0_rng_uniform(&rng) : 0;
+	double *yr = malloc(sizeof(double) * Ny * Nx);
+	c0_psi_omega_forward(&P, x, y);
+	forward_direct(&P, x, yr);
+	d = n = 0;
+	for (int i = 0; i < Ny * Nx; i++)
+		d = fmax(d, fabs(y[i] - yr[i])), n = fmax(n, fabs(yr[i]));
+	CHECK_MSG(d <= 1e-12 * n, "forward: %g off the direct sums (largest %g)", d, n);
 	c0_psi_omega_free(&P);
-	free(m), free(y), free(x), free(ref);
+	free(m), free(y), free(yr), free(x), free(ref);
 }
 
 static void test_operators(void)
@@ -774,6 +797,6 @@ int main(void)
 	RUN(test_linear);
 	RUN(test_simulated);
 	RUN(test_pattern);
-	RUN(test_adjoint_shared);
+	RUN(test_shared_columns);
 	return CHECK_DONE();
 }
