@@ -41,3 +41,8 @@ int c0_threads_get(void)
 {
 	return omp_get_max_threads();
 }
+
+int c0_threads_here(void)
+{
+	return omp_in_parallel() ? 1 : omp_get_max_threads();
+}

@@ -18,3 +18,7 @@ int c0_threads_affinity(void);
  * OMP_NUM_THREADS when set, else the affinity mask. Returns the count used. */
 int c0_threads_set(int n);
 int c0_threads_get(void);
+/* Threads a parallel region started here may have: 1 inside another team
+ * (nested regions run alone), else c0_threads_get(). What per-thread
+ * workspaces are sized by. */
+int c0_threads_here(void);

@@ -2,6 +2,7 @@
 #include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/threads.h"
 
 #include <omp.h>
 #include <stdlib.h>
@@ -59,7 +60,7 @@ int c0_covnormal_init(struct c0_covnormal *w, const struct c0_covop *op)
 {
 	const size_t Ly = (size_t)op->Ly, L = Ly * op->Lx;
 	/* inside another team (tiles side by side) the set's loops run alone */
-	const int nbuf = omp_in_parallel() ? 1 : omp_get_max_threads();
+	const int nbuf = c0_threads_here();
 	*w = (struct c0_covnormal){ op, c0_alloc(L, sizeof(size_t)), 0, c0_alloc(Ly + 1, sizeof(size_t)),
 				    c0_alloc(L + 1, sizeof(size_t)), c0_alloc(L, sizeof(int)), c0_alloc(Ly + 1, sizeof(size_t)),
 				    c0_alloc(L + 1, sizeof(size_t)), nbuf, c0_alloc((size_t)nbuf, sizeof *w->buf) };

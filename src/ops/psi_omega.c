@@ -3,6 +3,7 @@
 #include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/threads.h"
 
 #include <math.h>
 #include <omp.h>
@@ -102,7 +103,7 @@ int c0_psi_omega_init_dir(struct c0_psi_omega *p, int Ny, int Nx, int r, double 
 	/* inside another team (tiles side by side) the adjoint runs alone */
 	for (p->ring = 1; p->ring < p->GyT.w; p->ring *= 2)
 		;
-	p->nws = omp_in_parallel() ? 1 : omp_get_max_threads();
+	p->nws = c0_threads_here();
 	p->ws_t = c0_alloc((size_t)p->nws * p->Lx * p->ring, sizeof *p->ws_t);
 	p->ws_hi = c0_alloc((size_t)p->nws * p->Lx, sizeof *p->ws_hi);
 	if (!p->ws_t || !p->ws_hi) {
