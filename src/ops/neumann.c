@@ -61,8 +61,9 @@ struct c0_neumann {
 	float *pwork;            /* periodic: Py x Px */
 	fftwf_complex *spec;     /* periodic: Py x (Px/2 + 1) */
 	double *ly, *lx;         /* eigenvalues of the 1-D second differences */
-	double *scale, a, beta;  /* 1 / ((a + beta l^k) norm) for the last a, beta, k */
-	float *fscale;           /* periodic: scale in single precision */
+	double *scale;           /* exact: 1 / ((a + beta l^k) norm) for the last a, beta, k */
+	float *fscale;           /* periodic: the same in single precision */
+	double a, beta;
 	int k;
 };
 
@@ -96,14 +97,15 @@ int c0_neumann_new(int Ny, int Nx, int pad, struct c0_neumann **out)
 	const int Py = s->Py, Px = s->Px, Pc = s->periodic ? Px / 2 + 1 : Px;
 	const size_t n = (size_t)Py * Px, nc = (size_t)Py * Pc;
 	s->ly = c0_alloc((size_t)Py, sizeof *s->ly), s->lx = c0_alloc((size_t)Px, sizeof *s->lx);
-	s->scale = c0_alloc(nc, sizeof *s->scale);
-	int ok = s->ly && s->lx && s->scale;
+	int ok = s->ly && s->lx;
 	if (s->periodic) {
 		s->pwork = fftwf_malloc(sizeof *s->pwork * n), s->spec = fftwf_malloc(sizeof *s->spec * nc);
 		s->fscale = c0_alloc(nc, sizeof *s->fscale);
 		ok = ok && s->pwork && s->spec && s->fscale;
-	} else
-		ok = ok && (s->work = fftw_malloc(sizeof *s->work * n));
+	} else {
+		s->work = fftw_malloc(sizeof *s->work * n), s->scale = c0_alloc(n, sizeof *s->scale);
+		ok = ok && s->work && s->scale;
+	}
 	if (ok) {
 #pragma omp critical(c0_fftw_plan)   /* fftw's planner is not thread-safe */
 		if (s->periodic) {
@@ -153,17 +155,19 @@ static void solve_periodic(struct c0_neumann *s, const double *in, double *out)
 void c0_neumann_solve(struct c0_neumann *s, double a, double beta, int k, const double *in, double *out)
 {
 	const int Py = s->Py, Px = s->Px, Pc = s->periodic ? Px / 2 + 1 : Px;
-	const size_t n = (size_t)Py * Px, nc = (size_t)Py * Pc;
+	const size_t n = (size_t)Py * Px;
 	if (!(s->a == a && s->beta == beta && s->k == k)) {   /* the eigenvalues' scaling, once per operator */
 		/* c2r of r2c: n; DCT-III of DCT-II: 2N a dimension */
 		const double norm = s->periodic ? (double)n : 4.0 * (double)n;
 		for (int y = 0; y < Py; y++)
 			for (int x = 0; x < Pc; x++) {
-				double l = s->ly[y] + s->lx[x], d = a + beta * (k == 1 ? l : pow(l, k));
-				s->scale[(size_t)y * Pc + x] = d > 0 ? 1 / (d * norm) : 0;   /* the constant mode when a = 0 */
+				const double l = s->ly[y] + s->lx[x], d = a + beta * (k == 1 ? l : pow(l, k));
+				const double v = d > 0 ? 1 / (d * norm) : 0;   /* the constant mode when a = 0 */
+				if (s->periodic)
+					s->fscale[(size_t)y * Pc + x] = (float)v;
+				else
+					s->scale[(size_t)y * Pc + x] = v;
 			}
-		for (size_t i = 0; s->periodic && i < nc; i++)
-			s->fscale[i] = (float)s->scale[i];
 		s->a = a, s->beta = beta, s->k = k;
 	}
 	if (s->periodic) {
