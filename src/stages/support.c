@@ -415,7 +415,8 @@ static int stacks_check(struct c0_frames *in, int n, int halves)
 	return C0_OK;
 }
 
-static int stacks(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_result *res)
+/* c: the stacks' n configurations (their drift hooks and noise maps differ) */
+int c0_support_stacks(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_result *res)
 {
 	memset(res, 0, sizeof *res);
 	struct stack k = { .c = c, .in = in, .n = n };
@@ -458,23 +459,5 @@ static int stacks(const struct c0_support_conf *c, struct c0_frames *in, int n, 
 	res->t_solve = c0_now() - t1;
 	if (st)
 		c0_support_result_free(res);
-	return st;
-}
-
-/* c: the stacks' n configurations (their drift hooks and noise maps differ) */
-int c0_support_stacks(const struct c0_support_conf *c, struct c0_frames *in, int n, struct c0_support_result *res)
-{
-	if (n < 1 || c[0].crest != C0_CREST_AUTO)
-		return stacks(c, in, n, res);
-	/* the variances' crests where stacks are pooled: on one stack they lost
-	 * 0.009-0.022 to C's on the project's tubes (SOFI-tool stacks +0.003 on
-	 * average), pooled they gained on every panel (docs/history/support-width.md) */
-	struct c0_support_conf *cc = c0_alloc((size_t)n, sizeof *cc);
-	if (!cc)
-		return memset(res, 0, sizeof *res), C0_ENOMEM;
-	for (int q = 0; q < n; q++)
-		cc[q] = c[q], cc[q].crest = n > 1 ? C0_CREST_VAR : C0_CREST_CORR;
-	const int st = stacks(cc, in, n, res);
-	free(cc);
 	return st;
 }

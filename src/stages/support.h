@@ -18,12 +18,6 @@
  * t (0-based in its stack, H x W) is changed in place before it is used. */
 typedef int (*c0_frame_fn)(void *ctx, int64_t t, float *frame, int H, int W);
 
-/* Whose crests the growth across labelled structures follows: the
- * correlation image C = A^T R's (smooth: it sums every lag under the PSF) or
- * the pixel variances' (sharp: their profile across a line is the PSF's
- * squared; docs/defaults.md#label_radius_nm). */
-enum c0_support_crest { C0_CREST_AUTO, C0_CREST_CORR, C0_CREST_VAR };
-
 struct c0_support_conf {
 	struct c0_grid grid;       /* pixel_nm, fwhm_nm required; srf 4 */
 	enum c0_penalty penalty;   /* l1 */
@@ -52,10 +46,8 @@ struct c0_support_conf {
 	double label_radius_nm;    /* 15; 0: the support is the l1 solve's; > 0: the labelled structures' radius
 				    * about their axis, and the support grows across their ridges to it
 				    * (c0_support_grow) */
-	enum c0_support_crest crest; /* the ridges the growth follows: automatic (c0_support_stacks: the
-				    * pixel variances' where several stacks are pooled, else C's) */
 };
-#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0, 1, 0, 15, C0_CREST_AUTO }
+#define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0, 1, 0, 15 }
 /* g of c0_cov_guard for this PSF: the smallest mean ratio of a point
  * source's signal in a pixel's 4 neighbours to its signal in the pixel,
  * over positions in and around the pixel (0.6 at 229 nm / 100 nm). */

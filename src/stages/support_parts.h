@@ -32,12 +32,9 @@ void c0_support_correlate(struct c0_covop *op, const struct c0_cov *cov, double 
 int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
 			    double **band, const struct c0_support_scale *g, struct c0_support_result *res);
 
-/* res's mask grown across the structures' ridges to c->label_radius_nm
- * (support_solve.c): those of var when given (the window's pixel
- * variances, H x W, the covariance's lag 0), else of C (the window's
- * correlation image). */
-int c0_support_grow(const struct c0_support_conf *c, const double *C, const double *var, int H, int W,
-		    struct c0_support_result *res);
+/* res's mask grown across the ridges of the pixel variance the fit x
+ * (res->Ly x res->Lx) predicts, to c->label_radius_nm (support_solve.c). */
+int c0_support_grow(const struct c0_support_conf *c, const double *x, struct c0_support_result *res);
 
 /* The l1 solve of ctx at ctx->lam from x as it is (a warm start), with c's
  * solver and tolerance and at most maxit iterations (the automatic lambda's

@@ -3,11 +3,11 @@
  * reweighting, the masked fit for the noise variance. */
 #include "stages/support_parts.h"
 #include "ops/covfit.h"
+#include "ops/finevar.h"
 #include "ops/ridge.h"
 #include "optics/psf.h"
 #include "core/c0math.h"
 #include "core/clock.h"
-#include "core/spline.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -261,22 +261,23 @@ static int run(const struct c0_support_conf *c, const uint8_t *mask, struct c0_c
 /* A labelled structure's fluorophores lie up to label_radius_nm from its
  * axis, so every fine pixel whose centre is within that and half a fine
  * pixel of the axis holds some. The l1 support marks about one pixel across
- * a structure, near its axis; the axis is a crest (c->crest) of C = A^T R
- * (smooth, free of background) or of the pixels' variance (the covariance's
- * lag 0), spline-interpolated onto the fine grid: its profile across a line
- * is the PSF's squared, sd sigma / sqrt 2, where C's is sigma, so that a
- * neighbouring structure pulls its crest less, but one stack's is noisier
- * (docs/history/support-width.md). The support's 4-neighbours that close
- * to a crest join it (their rx stays 0: the solve put no variance there). */
-int c0_support_grow(const struct c0_support_conf *c, const double *C, const double *var, int H, int W,
-		    struct c0_support_result *res)
+ * a structure, near its axis; the axis is a crest of the pixel variance the
+ * fit x predicts on the fine grid (ops/finevar.h): free of the measured
+ * variances' noise and background, and its profile across a line is the
+ * PSF's squared, narrower than C = A^T R's, so that a neighbouring structure
+ * pulls it less (docs/defaults.md#label_radius_nm). The support's
+ * 4-neighbours that close to a crest join it (their rx stays 0: the solve
+ * put no variance there). */
+int c0_support_grow(const struct c0_support_conf *c, const double *x, struct c0_support_result *res)
 {
 	const double fine = c->grid.pixel_nm / c->grid.srf;
-	double *f = var ? c0_alloc((size_t)res->Ly * res->Lx, sizeof *f) : NULL;
-	int st = !var ? C0_OK : f ? c0_spline_upsample(var, H, W, c->grid.srf, f) : C0_ENOMEM;
-	const long n = st ? 0 : c0_ridge_grow(var ? f : C, res->Ly, res->Lx, c->label_radius_nm / fine + 0.5, res->mask);
-	free(f);
-	if (st || n < 0)
+	double *v = c0_alloc((size_t)res->Ly * res->Lx, sizeof *v);
+	if (!v)
+		return C0_ENOMEM;
+	c0_finevar(x, res->Ly, res->Lx, c->grid.srf, c0_grid_sigma_px(&c->grid), v);
+	const long n = c0_ridge_grow(v, res->Ly, res->Lx, c->label_radius_nm / fine + 0.5, res->mask);
+	free(v);
+	if (n < 0)
 		return C0_ENOMEM;
 	res->support_pixels += (int)n;
 	return C0_OK;
@@ -303,10 +304,7 @@ int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov
 		return st;
 	double *C = c0_alloc(L, sizeof *C);
 	double *x = c0_alloc(L, sizeof *x), *Ax = c0_alloc(L, sizeof *Ax);
-	const int grow = !mask && c->label_radius_nm > 0, byvar = grow && c->crest == C0_CREST_VAR;
-	double *var = byvar ? c0_alloc(n, sizeof *var) : NULL;   /* lag 0, before the band is freed */
-	if (var)
-		memcpy(var, cov->r, n * sizeof *var);
+	const int grow = !mask && c->label_radius_nm > 0;
 	double *part = c0_alloc(4 * ((L + C0_SUM_BLOCK - 1) / C0_SUM_BLOCK), sizeof *part);
 	res->Ly = H * r, res->Lx = W * r, res->lag = cov->d, res->nlag = cov->nlag, res->frames = cov->frames;
 	res->mask = c0_alloc(L, 1);
@@ -314,15 +312,15 @@ int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov
 	res->nhist = c->fista.maxit * (c->penalty == C0_PENALTY_CEL0 ? c->cel0_outer : 1);
 	res->hist = c0_alloc((size_t)res->nhist, sizeof *res->hist);
 	struct c0_covfit ctx = { &op, C, 0, 0, (double)n, Ax, 0, part };
-	if (!C || !x || !Ax || !part || !res->mask || !res->rx || !res->hist || (byvar && !var))
+	if (!C || !x || !Ax || !part || !res->mask || !res->rx || !res->hist)
 		st = C0_ENOMEM;
 	if (!st)
 		st = normalise(c, cov, mask, band, g, &ctx, C, res);
 	if (!st)
 		st = run(c, mask, &ctx, x, res);
 	if (!st && grow)
-		st = c0_support_grow(c, C, var, H, W, res);
-	free(C), free(x), free(Ax), free(part), free(var);
+		st = c0_support_grow(c, x, res);
+	free(C), free(x), free(Ax), free(part);
 	c0_covop_free(&op);
 	res->t_solve = c0_now() - t0;
 	return st;
