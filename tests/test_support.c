@@ -856,7 +856,9 @@ static void test_accuracy(void)
 	c.grid.pixel_nm = 100, c.grid.fwhm_nm = 229;
 	struct c0_support_result res, thin;
 	CHECK(c0_support_stack(&c, &fr, &res) == C0_OK);
-	c.label_radius_nm = 0;   /* the l1 support alone: one pixel across the tubes */
+	/* the l1 support alone, one pixel across the tubes, at the same lambda
+	 * (without a radius the rule has no width's share) */
+	c.label_radius_nm = 0, c.lambda_rel = res.cv.chosen_rel;
 	CHECK(c0_support_stack(&c, &fr, &thin) == C0_OK);
 	c0_frames_close(&fr);
 	snprintf(p, sizeof p, "%s/truth_support.tif", dir);

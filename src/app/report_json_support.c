@@ -36,7 +36,7 @@ static void lambda_auto(cJSON *o, const struct c0_support_result *s)
 				? "cross-validation of the interleaved frame halves along a path of lambda (cross_validation); "
 				  "rho, q90, kappa and sigma_C below are the peaks rule's first step, for reference"
 				: v->noise
-				? "max(kappa sigma_C, width_share median); sigma_C: noise sd of the correlation image, "
+				? "kappa sigma_C + width_share median; sigma_C: noise sd of the correlation image, "
 				  "from the lower quartile of the interleaved frame halves' difference; median: of the "
 				  "correlation image over the pixels above kappa sigma_C; width_share: the share of a "
 				  "tube's correlation its label radius leaves beside its axis (rho and q90 below: the "

@@ -70,8 +70,11 @@ static void choose(const struct c0_support_conf *c, double sig, double sq, doubl
 	out->noise_bound = KAPPA * sig >= RHO * sq;
 	const double t = fmax(RHO * sq, KAPPA * sig), w = out->width_share * sm;
 	if (c->penalty == C0_PENALTY_L1 && c->lambda_noise && !c->lambda_cv) {
+		/* beside a tube's axis the correlation is the width's share plus the
+		 * noise: kappa sds above the share keep those pixels out as kappa
+		 * sds above 0 keep out the empty ones */
 		out->noise = 1, out->noise_bound = KAPPA * sig >= w;
-		out->chosen_rel = fmax(KAPPA * sig, w) / lmax;
+		out->chosen_rel = (KAPPA * sig + w) / lmax;
 	} else if (c->penalty == C0_PENALTY_L1)
 		out->chosen_rel = t / lmax;
 	else

@@ -9,9 +9,9 @@
  * pixels beside its axis, which hold a fraction of its variance, enter once
  * they stand above the noise (docs/defaults.md#lambda_rule). Where the
  * support grows across the structures (label_radius_nm R > 0) the growth
- * gives that width, and lambda is never below the correlation a tube's
- * width leaves beside its axis: c0_lambda_width_share times the median
- * correlation over the pixels above kappa sigma_C.
+ * gives that width, and lambda stands kappa sigma_C above the correlation a
+ * tube's width leaves beside its axis: c0_lambda_width_share times the
+ * median correlation over the pixels above kappa sigma_C.
  * Otherwise (the peaks rule) a pixel enters the l1 support where its
  * correlation exceeds the threshold
  *   t = max(rho * q90, kappa * sigma_C),
