@@ -5,14 +5,9 @@
 #include <math.h>
 #include <string.h>
 
-int c0_finevar_reach(double sigma_px, int r)
-{
-	return (int)ceil(4 * sigma_px * r);   /* (e^{-8})^2 ~ 1e-7 */
-}
-
 void c0_finevar(const double *x, int Ly, int Lx, int r, double sigma_px, double *v)
 {
-	const int K = c0_finevar_reach(sigma_px, r);
+	const int K = (int)ceil(4 * sigma_px * r);   /* (e^{-8})^2 ~ 1e-7 */
 	double k[2 * K + 1];
 	for (int d = -K; d <= K; d++) {
 		c0_psf_pixel_weights(0.5 + (double)d / r, sigma_px, 0, 1, &k[d + K]);
