@@ -179,6 +179,10 @@ static void test_pooled_support(void)
 		const double j1 = jaccard("tube", one.mask, one.Ly, one.Lx), jp = jaccard("tube", pooled.mask, pooled.Ly, pooled.Lx);
 		fprintf(stderr, "labelled, seed %d: first stack JI %.3f, %d stacks pooled %.3f\n", seed, j1, NQ, jp);
 		CHECK(pooled.frames == NQ * 200 && jp >= j1 - 0.01 && jp >= 0.57);
+		/* the noise rule: kappa noise sds above the width's share (stages/lambda.h) */
+		const struct c0_lambda_result *v = &pooled.cv;
+		CHECK(v->noise && v->width_share > 0 && v->median_rel > 0);
+		CHECK_REL(v->chosen_rel, v->kappa * v->noise_rel + v->width_share * v->median_rel, 1e-12);
 		g += (jp - j1) / 3;
 		if (seed == 3) {
 			support("tube", NQ, 24, &tiled);
