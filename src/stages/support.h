@@ -45,7 +45,7 @@ struct c0_support_conf {
 				    * grid.fwhm_nm by more than C0_LAMBDA_PSF_WARN, the solves use it */
 	double label_radius_nm;    /* 15; 0: the support is the l1 solve's; > 0: the labelled structures' radius
 				    * about their axis, and the support grows across their ridges to it
-				    * (c0_support_grow) */
+				    * (support_solve.c) */
 };
 #define C0_SUPPORT_DEFAULTS { { 0, 0, 4 }, C0_PENALTY_L1, 0, 0, { C0_FISTA_MAXIT, -1 }, 10, C0_SUPPORT_FISTA, 1, 0, NULL, NULL, 1, NULL, 0, 0, 1, 0, 15 }
 /* g of c0_cov_guard for this PSF: the smallest mean ratio of a point

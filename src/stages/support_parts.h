@@ -32,10 +32,6 @@ void c0_support_correlate(struct c0_covop *op, const struct c0_cov *cov, double 
 int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov *cov, const uint8_t *mask,
 			    double **band, const struct c0_support_scale *g, struct c0_support_result *res);
 
-/* res's mask grown across the ridges of the pixel variance the fit x
- * (res->Ly x res->Lx) predicts, to c->label_radius_nm (support_solve.c). */
-int c0_support_grow(const struct c0_support_conf *c, const double *x, struct c0_support_result *res);
-
 /* The l1 solve of ctx at ctx->lam from x as it is (a warm start), with c's
  * solver and tolerance and at most maxit iterations (the automatic lambda's
  * path, stages/lambda_cv.c); *iters: how many it made. */

@@ -268,7 +268,7 @@ static int run(const struct c0_support_conf *c, const uint8_t *mask, struct c0_c
  * pulls it less (docs/defaults.md#label_radius_nm). The support's
  * 4-neighbours that close to a crest join it (their rx stays 0: the solve
  * put no variance there). */
-int c0_support_grow(const struct c0_support_conf *c, const double *x, struct c0_support_result *res)
+static int grow_support(const struct c0_support_conf *c, const double *x, struct c0_support_result *res)
 {
 	const double fine = c->grid.pixel_nm / c->grid.srf;
 	double *v = c0_alloc((size_t)res->Ly * res->Lx, sizeof *v);
@@ -319,7 +319,7 @@ int c0_support_window_solve(const struct c0_support_conf *c, const struct c0_cov
 	if (!st)
 		st = run(c, mask, &ctx, x, res);
 	if (!st && grow)
-		st = c0_support_grow(c, x, res);
+		st = grow_support(c, x, res);
 	free(C), free(x), free(Ax), free(part);
 	c0_covop_free(&op);
 	res->t_solve = c0_now() - t0;
