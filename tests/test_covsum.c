@@ -1,7 +1,7 @@
 /* The covariance accumulator's hot loop (ops/covsum.h, ops/covariance.c's
- * flush) against the obvious sums: the kernel bit for bit against the plain
+ * flush) against the obvious sums: the kernel (several lags at once) bit for bit against the plain
  * loop over frames in double, and a whole accumulator (widths that leave
- * vector tails, a partial last block, columns in several chunks, a region
+ * vector tails, a partial last block, columns in two strips, a region
  * whose spans cross them) against the covariance summed in double from the
  * frames directly. */
 #include "check.h"
@@ -24,31 +24,33 @@ static float rnd_float(void)
 
 static void test_kernel(void)
 {
-	enum { LEN = 75, NB = 17 };
-	const size_t s = LEN + 3;
+	enum { LEN = 75, NB = 17, NLAG = 15 };
+	const size_t s = LEN + NLAG + 3, plane = LEN + 5;
 	double *p = malloc(sizeof *p * s * NB), *q = malloc(sizeof *q * s * NB);
-	float acc[LEN], ref[LEN];
+	float *acc = malloc(sizeof *acc * plane * NLAG), *ref = malloc(sizeof *ref * plane * NLAG);
 	for (size_t i = 0; i < s * NB; i++)
 		p[i] = rnd_float(), q[i] = rnd_float();
 	int same = 1;
 	for (int len = 0; len <= LEN; len += 1 + len / 8)
-		for (int nb = 1; nb <= NB; nb += 3) {
-			for (int x = 0; x < LEN; x++)
-				acc[x] = ref[x] = 1000 * rnd_float();
-			c0_covsum_span(acc, p, q, len, nb, s);
-			for (int x = 0; x < len; x++) {
-				double v = ref[x];
-				for (int b = 0; b < nb; b++)
-					v += p[b * s + x] * q[b * s + x];
-				ref[x] = (float)v;
+		for (int nb = 1; nb <= NB; nb += 3)
+			for (int nlag = 1; nlag <= NLAG; nlag += 1 + nlag / 4) {   /* groups of 12 and their rest */
+				for (size_t i = 0; i < plane * NLAG; i++)
+					acc[i] = ref[i] = 1000 * rnd_float();
+				c0_covsum_lags(acc, plane, p, q, len, nlag, nb, s);
+				for (int k = 0; k < nlag; k++)
+					for (int x = 0; x < len; x++) {
+						double v = ref[k * plane + x];
+						for (int b = 0; b < nb; b++)
+							v += p[b * s + x] * q[b * s + x + k];
+						ref[k * plane + x] = (float)v;
+					}
+				same &= !memcmp(acc, ref, sizeof *acc * plane * NLAG);   /* nothing else written */
 			}
-			same &= !memcmp(acc, ref, sizeof acc);
-		}
 	CHECK_MSG(same, "covsum kernel differs from the plain double loop");
-	free(p), free(q);
+	free(p), free(q), free(acc), free(ref);
 }
 
-enum { W = 83, H = 13, D = 3, T = 41 };
+enum { W = 299, H = 13, D = 3, T = 41 };
 
 /* lag l of the detrended covariance at pixel (y, x), summed in double from
  * the frames (mean and per-pixel trend removed, T - 2) */
@@ -70,14 +72,14 @@ static void test_accumulator(void)
 {
 	float *fr = malloc(sizeof *fr * W * H * T);
 	uint8_t keep[W * H];
-	for (int i = 0; i < W * H; i++)   /* spans of 29 columns, shifted by 7 each row: across the chunks */
+	for (int i = 0; i < W * H; i++)   /* spans of 29 columns, shifted by 7 each row: across the strips */
 		keep[i] = ((i % W) + 7 * (i / W)) % 58 < 29;
 	for (int i = 0; i < W * H * T; i++)   /* an offset, noise, a trend, a few bright pixels */
 		fr[i] = (float)(500 + 20 * c0_rng_normal(&rng) + 0.3 * (i / (W * H)) * ((i % 5) - 2.0) +
 				((i % (W * H)) % 11 == 0 ? 200 * c0_rng_uniform(&rng) : 0));
 	struct c0_cov_acc *a, *b;
 	CHECK(c0_cov_acc_new(W, H, D, &a) == C0_OK && c0_cov_acc_new(W, H, D, &b) == C0_OK);
-	/* 41 = 2 x 19 + 3 frames; 19 frames and lag 3 make flush take 32 columns at a time */
+	/* 41 = 2 x 19 + 3 frames; 299 columns make flush take two strips, the second ending in a vector's tail */
 	CHECK(c0_cov_acc_set_block(a, 19) == C0_OK && c0_cov_acc_set_block(b, 19) == C0_OK);
 	CHECK(c0_cov_acc_set_region(b, keep) == C0_OK);
 	for (int t = 0; t < T; t++)

@@ -158,148 +158,174 @@ int c0_cov_acc_set_region(struct c0_cov_acc *a, const uint8_t *keep)
 	return C0_OK;
 }
 
-/* flush's working set: per thread, the block's rows y..y+d (a ring of d + 1
- * slots) as doubles, converted once each; frame b of row y at
- * ring + (y % (d + 1)) nb S + b S, S = W + 8 (rows 8 kB apart would share
- * L1's sets) */
+/* flush's unit of work: rows of a strip of columns [c0, c0 + w). Per
+ * thread, the block's rows y..y+d of the strip (a ring of d + 1 slots) as
+ * doubles, converted once each, with `pad` zero columns either side: a lag
+ * that reaches past the image adds products of 0 to sums never read. Frame
+ * b of row y, column c0 + x at ring_row(g, y) + b S + x. A strip's ring
+ * (d + 1 rows of nb frames, 250 kB at d = 6, 16 frames) stays in L2. */
+enum { STRIP = 256, ROWS = 32 };   /* columns (a multiple of 16: whole cache lines of sums) and rows per task */
+
 struct ring {
 	double *v;
 	size_t S;
-	int slots;
+	int slots, pad, c0, w;
 };
+
+static int ring_new(struct ring *g, const struct c0_cov_acc *a)
+{
+	g->pad = (a->d + 7) / 8 * 8;
+	g->S = (size_t)STRIP + 2 * g->pad;
+	g->S += g->S % 512 ? 0 : 8;   /* rows 4 kB apart would share L1's sets */
+	g->slots = a->d + 1;
+	g->v = aligned_alloc(64, sizeof *g->v * (size_t)g->slots * a->nb * g->S);
+	return g->v ? C0_OK : C0_ENOMEM;
+}
 
 static double *ring_row(const struct ring *g, const struct c0_cov_acc *a, int y)
 {
-	return g->v + (size_t)(y % g->slots) * a->nb * g->S;
+	return g->v + (size_t)(y % g->slots) * a->nb * g->S + g->pad;
 }
 
 static void ring_fill(const struct ring *g, const struct c0_cov_acc *a, int y)
 {
 	const size_t n = (size_t)a->W * a->H;
 	double *dst = ring_row(g, a, y);
+	const int lo = g->c0 - g->pad < 0 ? -g->c0 : -g->pad;
+	const int hi = g->c0 + g->w + g->pad > a->W ? a->W - g->c0 : g->w + g->pad;
 	for (int b = 0; b < a->nb; b++) {
-		const float *src = a->blk + b * n + (size_t)y * a->W;
-		for (int x = 0; x < a->W; x++)
-			dst[b * g->S + x] = src[x];
+		const float *src = a->blk + b * n + (size_t)y * a->W + g->c0;
+		double *d = dst + b * g->S;
+		for (int x = -g->pad; x < lo; x++)
+			d[x] = 0;
+		for (int x = lo; x < hi; x++)
+			d[x] = src[x];
+		for (int x = hi; x < g->w + g->pad; x++)
+			d[x] = 0;
 	}
 }
 
-/* Columns per pass of flush_row: the ring's d + 1 rows of them stay in L1
- * (about 40 kB) while every lag reads them; a multiple of the kernel's 32 */
-static int chunk_cols(int d, int nb)
+/* the block's row y of the strip, from memory while the row before is
+ * summed: nb runs of a kilobyte, a frame apart, are more streams than the
+ * hardware prefetcher follows */
+static void ring_prefetch(const struct ring *g, const struct c0_cov_acc *a, int y)
 {
-	const int c = 40960 / ((d + 1) * nb * (int)sizeof(double)) - 2 * d;
-	return c < 32 ? 32 : c > 512 ? 512 : c / 32 * 32;
+	const size_t n = (size_t)a->W * a->H;
+	const int lo = g->c0 - g->pad < 0 ? 0 : g->c0 - g->pad;
+	const int hi = g->c0 + g->w + g->pad > a->W ? a->W : g->c0 + g->w + g->pad;
+	for (int b = 0; b < a->nb; b++)
+		for (int x = lo; x < hi; x += 16)
+			__builtin_prefetch(a->blk + b * n + (size_t)y * a->W + x, 0);
 }
 
-/* does a span of row y meet columns [c0, c1)? (no region: all do) */
-static int spans_meet(const struct c0_cov_acc *a, int y, int c0, int c1)
+/* s1 and st of row y's columns [x0, x0 + w) from the block's frames in
+ * order, as c0_cov_acc_add once did frame by frame (t v is exact in
+ * double: the same sums); p: the ring's column x0 */
+static void row_moments(struct c0_cov_acc *a, int y, int x0, int w, const double *p, size_t S)
 {
-	if (!a->span)
-		return 1;
-	for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++)
-		if (a->span[2 * k] < c1 && a->span[2 * k + 1] > c0)
-			return 1;
-	return 0;
-}
-
-/* s1 and st of row y from the block's frames in order, as c0_cov_acc_add
- * once did frame by frame (t v is exact in double: the same sums) */
-static void row_moments(struct c0_cov_acc *a, int y, const double *p, size_t S)
-{
-	double *s1 = a->s1 + (size_t)y * a->W, *st = a->st + (size_t)y * a->W;
+	double *s1 = a->s1 + (size_t)y * a->W + x0, *st = a->st + (size_t)y * a->W + x0;
 	const double t0 = (double)(a->frames - a->nb);
 	int x = 0;
-	for (; x + 4 <= a->W; x += 4) {   /* the frames inner: 4 pixels' sums stay in registers */
-		double u[4], w[4];
+	for (; x + 4 <= w; x += 4) {   /* the frames inner: 4 pixels' sums stay in registers */
+		double u[4], v[4];
 		for (int k = 0; k < 4; k++)
-			u[k] = s1[x + k], w[k] = st[x + k];
+			u[k] = s1[x + k], v[k] = st[x + k];
 		for (int b = 0; b < a->nb; b++)
 			for (int k = 0; k < 4; k++)
-				u[k] += p[b * S + x + k], w[k] += (t0 + b) * p[b * S + x + k];
+				u[k] += p[b * S + x + k], v[k] += (t0 + b) * p[b * S + x + k];
 		for (int k = 0; k < 4; k++)
-			s1[x + k] = u[k], st[x + k] = w[k];
+			s1[x + k] = u[k], st[x + k] = v[k];
 	}
-	for (; x < a->W; x++)
+	for (; x < w; x++)
 		for (int b = 0; b < a->nb; b++)
 			s1[x] += p[b * S + x], st[x] += (t0 + b) * p[b * S + x];
 }
 
-/* acc[0..m) += the products; on the first flush the sums are zeroed first.
- * A first touch that read would map the zero page, whose copy on the
- * write then flushes every thread's TLB (7 % of `support`'s CPU time on a
- * 1024^2 frame); zeroing only what is added keeps the pages a region
- * leaves out (c0_cov_acc_set_region) unmade, as calloc left them. */
-static void add_span(float *acc, const double *p, const double *q, int m, int nb, size_t S, int fresh)
+/* lags [l, l + m) (one dy, consecutive dx) of row y over the strip's
+ * columns [x0, x1); on the first flush the sums are zeroed first. A first
+ * touch that read would map the zero page, whose copy on the write then
+ * flushes every thread's TLB (7 % of `support`'s CPU time on a 1024^2
+ * frame); zeroing only what is added keeps the pages a region leaves out
+ * (c0_cov_acc_set_region) unmade, as calloc left them. */
+static void add_lags(struct c0_cov_acc *a, int y, const struct ring *g, int l, int m, int x0, int x1)
 {
-	if (fresh)
-		memset(acc, 0, sizeof *acc * (size_t)m);
-	c0_covsum_span(acc, p, q, m, nb, S);
+	const size_t n = (size_t)a->W * a->H;
+	float *acc = a->sum + (size_t)l * n + (size_t)y * a->W + g->c0 + x0;
+	for (int k = 0; a->fresh && k < m; k++)
+		memset(acc + k * n, 0, sizeof *acc * (size_t)(x1 - x0));
+	const double *p = ring_row(g, a, y) + x0, *q = ring_row(g, a, y + a->dy[l]) + x0 + a->dx[l];
+	c0_covsum_lags(acc, n, p, q, x1 - x0, m, a->nb, g->S);
 }
 
-/* flush's work on row y, the ring holding rows y..y+d: chunk by chunk of
- * columns, every lag's products */
-static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int cw)
+/* a region's columns in the strip where row y's restricted lags are
+ * summed: its spans, widened to whole vectors of 8 from the strip's start
+ * (the sums outside are cleared when read); `r` gets [x0, x1) pairs,
+ * strip-relative, in order; returns their number */
+static int region_runs(const struct c0_cov_acc *a, int y, const struct ring *g, int *r)
 {
-	const int fresh = a->fresh;
-	const int W = a->W, H = a->H, nb = a->nb, nr = a->d + 1 < H - y ? a->d + 1 : H - y;
-	const size_t n = (size_t)W * H, S = g->S;
-	const double *p = ring_row(g, a, y);
-	row_moments(a, y, p, S);
-	for (int cx = 0; cx < W; cx += cw) {
-		const int ce = cx + cw < W ? cx + cw : W;
-		/* the next chunk's sums: the lags' rows are more streams than the
-		 * hardware prefetcher follows, and a chunk is 2 lines of each */
-		for (int l = 0; ce < W && l < a->nlag; l++)
-			for (int x = ce; x < (ce + cw < W ? ce + cw : W); x += 16)
-				__builtin_prefetch(a->sum + (size_t)l * n + (size_t)y * W + x, 1);
-		for (int b = 0; y + nr < H && b < nb; b++)   /* and the ring's next row, from memory */
-			for (int x = cx; x < ce; x += 16)
-				__builtin_prefetch(a->blk + b * n + (size_t)(y + nr) * W + x, 0);
-		const int meet = spans_meet(a, y, cx, ce);
-		for (int l = 0; l < a->nlag; l++) {
-			const int dy = a->dy[l], dx = a->dx[l], whole = !a->span || whole_lag(dy, dx);
-			if (dy >= nr || !(whole || meet))
-				continue;
-			const int x0 = dx < 0 ? (cx > -dx ? cx : -dx) : cx, x1 = dx > 0 ? (ce < W - dx ? ce : W - dx) : ce;
-			float *acc = a->sum + (size_t)l * n + (size_t)y * W;
-			const double *q = ring_row(g, a, y + dy) + dx;   /* q[x]: column x + dx */
-			if (whole) {
-				if (x1 > x0)
-					add_span(acc + x0, p + x0, q + x0, x1 - x0, nb, S, fresh);
-				continue;
-			}
-			for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++) {
-				const int s0 = a->span[2 * k] > x0 ? a->span[2 * k] : x0;
-				const int s1 = a->span[2 * k + 1] < x1 ? a->span[2 * k + 1] : x1;
-				if (s1 > s0)
-					add_span(acc + s0, p + s0, q + s0, s1 - s0, nb, S, fresh);
-			}
+	int m = 0;
+	for (int k = a->span_at[y]; k < a->span_at[y + 1]; k++) {
+		int s0 = a->span[2 * k] - g->c0, s1 = a->span[2 * k + 1] - g->c0;
+		s0 = s0 < 0 ? 0 : s0 / 8 * 8;
+		s1 = s1 > g->w ? g->w : (s1 + 7) / 8 * 8 < g->w ? (s1 + 7) / 8 * 8 : g->w;
+		if (s1 <= s0)
+			continue;
+		if (m && s0 <= r[2 * m - 1])
+			r[2 * m - 1] = s1 > r[2 * m - 1] ? s1 : r[2 * m - 1];
+		else
+			r[2 * m] = s0, r[2 * m + 1] = s1, m++;
+	}
+	return m;
+}
+
+/* flush's work on row y of the strip, the ring holding rows y..y+d: the
+ * lags of each dy together (one load of p serves them all) */
+static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int *runs)
+{
+	const int nr = a->d + 1 < a->H - y ? a->d + 1 : a->H - y;
+	row_moments(a, y, g->c0, g->w, ring_row(g, a, y), g->S);
+	const int nrun = a->span ? region_runs(a, y, g, runs) : 0;
+	for (int l = 0; l < a->nlag;) {
+		int e = l + 1;   /* [l, e): the lags of one dy, whole or not alike */
+		const int wl = !a->span || whole_lag(a->dy[l], a->dx[l]);
+		while (e < a->nlag && a->dy[e] == a->dy[l] && (!a->span || whole_lag(a->dy[e], a->dx[e]) == wl))
+			e++;
+		if (a->dy[l] < nr) {
+			if (wl)
+				add_lags(a, y, g, l, e - l, 0, g->w);
+			for (int k = 0; !wl && k < nrun; k++)
+				add_lags(a, y, g, l, e - l, runs[2 * k], runs[2 * k + 1]);
 		}
+		l = e;
 	}
 }
 
 /* The sums are float (half the memory of the band: whole sCMOS frames fit);
- * each pass adds a block of frames in double and rounds once. */
+ * each pass adds a block of frames in double and rounds once. Each (lag,
+ * row, strip) owns its accumulators: no races. */
 static void flush(struct c0_cov_acc *a)
 {
-	const int nb = a->nb, H = a->H, G = 32;   /* rows per task: the ring refills d rows per task */
+	const int nb = a->nb, H = a->H, ns = (a->W + STRIP - 1) / STRIP, nt = (H + ROWS - 1) / ROWS * ns;
 	if (!nb)
 		return;
-	const int cw = chunk_cols(a->d, nb);
-	/* each (lag, row) owns one accumulator row: no races */
 #pragma omp parallel
 	{
-		struct ring g = { NULL, (size_t)a->W + 8, a->d + 1 };
-		g.v = malloc(sizeof *g.v * (size_t)g.slots * nb * g.S);
+		struct ring g;
+		int *runs = malloc(sizeof *runs * (STRIP + 2));
+		int ok = !ring_new(&g, a) && runs;
 #pragma omp for schedule(dynamic, 1)
-		for (int y0 = 0; y0 < H; y0 += G)
-			for (int y = y0; g.v && y < (y0 + G < H ? y0 + G : H); y++) {
+		for (int t = 0; t < nt; t++) {
+			const int y0 = t / ns * ROWS, y1 = y0 + ROWS < H ? y0 + ROWS : H;
+			g.c0 = t % ns * STRIP, g.w = g.c0 + STRIP < a->W ? STRIP : a->W - g.c0;
+			for (int y = y0; ok && y < y1; y++) {
 				for (int r = y == y0 ? y : y + a->d; r <= y + a->d && r < H; r++)
 					ring_fill(&g, a, r);
-				flush_row(a, y, &g, cw);
+				if (y + a->d + 1 < H)
+					ring_prefetch(&g, a, y + a->d + 1);
+				flush_row(a, y, &g, runs);
 			}
-		free(g.v);
+		}
+		free(g.v), free(runs);
 	}
 	a->nb = 0, a->fresh = 0;
 }
