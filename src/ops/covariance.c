@@ -336,10 +336,11 @@ int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
 	if (!a->blk && !(a->blk = c0_alloc(n * (size_t)a->block, sizeof(float))))
 		return C0_ENOMEM;
 	if (a->frames == 0)
-		for (size_t i = 0; i < n; i++)
-			a->shift[i] = frame[i];
-	/* the frame's sums (s1, st) are added by flush, from the block */
+		memcpy(a->shift, frame, n * sizeof *frame);
+	/* the frame's sums (s1, st) are added by flush, from the block; the
+	 * copy on every thread (it bounds the stream between the flushes) */
 	float *dst = a->blk + a->nb * n;
+#pragma omp parallel for schedule(static) if (n >= 65536)
 	for (size_t i = 0; i < n; i++)
 		dst[i] = frame[i] - a->shift[i];
 	a->frames++;
