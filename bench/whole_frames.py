@@ -125,7 +125,7 @@ def roofline_rows(r, files, w, T, bw, peak):
     rows = [("drift (block means)", allb, px * len(files) / 1e9, t.get("drift", 0),
              "every stack read; frames decoded one by one, 1 add a pixel: bound by reading"),
             ("support: covariance", supb, (2 * nlag + 4) * px * nsup / 1e9, cov_s,
-             "double FMAs (exact float products), rows converted once, chunks in L1"),
+             "double FMAs (exact float products), a dy's lags at once, strips in L2"),
             ("support: solve (tiles)", None, None, max(solve_s, 0), "FISTA on the tiles' working sets"),
             ("support: lambda rule", None, None, lam_s, "the halves' correlation images (the noise rule: no first solve)"),
             ("intensity (means and solves)", allb if pooled else allb - supb, 2 * px * nint / 1e9, t.get("intensity", 0),
