@@ -205,19 +205,6 @@ static void ring_fill(const struct ring *g, const struct c0_cov_acc *a, int y)
 	}
 }
 
-/* the block's row y of the strip, from memory while the row before is
- * summed: nb runs of a kilobyte, a frame apart, are more streams than the
- * hardware prefetcher follows */
-static void ring_prefetch(const struct ring *g, const struct c0_cov_acc *a, int y)
-{
-	const size_t n = (size_t)a->W * a->H;
-	const int lo = g->c0 - g->pad < 0 ? 0 : g->c0 - g->pad;
-	const int hi = g->c0 + g->w + g->pad > a->W ? a->W : g->c0 + g->w + g->pad;
-	for (int b = 0; b < a->nb; b++)
-		for (int x = lo; x < hi; x += 16)
-			__builtin_prefetch(a->blk + b * n + (size_t)y * a->W + x, 0);
-}
-
 /* s1 and st of row y's columns [x0, x0 + w) from the block's frames in
  * order, as c0_cov_acc_add once did frame by frame (t v is exact in
  * double: the same sums); p: the ring's column x0 */
@@ -320,8 +307,6 @@ static void flush(struct c0_cov_acc *a)
 			for (int y = y0; ok && y < y1; y++) {
 				for (int r = y == y0 ? y : y + a->d; r <= y + a->d && r < H; r++)
 					ring_fill(&g, a, r);
-				if (y + a->d + 1 < H)
-					ring_prefetch(&g, a, y + a->d + 1);
 				flush_row(a, y, &g, runs);
 			}
 		}
