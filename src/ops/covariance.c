@@ -25,7 +25,8 @@ struct c0_cov_acc {
 	float *blk;         /* up to `block` frames, shifted */
 	int nb, block;
 	int dropped;        /* rows [0, dropped) of sum are given back */
-	int fresh;          /* sum untouched since calloc: the first flush writes each sum before adding (add_span) */
+	int fresh;          /* sum untouched since calloc: the first flush writes each sum before adding (add_lags) */
+	int lost;           /* a flush's thread had no memory for its ring: its rows were not added */
 	double guard;       /* c0_cov_acc_set_guard's g; 0: none */
 	const float *noise; /* c0_cov_acc_set_noise's map (NULL: none), its width and this accumulator's origin in it */
 	int noise_w, noise_x0, noise_y0;
@@ -289,12 +290,13 @@ static void flush_row(struct c0_cov_acc *a, int y, const struct ring *g, int *ru
 
 /* The sums are float (half the memory of the band: whole sCMOS frames fit);
  * each pass adds a block of frames in double and rounds once. Each (lag,
- * row, strip) owns its accumulators: no races. */
-static void flush(struct c0_cov_acc *a)
+ * row, strip) owns its accumulators: no races. Fails, now and at every
+ * later flush, once a thread could not add its rows. */
+static int flush(struct c0_cov_acc *a)
 {
 	const int nb = a->nb, H = a->H, ns = (a->W + STRIP - 1) / STRIP, nt = (H + ROWS - 1) / ROWS * ns;
 	if (!nb)
-		return;
+		goto done;
 #pragma omp parallel
 	{
 		struct ring g;
@@ -310,9 +312,14 @@ static void flush(struct c0_cov_acc *a)
 				flush_row(a, y, &g, runs);
 			}
 		}
+		if (!ok)
+#pragma omp atomic write
+			a->lost = 1;
 		free(g.v), free(runs);
 	}
 	a->nb = 0, a->fresh = 0;
+done:
+	return a->lost ? c0_fail(C0_ENOMEM, "covariance: out of memory for a thread's rows of frames") : C0_OK;
 }
 
 int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
@@ -329,9 +336,7 @@ int c0_cov_acc_add(struct c0_cov_acc *a, const float *frame)
 	for (size_t i = 0; i < n; i++)
 		dst[i] = frame[i] - a->shift[i];
 	a->frames++;
-	if (++a->nb == a->block)
-		flush(a);
-	return C0_OK;
+	return ++a->nb == a->block ? flush(a) : C0_OK;
 }
 
 /* a_i / sqrt(Stt) of pixel k */
@@ -371,7 +376,9 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 		return c0_fail(C0_EINVAL, "covariance: window %dx%d at (%d, %d) outside %dx%d", w, h, x0, y0, a->W, a->H);
 	if (y0 < a->dropped)
 		return c0_fail(C0_EINVAL, "covariance: window from row %d, but rows up to %d were dropped", y0, a->dropped);
-	flush(a);
+	int st = flush(a);
+	if (st)
+		return st;
 	struct c0_cov *c = out;
 	c->W = w, c->H = h, c->d = a->d, c->nlag = a->nlag, c->frames = a->frames + a->seg_frames;
 	const size_t n = (size_t)w * h, N = (size_t)a->W * a->H;
@@ -423,7 +430,7 @@ int c0_cov_acc_window(struct c0_cov_acc *a, int y0, int x0, int h, int w, struct
 				c->mean[i] = (a->seg_sum[k] + T * c->mean[i]) / (double)c->frames;
 		}
 	subtract_noise(a, y0, x0, c);
-	int st = a->guard > 0 ? c0_cov_guard(c, a->guard, NULL) : C0_OK;
+	st = a->guard > 0 ? c0_cov_guard(c, a->guard, NULL) : C0_OK;
 	if (st)
 		c0_cov_free(c);
 	return st;
@@ -516,7 +523,8 @@ int c0_cov_guard(struct c0_cov *c, double g, size_t *set)
 
 double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x)
 {
-	flush(a);
+	if (flush(a))
+		return NAN;
 	const size_t i = (size_t)y * a->W + x;
 	const double T = (double)a->frames, m = a->s1[i] / T, b = trend(a, i);
 	return (a->sum[i] - T * m * m - b * b) / (a->seg_dof + T - 2);
@@ -551,7 +559,9 @@ int c0_cov_acc_next(struct c0_cov_acc *a)
 		return C0_ENOMEM;
 	if (a->noise && !a->seg_noise && !(a->seg_noise = c0_alloc(n, sizeof *a->seg_noise)))
 		return C0_ENOMEM;
-	flush(a);
+	int st = flush(a);
+	if (st)
+		return st;
 	centre_segment(a);
 	for (int y = 0; a->noise && y < a->H; y++)   /* each segment's own map, over its degrees of freedom */
 		for (int x = 0; x < a->W; x++)
@@ -565,7 +575,7 @@ int c0_cov_acc_next(struct c0_cov_acc *a)
 
 void c0_cov_acc_seal(struct c0_cov_acc *a)
 {
-	flush(a);
+	(void)flush(a);   /* a failure stays: the windows report it */
 	free(a->blk), a->blk = NULL;
 }
 
@@ -599,7 +609,9 @@ int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y
 			       (long long)all->frames, (long long)To);
 	if (y0 < 0 || x0 < 0 || y0 + h > all->H || x0 + w > all->W)
 		return c0_fail(C0_EINVAL, "covariance: window %dx%d at (%d, %d) outside %dx%d", w, h, x0, y0, all->W, all->H);
-	flush(all), flush(odd);
+	int st = flush(all);
+	if (st || (st = flush(odd)))
+		return st;
 	struct c0_cov *c = out;
 	c->W = w, c->H = h, c->d = all->d, c->nlag = all->nlag, c->frames = Te;
 	const size_t n = (size_t)w * h, N = (size_t)all->W * all->H;
@@ -647,7 +659,7 @@ int c0_cov_acc_window_even(struct c0_cov_acc *all, struct c0_cov_acc *odd, int y
 			c->mean[(size_t)y * w + x] += all->shift[(size_t)(y0 + y) * all->W + x0 + x];
 	free(s1), free(dl), free(tr);
 	subtract_noise(all, y0, x0, c);
-	int st = all->guard > 0 ? c0_cov_guard(c, all->guard, NULL) : C0_OK;
+	st = all->guard > 0 ? c0_cov_guard(c, all->guard, NULL) : C0_OK;
 	if (st)
 		c0_cov_free(c);
 	return st;

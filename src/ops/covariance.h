@@ -62,11 +62,13 @@ void c0_cov_acc_set_noise(struct c0_cov_acc *a, const float *map, int map_w, int
 int c0_cov_acc_set_region(struct c0_cov_acc *a, const uint8_t *keep);
 /* The same on a finished covariance; *set (or NULL): how many variances it set. */
 int c0_cov_guard(struct c0_cov *c, double g, size_t *set);
-/* Temporal variance of one pixel so far. */
+/* Temporal variance of one pixel so far (NaN once a block of frames could
+ * not be added for want of memory). */
 double c0_cov_acc_variance(struct c0_cov_acc *a, int y, int x);
 /* Adds the frames still in the block and gives the block's memory back (up
  * to 64 MB, next to the tiles' solves); call it before cutting windows from
- * several threads (they then only read). A later frame allocates it again. */
+ * several threads (they then only read). A later frame allocates it again.
+ * Should adding the block fail (memory), the windows report it. */
 void c0_cov_acc_seal(struct c0_cov_acc *a);
 /* Rows [0, y1) will not be read again (windows below them are all cut):
  * their sums' memory goes back to the system, so that a tiled solve's
