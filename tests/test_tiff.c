@@ -181,6 +181,79 @@ static void test_deflate_strips(void)
 	free(a), free(b), free(v), free(back);
 }
 
+/* a float plane written by libtiff itself, deflated in strips of rps rows */
+static int libtiff_deflated(const char *path, const float *v, int W, int H, uint32_t rps, uint16_t predictor)
+{
+	TIFF *t = TIFFOpen(path, "w");
+	if (!t)
+		return 0;
+	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)W), TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)H);
+	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 32), TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE), TIFFSetField(t, TIFFTAG_PREDICTOR, predictor);
+	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
+	int ok = 1;
+	for (uint32_t y = 0; y < (uint32_t)H; y += rps)
+		ok &= TIFFWriteEncodedStrip(t, TIFFComputeStrip(t, y, 0), (void *)(v + (size_t)y * W),
+					    (tmsize_t)(((uint32_t)H - y < rps ? (uint32_t)H - y : rps) * W * sizeof *v)) > 0;
+	TIFFClose(t);
+	return ok;
+}
+
+/* the reader inflates deflated strips side by side (io/tiff_inflate.c):
+ * the values of libtiff's own decoder over more strips than one batch, a
+ * short last strip and rows across a batch's end; a predictor goes through
+ * libtiff; a damaged strip is an error that names it */
+static void test_inflate_strips(void)
+{
+	enum { W = 1024, H = 256 * 17 + 5, RPS = 256 };
+	char path[512], pred[512];
+	snprintf(path, sizeof path, "%s/inflate.tif", dir), snprintf(pred, sizeof pred, "%s/inflate_pred.tif", dir);
+	float *v = calloc((size_t)W * H, sizeof *v), *back = calloc((size_t)W * H, sizeof *back);
+	for (int i = 0; i < 40000; i++)
+		v[(size_t)i * 7919 % ((size_t)W * H)] = (float)(i % 89) * 0.5f - 7;
+	CHECK(libtiff_deflated(path, v, W, H, RPS, PREDICTOR_NONE));
+	CHECK(libtiff_deflated(pred, v, W, H, RPS, PREDICTOR_FLOATINGPOINT));
+	struct c0_tiff_reader *r = NULL;
+	CHECK(c0_tiff_open(path, &r) == C0_OK);
+	if (r) {
+		CHECK(c0_tiff_read_f32(r, 0, back) == C0_OK && memcmp(back, v, sizeof *v * W * H) == 0);
+		const int y0 = 16 * RPS - 3, ny = H - y0;   /* the last rows of one batch, then the next */
+		CHECK(c0_tiff_read_rows_f32(r, 0, y0, ny, back) == C0_OK &&
+		      memcmp(back, v + (size_t)y0 * W, sizeof *v * (size_t)ny * W) == 0);
+		c0_tiff_close(r);
+	}
+	memset(back, 0, sizeof *back * W * H);
+	CHECK(c0_tiff_open(pred, &r) == C0_OK);
+	if (r) {
+		CHECK(c0_tiff_read_f32(r, 0, back) == C0_OK && memcmp(back, v, sizeof *v * W * H) == 0);
+		c0_tiff_close(r);
+	}
+	/* strip 5's stream damaged, in a copy in memory */
+	FILE *f = fopen(path, "rb");
+	uint8_t *file = malloc(8 << 20);
+	size_t n = f ? fread(file, 1, 8 << 20, f) : 0;
+	if (f)
+		fclose(f);
+	TIFF *t = TIFFOpen(path, "r");
+	const uint64_t off = t ? TIFFGetStrileOffset(t, 5) : 0, len = t ? TIFFGetStrileByteCount(t, 5) : 0;
+	if (t)
+		TIFFClose(t);
+	CHECK(n > 0 && len > 16 && off + len <= n);
+	if (n > 0 && len > 16 && off + len <= n) {
+		for (uint64_t k = len / 2; k < len / 2 + 8; k++)
+			file[off + k] ^= 0x5a;
+		CHECK(c0_tiff_open_mem(file, n, "damaged.tif", &r) == C0_OK);
+		if (r) {
+			CHECK(c0_tiff_read_f32(r, 0, back) != C0_OK);
+			CHECK_MSG(strstr(c0_errmsg(), "damaged.tif") && strstr(c0_errmsg(), "strip 5"), "message: %s", c0_errmsg());
+			c0_tiff_close(r);
+		}
+	}
+	free(file), free(v), free(back);
+}
+
 static void test_abort_leaves_nothing(void)
 {
 	int before = count_files();
@@ -352,6 +425,7 @@ int main(void)
 	RUN(test_bigtiff);
 	RUN(test_deflate);
 	RUN(test_deflate_strips);
+	RUN(test_inflate_strips);
 	RUN(test_abort_leaves_nothing);
 	RUN(test_bad_input);
 	RUN(test_imagej_meta);
