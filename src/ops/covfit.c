@@ -16,7 +16,9 @@ static double objective(const struct c0_covfit *c, double xc, double xax, double
 }
 
 /* <x, C>, <x, A^T A x>, <x, n> and sum x over the grid (A^T A x in c->Ax),
- * in blocks (C0_SUM_BLOCK): s, from <x, n>, moves the iterates */
+ * in blocks (C0_SUM_BLOCK): s, from <x, n>, moves the iterates. A pixel at
+ * 0 adds a zero to each sum, which leaves it as it was: the sums skip it
+ * and read C, A^T A x and n only where x is not 0 (x is sparse) */
 static void grid_sums(struct c0_covfit *c, const double *x, double out[4])
 {
 	const double *n = c->op->n, *C = c->C, *Ax = c->Ax;
@@ -26,7 +28,8 @@ static void grid_sums(struct c0_covfit *c, const double *x, double out[4])
 		const size_t i0 = b * C0_SUM_BLOCK, i1 = L - i0 < C0_SUM_BLOCK ? L : i0 + C0_SUM_BLOCK;
 		double xc = 0, xax = 0, xn = 0, x1 = 0;
 		for (size_t i = i0; i < i1; i++)
-			xc += x[i] * C[i], xax += x[i] * Ax[i], xn += x[i] * n[i], x1 += x[i];
+			if (x[i] != 0)
+				xc += x[i] * C[i], xax += x[i] * Ax[i], xn += x[i] * n[i], x1 += x[i];
 		c->part[4 * b] = xc, c->part[4 * b + 1] = xax, c->part[4 * b + 2] = xn, c->part[4 * b + 3] = x1;
 	}
 	out[0] = out[1] = out[2] = out[3] = 0;

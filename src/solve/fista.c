@@ -75,7 +75,8 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 			beta = 0, tp = 1;   /* momentum points uphill: restart */
 			restarts++;
 		}
-		if (info->prev)
+		const int stop = sqrt(dn) <= conf->tol * fmax(xnorm, 1e-300);
+		if (info->prev && (stop || it == conf->maxit - 1))   /* only the last is read (a resume) */
 			memcpy(info->prev, x, n * sizeof *x);
 #pragma omp parallel for if (n > 100000)
 		for (size_t i = 0; i < n; i++) {
@@ -83,7 +84,7 @@ int c0_fista_nn(c0_smooth_fn f, void *ctx, size_t n, double lip, const double *w
 			x[i] = xn[i];
 		}
 		theta = tp;
-		if (sqrt(dn) <= conf->tol * fmax(xnorm, 1e-300)) {
+		if (stop) {
 			info->converged = 1;
 			break;
 		}
