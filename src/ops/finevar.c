@@ -1,14 +1,21 @@
 /* The pixel variance a fit predicts on the fine grid (ops/finevar.h). */
 #include "ops/finevar.h"
 #include "optics/psf.h"
+#include "core/err.h"
+#include "core/mem.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
-void c0_finevar(const double *x, int Ly, int Lx, int r, double sigma_px, double *v)
+int c0_finevar(const double *x, int Ly, int Lx, int r, double sigma_px, double *v)
 {
-	const int K = (int)ceil(4 * sigma_px * r);   /* (e^{-8})^2 ~ 1e-7 */
-	double k[2 * K + 1];
+	/* (e^{-8})^2 ~ 1e-7; no offset beyond the field is ever used */
+	const double reach = ceil(4 * sigma_px * r), field = Ly > Lx ? Ly : Lx;
+	const int K = (int)(reach < field ? reach : field);
+	double *k = c0_alloc(2 * (size_t)K + 1, sizeof *k);
+	if (!k)
+		return C0_ENOMEM;
 	for (int d = -K; d <= K; d++) {
 		c0_psf_pixel_weights(0.5 + (double)d / r, sigma_px, 0, 1, &k[d + K]);
 		k[d + K] *= k[d + K];
@@ -29,4 +36,6 @@ void c0_finevar(const double *x, int Ly, int Lx, int r, double sigma_px, double 
 					row[w] += ay * k[w - xx + K];
 			}
 		}
+	free(k);
+	return C0_OK;
 }

@@ -10,5 +10,5 @@
  * in camera pixels): v = x * (k k^T), k[d] = (integral over the camera pixel
  * centred d/r from the emitter)^2, cut where it falls below 1e-7 of its peak
  * (4 sigma), zero outside the field. Cost: the nonzeros of x times
- * (8 sigma_px r + 1)^2. */
-void c0_finevar(const double *x, int Ly, int Lx, int r, double sigma_px, double *v);
+ * (8 sigma_px r + 1)^2. C0_OK, or C0_ENOMEM for the kernel. */
+int c0_finevar(const double *x, int Ly, int Lx, int r, double sigma_px, double *v);

@@ -274,7 +274,10 @@ static int grow_support(const struct c0_support_conf *c, const double *x, struct
 	double *v = c0_alloc((size_t)res->Ly * res->Lx, sizeof *v);
 	if (!v)
 		return C0_ENOMEM;
-	c0_finevar(x, res->Ly, res->Lx, c->grid.srf, c0_grid_sigma_px(&c->grid), v);
+	if (c0_finevar(x, res->Ly, res->Lx, c->grid.srf, c0_grid_sigma_px(&c->grid), v)) {
+		free(v);
+		return C0_ENOMEM;
+	}
 	const long n = c0_ridge_grow(v, res->Ly, res->Lx, c->label_radius_nm / fine + 0.5, res->mask);
 	free(v);
 	if (n < 0)
