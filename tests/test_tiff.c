@@ -201,15 +201,14 @@ static int libtiff_deflated(const char *path, const float *v, int W, int H, uint
 	return ok;
 }
 
-/* the reader inflates deflated strips side by side (io/tiff_inflate.c):
- * the values of libtiff's own decoder over more strips than one batch, a
- * short last strip and rows across a batch's end; a predictor goes through
- * libtiff; a damaged strip is an error that names it */
-static void test_inflate_strips(void)
+/* a plane deflated by libtiff itself reads back: many strips, a short last
+ * one and rows across strips; with the floating-point predictor too; a
+ * damaged strip is an error that names it */
+static void test_deflate_read(void)
 {
 	enum { W = 1024, H = 256 * 17 + 5, RPS = 256 };
 	char path[512], pred[512];
-	snprintf(path, sizeof path, "%s/inflate.tif", dir), snprintf(pred, sizeof pred, "%s/inflate_pred.tif", dir);
+	snprintf(path, sizeof path, "%s/deflated.tif", dir), snprintf(pred, sizeof pred, "%s/deflated_pred.tif", dir);
 	float *v = calloc((size_t)W * H, sizeof *v), *back = calloc((size_t)W * H, sizeof *back);
 	for (int i = 0; i < 40000; i++)
 		v[(size_t)i * 7919 % ((size_t)W * H)] = (float)(i % 89) * 0.5f - 7;
@@ -219,7 +218,7 @@ static void test_inflate_strips(void)
 	CHECK(c0_tiff_open(path, &r) == C0_OK);
 	if (r) {
 		CHECK(c0_tiff_read_f32(r, 0, back) == C0_OK && memcmp(back, v, sizeof *v * W * H) == 0);
-		const int y0 = 16 * RPS - 3, ny = H - y0;   /* the last rows of one batch, then the next */
+		const int y0 = 16 * RPS - 3, ny = H - y0;   /* across two strips to the end */
 		CHECK(c0_tiff_read_rows_f32(r, 0, y0, ny, back) == C0_OK &&
 		      memcmp(back, v + (size_t)y0 * W, sizeof *v * (size_t)ny * W) == 0);
 		c0_tiff_close(r);
@@ -425,7 +424,7 @@ int main(void)
 	RUN(test_bigtiff);
 	RUN(test_deflate);
 	RUN(test_deflate_strips);
-	RUN(test_inflate_strips);
+	RUN(test_deflate_read);
 	RUN(test_abort_leaves_nothing);
 	RUN(test_bad_input);
 	RUN(test_imagej_meta);

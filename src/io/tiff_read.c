@@ -3,7 +3,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "io/tiff.h"
 #include "io/imagej.h"
-#include "io/tiff_inflate.h"
 #include "core/c0math.h"
 #include "core/err.h"
 #include "core/mem.h"
@@ -32,7 +31,6 @@ struct c0_tiff_reader {
 	int64_t series_pages, per_series, stride;
 	int64_t *map;               /* selected channel: its file planes in order */
 	int allow_nonfinite;
-	struct c0_inflater *z;      /* deflated strips side by side (made on the first) */
 };
 
 const char *c0_dtype_name(enum c0_dtype t)
@@ -326,7 +324,6 @@ void c0_tiff_close(struct c0_tiff_reader *r)
 		TIFFClose(r->tif);
 	free(r->buf);
 	free(r->map);
-	c0_inflater_free(r->z);
 	free(r);
 }
 
@@ -489,9 +486,6 @@ static int read_page(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t
 	return check_finite(r, page, ya, yb, d32, d64);
 }
 
-/* Strips of deflate inflated side by side, Z_BATCH at a time (tiff_inflate.h) */
-enum { Z_BATCH = 16 };
-
 static int read_strips(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64)
 {
 	const int64_t W = r->info.width, H = r->info.height;
@@ -501,36 +495,19 @@ static int read_strips(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64
 	TIFFGetFieldDefaulted(r->tif, TIFFTAG_ROWSPERSTRIP, &rps);
 	if (rps == 0 || rps > H)
 		rps = (uint32_t)H;
-	const size_t strip = (size_t)rps * W * bs;
-	/* up to 32 MiB of strips at a time (one, at the least, inflated here too) */
-	const int inflate = c0_inflater_applies(r->tif) && (r->z || (r->z = c0_inflater_new()));
-	int batch = !inflate ? 1 : strip >= (32u << 20) / Z_BATCH ? (int)((32u << 20) / strip) : Z_BATCH;
-	if (batch < 1)
-		batch = 1;
-	if ((st = ensure_buf(r, strip * (size_t)batch)))
+	if ((st = ensure_buf(r, (size_t)rps * W * bs)))
 		return st;
-	for (int64_t y0 = ya / rps * rps; y0 < yb; y0 += (int64_t)rps * batch) {
-		const uint32_t s0 = TIFFComputeStrip(r->tif, (uint32_t)y0, 0);
-		size_t want[Z_BATCH];
-		uint8_t done[Z_BATCH] = { 0 };
-		int n = 0;
-		for (; n < batch && y0 + (int64_t)n * rps < yb; n++) {
-			const int64_t y = y0 + (int64_t)n * rps;
-			want[n] = (size_t)((H - y < rps ? H - y : rps) * W) * bs;
-		}
-		if (inflate && (st = c0_inflate_strips(r->z, r->tif, s0, n, want, strip, r->buf, done)))
-			return st;
-		for (int i = 0; i < n; i++) {
-			const int64_t y = y0 + (int64_t)i * rps, ny = (int64_t)(want[i] / bs) / W;
-			uint8_t *buf = r->buf + (size_t)i * strip;
-			if (!done[i] && TIFFReadEncodedStrip(r->tif, s0 + (uint32_t)i, buf, (tmsize_t)want[i]) != (tmsize_t)want[i])
-				return c0_fail(C0_EFORMAT, "%s: page %lld: cannot read strip %u (%s)", r->name,
-					       (long long)page + 1, s0 + (uint32_t)i, r->tiffmsg[0] ? r->tiffmsg : "truncated file");
-			int64_t a = y > ya ? y : ya, b = y + ny < yb ? y + ny : yb;
-			size_t o = (size_t)(a - ya) * W;
-			convert(r->info.dtype, buf + (size_t)(a - y) * W * bs, (size_t)((b - a) * W), d32 ? d32 + o : NULL,
-				d64 ? d64 + o : NULL);
-		}
+	for (int64_t y0 = ya / rps * rps; y0 < yb; y0 += rps) {
+		int64_t ny = H - y0 < rps ? H - y0 : rps;
+		tmsize_t want = (tmsize_t)(ny * W * bs);
+		uint32_t s = TIFFComputeStrip(r->tif, (uint32_t)y0, 0);
+		if (TIFFReadEncodedStrip(r->tif, s, r->buf, want) != want)
+			return c0_fail(C0_EFORMAT, "%s: page %lld: cannot read strip %u (%s)", r->name,
+				       (long long)page + 1, s, r->tiffmsg[0] ? r->tiffmsg : "truncated file");
+		int64_t a = y0 > ya ? y0 : ya, b = y0 + ny < yb ? y0 + ny : yb;
+		size_t o = (size_t)(a - ya) * W;
+		convert(r->info.dtype, r->buf + (size_t)(a - y0) * W * bs, (size_t)((b - a) * W), d32 ? d32 + o : NULL,
+			d64 ? d64 + o : NULL);
 	}
 	return C0_OK;
 }
