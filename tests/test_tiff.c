@@ -135,6 +135,28 @@ static uint8_t *raw_strips(const char *path, uint32_t *n, uint64_t *len)
 	return b;
 }
 
+/* a float plane written by libtiff itself, deflated at level 1 (ZIPQUALITY,
+ * as io/tiff_write.c) in strips of rps rows; 0 when a write failed */
+static int libtiff_deflated(const char *path, const float *v, int W, int H, uint32_t rps, uint16_t predictor)
+{
+	TIFF *t = TIFFOpen(path, "w");
+	if (!t)
+		return 0;
+	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)W), TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)H);
+	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 32), TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE), TIFFSetField(t, TIFFTAG_ZIPQUALITY, 1);
+	TIFFSetField(t, TIFFTAG_PREDICTOR, predictor);
+	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
+	int ok = 1;
+	for (uint32_t y = 0; y < (uint32_t)H; y += rps)
+		ok &= TIFFWriteEncodedStrip(t, TIFFComputeStrip(t, y, 0), (void *)(v + (size_t)y * W),
+					    (tmsize_t)(((uint32_t)H - y < rps ? (uint32_t)H - y : rps) * W * sizeof *v)) > 0;
+	TIFFClose(t);
+	return ok;
+}
+
 /* the plane's strips are deflated side by side (io/tiff_write.c): more
  * strips than one batch and a short last one, each strip's bytes the ones
  * libtiff's own codec writes for it (ZIPQUALITY 1) */
@@ -148,27 +170,12 @@ static void test_deflate_strips(void)
 		v[(size_t)i * 7919 % ((size_t)W * H)] = (float)(i % 97) * 0.25f - 3;
 	struct c0_tiff_wopts o = { .width = W, .height = H, .dtype = C0_F32, .deflate = 1 };
 	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
-	TIFF *t = TIFFOpen(ref, "w");
-	CHECK(t != NULL);
-	if (!t) {
-		free(v);
-		return;
-	}
 	uint32_t rps = 0, ns = 0, nr = 0;
 	TIFF *f = TIFFOpen(path, "r");
 	CHECK(f && TIFFGetField(f, TIFFTAG_ROWSPERSTRIP, &rps) && rps == 256);
 	if (f)
 		TIFFClose(f);
-	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)W), TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)H);
-	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 32), TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
-	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
-	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
-	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE), TIFFSetField(t, TIFFTAG_ZIPQUALITY, 1);
-	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
-	for (uint32_t y = 0; y < H; y += rps)
-		CHECK(TIFFWriteEncodedStrip(t, TIFFComputeStrip(t, y, 0), v + (size_t)y * W,
-					    (tmsize_t)((H - y < rps ? H - y : rps) * W * sizeof *v)) > 0);
-	TIFFClose(t);
+	CHECK(rps == 256 && libtiff_deflated(ref, v, W, H, rps, PREDICTOR_NONE));
 	uint64_t la[64], lb[64];
 	uint8_t *a = raw_strips(path, &ns, la), *b = raw_strips(ref, &nr, lb);
 	int same = ns == 18 && nr == ns;
@@ -179,26 +186,6 @@ static void test_deflate_strips(void)
 	float *back = NULL;
 	CHECK(c0_tiff_load_f32(path, &in, &back) == C0_OK && back && memcmp(back, v, sizeof *v * W * H) == 0);
 	free(a), free(b), free(v), free(back);
-}
-
-/* a float plane written by libtiff itself, deflated in strips of rps rows */
-static int libtiff_deflated(const char *path, const float *v, int W, int H, uint32_t rps, uint16_t predictor)
-{
-	TIFF *t = TIFFOpen(path, "w");
-	if (!t)
-		return 0;
-	TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)W), TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)H);
-	TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 32), TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
-	TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
-	TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
-	TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE), TIFFSetField(t, TIFFTAG_PREDICTOR, predictor);
-	TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps);
-	int ok = 1;
-	for (uint32_t y = 0; y < (uint32_t)H; y += rps)
-		ok &= TIFFWriteEncodedStrip(t, TIFFComputeStrip(t, y, 0), (void *)(v + (size_t)y * W),
-					    (tmsize_t)(((uint32_t)H - y < rps ? (uint32_t)H - y : rps) * W * sizeof *v)) > 0;
-	TIFFClose(t);
-	return ok;
 }
 
 /* a plane deflated by libtiff itself reads back: many strips, a short last
