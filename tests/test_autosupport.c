@@ -19,8 +19,10 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/rng.h"
+#include "core/threads.h"
 #include "testkit/reference.h"
 
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -791,9 +793,27 @@ static void test_drift_angles(void)
 	c0_drift_free(d);
 }
 
+/* 1 when a and b give the 3 stacks the same trajectory, bit for bit; *end:
+ * a's drift at the last frame (px) */
+static int same_drift(const struct c0_drift *a, const struct c0_drift *b, double *end)
+{
+	int same = a && b;
+	double ax = 0, ay = 0, bx, by;
+	for (int q = 0; same && q < 3; q++)
+		for (int64_t t = 0; t < 300; t++) {
+			c0_drift_at(a, q, t, &ax, &ay), c0_drift_at(b, q, t, &bx, &by);
+			same &= ax == bx && ay == by;
+		}
+	*end = hypot(ax, ay);
+	return same;
+}
+
 /* The drift pass sums each batch of frames read ahead a chunk of pixels at
  * a time: batches of 7 frames, which split the blocks of 50, give the
- * trajectory of one batch a stack, bit for bit (the angles' stacks above) */
+ * trajectory of one batch a stack, bit for bit (the angles' stacks above).
+ * Nor does it depend on the threads: on 2 the third stack is left over
+ * (c0_threads_side) and read beside its adding, its blocks re-measured side
+ * by side; on 1 and 3 every stack has one thread. */
 static void test_drift_batches(void)
 {
 	struct c0_drift_conf dc = C0_DRIFT_DEFAULTS, d7 = C0_DRIFT_DEFAULTS;
@@ -802,15 +822,18 @@ static void test_drift_batches(void)
 	dc.psf_sigma_px = d7.psf_sigma_px = c0_psf_sigma_px(s.fwhm_nm, s.pixel_nm);
 	d7.read_ahead = 7;
 	struct c0_drift *a = estimate_3("angles", &dc), *b = estimate_3("angles", &d7);
-	int same = a && b;
-	double ax = 0, ay = 0, bx, by;
-	for (int q = 0; same && q < 3; q++)
-		for (int64_t t = 0; t < 300; t++) {
-			c0_drift_at(a, q, t, &ax, &ay), c0_drift_at(b, q, t, &bx, &by);
-			same &= ax == bx && ay == by;
-		}
-	CHECK_MSG(same, "the drift depends on how many frames are read ahead");
-	CHECK_MSG(hypot(ax, ay) > 0.5, "the stacks' drift was not measured (%.2f, %.2f px at the end)", ax, ay);
+	double end = 0;
+	CHECK_MSG(same_drift(a, b, &end), "the drift depends on how many frames are read ahead");
+	CHECK_MSG(end > 0.5, "the stacks' drift was not measured (%.2f px at the end)", end);
+	const int th0 = omp_get_max_threads();
+	for (int th = 1; th <= 3; th++) {
+		omp_set_num_threads(th);
+		CHECK_MSG(c0_threads_side(3) == (th == 2 ? 2 : 3), "c0_threads_side(3) on %d threads: %d", th, c0_threads_side(3));
+		struct c0_drift *c = estimate_3("angles", &dc);
+		CHECK_MSG(same_drift(a, c, &end), "the drift on %d threads differs from the default's", th);
+		c0_drift_free(c);
+	}
+	omp_set_num_threads(th0);
 	c0_drift_free(a), c0_drift_free(b);
 }
 

@@ -8,6 +8,7 @@
 #include "stages/pattern.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/threads.h"
 #include "core/progress.h"
 
 #include <math.h>
@@ -478,7 +479,8 @@ static void noise_draws(struct c0_result *r, const struct c0_intensity_conf *ic,
 }
 
 /* Every stack's mean and noise variance side by side (each reads its own
- * file), then the solves: side by side when each is one tile, else one
+ * file; those left over by c0_threads_side after, each with every thread),
+ * then the solves: side by side when each is one tile, else one
  * stack after the other with its tiles side by side (5 stacks on 2 threads
  * would leave one thread idle for the last). msg: per-stack error texts
  * (error messages are per thread). With share and no offset map, the
@@ -497,16 +499,19 @@ static void intensity_all(struct c0_result *r, const struct c0_intensity_conf *i
 	struct c0_progress pr;
 	int done = 0;
 	c0_progress_begin(&pr, "intensity (stacks)", 2 * n);
-#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
-	for (int i = 0; i < n; i++) {
-		s2[i] = sigma2 ? sigma2[i] : 0;
-		sts[i] = read_stack(sc, r->drift ? r->hooks[i] : NULL, c0_result_noise(r, i), &f[i], r->mask, &s2[i], known[i],
-				    !share || share[i] ? ic->noise_block : 0, &own[i], &frames[i], &tc[i], half[i], count[i]);
-		if (sts[i])
-			snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
+	const int side = c0_threads_side(n);   /* the rest one after another, each with every thread */
+	for (int pass = 0; pass < 2; pass++)
+#pragma omp parallel for schedule(dynamic, 1) if (!pass && side > 1)
+		for (int i = pass ? side : 0; i < (pass ? n : side); i++) {
+			s2[i] = sigma2 ? sigma2[i] : 0;
+			sts[i] = read_stack(sc, r->drift ? r->hooks[i] : NULL, c0_result_noise(r, i), &f[i], r->mask, &s2[i],
+					    known[i], !share || share[i] ? ic->noise_block : 0, &own[i], &frames[i], &tc[i], half[i],
+					    count[i]);
+			if (sts[i])
+				snprintf(msg[i], sizeof msg[i], "%s", c0_errmsg());
 #pragma omp critical(c0_intensity_progress)
-		c0_progress_update(&pr, ++done);
-	}
+			c0_progress_update(&pr, ++done);
+		}
 	int bad = 0;
 	for (int i = 0; i < n; i++)
 		bad |= sts[i], mean[i] = known[i] ? known[i]->mean : own[i];

@@ -46,3 +46,9 @@ int c0_threads_here(void)
 {
 	return omp_in_parallel() ? 1 : omp_get_max_threads();
 }
+
+int c0_threads_side(int n)
+{
+	const int t = c0_threads_here();
+	return t > 1 && n > t ? n - n % t : n;
+}

@@ -22,3 +22,9 @@ int c0_threads_get(void);
  * (nested regions run alone), else c0_threads_get(). What per-thread
  * workspaces are sized by. */
 int c0_threads_here(void);
+/* A loop over n items, one a thread, leaves threads idle at its end when n is
+ * more than the threads but not a multiple of them (5 stacks on 2 threads: the
+ * fifth alone, a core idle). Items [0, c0_threads_side(n)) go side by side;
+ * the rest, n % threads of them, one after another, each with every thread
+ * (its own parallel regions then run). n when n <= threads. */
+int c0_threads_side(int n);

@@ -7,6 +7,7 @@
 #include "core/fftw_plan.h"
 #include "core/mem.h"
 #include "core/progress.h"
+#include "core/threads.h"
 
 #include <complex.h>
 #include <fftw3.h>
@@ -200,17 +201,24 @@ static void clock(const struct c0_drift_conf *c, const struct c0_frames *f, stru
 }
 
 /* the stacks' block means and chained shifts, the stacks side by side: each
- * reads its own file; the first failing stack's message */
+ * reads its own file; the ones left over (c0_threads_side) each read beside
+ * their adding. The first failing stack's message. */
 static int read_stacks(const struct c0_drift_conf *c, struct c0_frames *f, int n, struct stack_blocks *sb)
 {
 	int fail = -1;
-#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
+	const int side = c0_threads_side(n);
+#pragma omp parallel for schedule(dynamic, 1) if (side > 1)
 	for (int q = 0; q < n; q++) {
+		if (q >= side)
+			continue;
 		if (stack_pass(&f[q], block_len(c, f[q].count), c->psf_sigma_px, c->read_ahead, &sb[q]))
 #pragma omp critical(c0_drift_fail)
 			if (fail < 0 || q < fail)
 				fail = q;
 	}
+	for (int q = side; q < n; q++)
+		if (stack_pass(&f[q], block_len(c, f[q].count), c->psf_sigma_px, c->read_ahead, &sb[q]) && fail < 0)
+			fail = q;
 	return fail >= 0 ? c0_fail(C0_EIO, "%s", sb[fail].msg) : C0_OK;
 }
 

@@ -1,6 +1,7 @@
 /* The drift's refinement (drift_parts.h). */
 #include "stages/drift_parts.h"
 #include "core/err.h"
+#include "core/threads.h"
 #include "core/mem.h"
 
 #include <math.h>
@@ -157,15 +158,17 @@ static void average_stacks(struct c0_drift *d)
 	d->nb = nb;
 }
 
-int drift_refine(struct c0_drift *d)
+/* Stacks q0..q1-1: side by side (each thread with transforms of its own),
+ * or one after another with each stack's blocks re-measured side by side
+ * (a stack alone, or those left over by c0_threads_side) */
+static int refine_stacks(struct c0_drift *d, int q0, int q1, int side)
 {
-	/* each stack against the mean of its own blocks: an angle changes the
-	 * image (depth-dependent excitation), which a correlation across angles
-	 * would read as a shift. The stacks' blocks are apart: side by side. */
-	const int *k0 = d->k0;
 	struct c0_first_fail fail = { 0 };
 	const size_t n = (size_t)d->H * d->W;
-#pragma omp parallel if (d->nq > 1)
+	const int par = !side || q1 - q0 == 1;
+	if (q1 <= q0)
+		return C0_OK;
+#pragma omp parallel if (!par)
 	{
 		struct xcorr x;
 		double *ref = c0_alloc(n, sizeof *ref);
@@ -174,15 +177,27 @@ int drift_refine(struct c0_drift *d)
 		if (!st && (!ref || !tmp))
 			st = C0_ENOMEM;
 #pragma omp for schedule(dynamic, 1)
-		for (int q = 0; q < d->nq; q++)
+		for (int q = q0; q < q1; q++)
 			if (!st)
-				st = refine_range(d, &x, ref, tmp, k0[q], k0[q + 1], d->nq == 1);
+				st = refine_range(d, &x, ref, tmp, d->k0[q], d->k0[q + 1], par);
 		c0_first_fail_note(&fail, st);
 		drift_xcorr_free(&x);
 		free(ref), free(tmp);
 	}
-	if (fail.code)
-		return c0_first_fail_raise(&fail);
+	return fail.code ? c0_first_fail_raise(&fail) : C0_OK;
+}
+
+int drift_refine(struct c0_drift *d)
+{
+	/* each stack against the mean of its own blocks: an angle changes the
+	 * image (depth-dependent excitation), which a correlation across angles
+	 * would read as a shift. The stacks' blocks are apart: side by side. */
+	const int *k0 = d->k0, side = c0_threads_side(d->nq);
+	int st = refine_stacks(d, 0, side, 1);
+	if (!st)
+		st = refine_stacks(d, side, d->nq, 0);
+	if (st)
+		return st;
 	if (d->interleaved)
 		average_stacks(d);
 	double *jv = c0_alloc((size_t)d->nb, sizeof *jv);

@@ -9,7 +9,7 @@
 - the automatic lambda on tiles: the same noise sigma_C as on one tile (within 1 %),
   and the localisation precision within 10 % (no FRC on tiles);
 - results do not depend on the thread count (bit-identical files), on tiles
-  and on one tile;
+  and on one tile, and for 'run' on 3 stacks (the third left over on 2 threads);
 - the program sets the passive OpenMP wait policy itself and counts threads
   from the affinity mask (the report records both, and the MPI rank count);
 - a tile smaller than the PSF band or larger than the image is refused with
@@ -164,6 +164,23 @@ with tempfile.TemporaryDirectory() as tmp:
         p = cli("support", *common, "-o", o, stack, pre=("taskset", "-c", "0"), env={k: v for k, v in ENV.items() if k != "OMP_NUM_THREADS"})
         check(p.returncode == 0 and json.load(open(os.path.join(o, "report.json")))["threads"] == 1,
               "one CPU in the affinity mask, one thread")
+
+    # 'run' on 3 stacks: on 2 threads the third is left over (c0_threads_side), its drift pass
+    # read beside its sums, its blocks re-measured and its intensity read with both threads;
+    # the files are those of 1 thread, where every stack has the one
+    sim3t = os.path.join(tmp, "sim3t")
+    p = cli("simulate", "-o", sim3t, "--width", "48", "--height", "48", "--frames", "120", "--angles", "62,66,70",
+            "--seed", "4", "--drift-nm", "80,-40")
+    check(p.returncode == 0, "simulate 3 angles: " + p.stderr)
+    outs = [os.path.join(tmp, "run3_%d" % t) for t in (1, 2)]
+    for t, o in zip((1, 2), outs):
+        p = cli("run", "--fwhm", "229", "--pixel-size", "100", "--angles", "62,66,70", "--tile", "24",
+                "--matirf-iterations", "300", "--threads", str(t), "-o", o,
+                *(os.path.join(sim3t, "stack_q0%d.tif" % q) for q in (1, 2, 3)))
+        check(p.returncode == 0, "run on 3 stacks, %d threads: %s" % (t, p.stderr[-2000:]))
+    if all(os.path.exists(os.path.join(o, "report.json")) for o in outs):
+        check(same_outputs(outs[0], outs[1]), "run on 3 stacks: 1 and 2 threads give different files")
+        check(json.load(open(os.path.join(outs[1], "report.json")))["drift"]["max_nm"] > 30, "run on 3 stacks: no drift found")
 
     # bad tile sizes: one line, nothing written
     big = str(W + 1)
