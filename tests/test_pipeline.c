@@ -7,6 +7,7 @@
 #include "col0rme.h"
 #include "app/result.h"
 #include "app/pipeline_conf.h"
+#include "app/stacks.h"
 #include "io/outdir.h"
 #include "app/params.h"
 #include "report/html.h"
@@ -306,11 +307,28 @@ static void test_quantile(void)
 	CHECK(c0_quantile(v, 0, 0.5) == 0);
 }
 
+/* How many stacks the page cache keeps between the passes: the first ones
+ * that fit in three quarters of the memory available, all when they all fit
+ * or the memory is unknown */
+static void test_keep_cached(void)
+{
+	const double G = 1e9, five[5] = { 4.2 * G, 4.2 * G, 4.2 * G, 4.2 * G, 4.2 * G };
+	CHECK(c0_stacks_keep_cached(five, 5, 21 * G) == 3);   /* 15.75 GB: three of 21 */
+	CHECK(c0_stacks_keep_cached(five, 5, 28 * G) == 5);   /* 21 <= 21 */
+	CHECK(c0_stacks_keep_cached(five, 5, 27 * G) == 4);
+	CHECK(c0_stacks_keep_cached(five, 5, 5 * G) == 0);
+	CHECK(c0_stacks_keep_cached(five, 5, 0) == 5);
+	const double mixed[3] = { 1 * G, 0, 9 * G };           /* an array counts 0 */
+	CHECK(c0_stacks_keep_cached(mixed, 3, 8 * G) == 2);
+	CHECK(c0_stacks_keep_cached(mixed, 3, 14 * G) == 3);
+}
+
 int main(void)
 {
 	RUN(test_conf);
 	RUN(test_param_defaults);
 	RUN(test_files_and_arrays);
 	RUN(test_quantile);
+	RUN(test_keep_cached);
 	return CHECK_DONE();
 }

@@ -1,15 +1,18 @@
 /* TIFF reader/writer round trips, metadata and bad input (C side; the
  * independent tifffile checks are in python/test_tiff_interop.py). */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* mincore */
 #include "check.h"
 #include "io/tiff.h"
 #include "io/imagej.h"
 #include "core/err.h"
 
 #include <dirent.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <tiffio.h>
 #include <unistd.h>
@@ -401,6 +404,77 @@ static void test_message_alias(void)
 	CHECK_MSG(!strcmp(c0_errmsg(), "x.tif: --angles: angle 50 deg is bad"), "got '%s'", c0_errmsg());
 }
 
+/* the share of a file's first n bytes in the kernel's page cache */
+static double resident(const char *path, size_t n)
+{
+	const size_t pg = (size_t)sysconf(_SC_PAGESIZE), np = (n + pg - 1) / pg;
+	int fd = open(path, O_RDONLY);
+	void *m = fd >= 0 ? mmap(NULL, n, PROT_READ, MAP_SHARED, fd, 0) : MAP_FAILED;
+	unsigned char *v = malloc(np);
+	size_t in = 0;
+	if (m != MAP_FAILED && v && !mincore(m, n, v))
+		for (size_t i = 0; i < np; i++)
+			in += v[i] & 1;
+	if (m != MAP_FAILED)
+		munmap(m, n);
+	if (fd >= 0)
+		close(fd);
+	free(v);
+	return (double)in / (double)np;
+}
+
+/* 1 when every plane of path reads back as v (Z planes of n), twice over:
+ * the second pass starts again from the first plane */
+static int read_twice(const char *path, const float *v, size_t n, int Z, int drop)
+{
+	struct c0_tiff_reader *r;
+	if (c0_tiff_open(path, &r) != C0_OK)
+		return 0;
+	c0_tiff_drop_behind(r, drop);
+	float *p = malloc(n * sizeof *p);
+	int same = p != NULL;
+	for (int pass = 0; pass < 2; pass++)
+		for (int z = 0; same && z < Z; z++)
+			same = c0_tiff_read_f32(r, z, p) == C0_OK && !memcmp(p, v + (size_t)z * n, n * sizeof *p);
+	free(p);
+	c0_tiff_close(r);
+	return same;
+}
+
+/* c0_tiff_drop_behind: the planes read the same, pass after pass, and the
+ * pages read are given back to the kernel (40 MB of planes: the drops go a
+ * 32 MB window at a time). A file system whose pages are its storage
+ * (tmpfs) keeps them whatever it is told: there only the values are checked. */
+static void test_drop_behind(void)
+{
+	const int W = 512, H = 512, Z = 80;
+	const size_t n = (size_t)W * H, win = (size_t)32 << 20;
+	char path[512];
+	snprintf(path, sizeof path, "%s/drop.tif", dir);
+	float *v = malloc(n * Z * sizeof *v);
+	for (size_t i = 0; i < n * Z; i++)
+		v[i] = (float)((i * 7919) % 60000);
+	struct c0_tiff_wopts o = { .width = W, .height = H, .slices = Z, .dtype = C0_U16 };
+	CHECK(c0_tiff_save_f32(path, &o, v) == C0_OK);
+	int fd = open(path, O_RDONLY);   /* written back: clean pages can be freed */
+	CHECK(fd >= 0 && !fsync(fd));
+	CHECK_MSG(read_twice(path, v, n, Z, 0), "the planes read back differently");
+	const double kept = resident(path, win);
+	CHECK_MSG(read_twice(path, v, n, Z, 1), "the planes read back differently when given back as read");
+	const double left = resident(path, win);
+	(void)posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
+	const double can = resident(path, win);
+	fprintf(stderr, "page cache, the first 32 MB: %.0f %% after a plain read, %.0f %% after reading with "
+		"drop-behind, %.0f %% when all is given back\n", 100 * kept, 100 * left, 100 * can);
+	if (can < 0.05)
+		CHECK_MSG(left < 0.05, "%.0f %% of the pages read stayed in the page cache", 100 * left);
+	else
+		fprintf(stderr, "this file system keeps its pages (tmpfs?): drop-behind not checked\n");
+	if (fd >= 0)
+		close(fd);
+	free(v);
+}
+
 int main(void)
 {
 	snprintf(dir, sizeof dir, "/tmp/c0_test_tiff_XXXXXX");
@@ -412,6 +486,7 @@ int main(void)
 	RUN(test_deflate);
 	RUN(test_deflate_strips);
 	RUN(test_deflate_read);
+	RUN(test_drop_behind);
 	RUN(test_abort_leaves_nothing);
 	RUN(test_bad_input);
 	RUN(test_imagej_meta);

@@ -7,6 +7,10 @@
 /* Opens the stacks as frame sources, all the same size. */
 int c0_stacks_open(const struct c0_stack *s, int n, struct c0_frames *f);
 void c0_stacks_close(struct c0_frames *f, int n);
+/* How many of n stacks of bytes[i] bytes each, read again pass after pass,
+ * the page cache is left to keep: the first ones whose sum fits in three
+ * quarters of avail bytes (n when they all fit, or avail is unknown: 0). */
+int c0_stacks_keep_cached(const double *bytes, int n, double avail);
 /* The camera pixel size: c->pixel_nm (>= 0, finite), else the stacks'
  * calibration, which must be the same for all n. */
 int c0_stacks_pixel(const struct c0_run_conf *c, const struct c0_frames *f, int n, double *pixel_nm);

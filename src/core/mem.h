@@ -16,3 +16,6 @@ const char *c0_mem_stage_name(void);
 int c0_mem_fail(double bytes);
 /* The process's peak resident memory so far (getrusage), in MiB. */
 double c0_mem_peak_mb(void);
+/* The memory the kernel says is available to start new work without
+ * swapping (MemAvailable, /proc/meminfo), in bytes; 0 where unknown. */
+double c0_mem_available(void);

@@ -126,6 +126,12 @@ int c0_frames_keep_profiles(struct c0_frames *f)
 	return C0_OK;
 }
 
+void c0_frames_drop_behind(struct c0_frames *f, int on)
+{
+	if (f->tiff)
+		c0_tiff_drop_behind(f->tiff, on);
+}
+
 int c0_frames_open(struct c0_frames *f, const char *path)
 {
 	memset(f, 0, sizeof *f);

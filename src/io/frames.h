@@ -38,6 +38,9 @@ int c0_frames_sums(struct c0_frames *f, const double **sums);
 /* From now on every whole-frame read also notes the frame's row and column
  * sums (the frames read before are read again for them). */
 int c0_frames_keep_profiles(struct c0_frames *f);
+/* A file's frames given back to the kernel's page cache as they are read
+ * (c0_tiff_drop_behind); nothing for an array. */
+void c0_frames_drop_behind(struct c0_frames *f, int on);
 /* The sums, row sums and column sums of every frame (count, count x height,
  * count x width), reading the frames not yet read whole since
  * c0_frames_keep_profiles. */

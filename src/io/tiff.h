@@ -44,6 +44,10 @@ int c0_tiff_select_channel(struct c0_tiff_reader *r, int k);
 /* Reading float samples refuses NaN and infinity (naming the frame and the
  * pixel) unless this is called ('info' describes such files). */
 void c0_tiff_allow_nonfinite(struct c0_tiff_reader *r);
+/* on: the file's planes, once read whole, are given back to the kernel's
+ * page cache as the reading goes on (posix_fadvise DONTNEED), for files that
+ * will not all stay cached: what is read is the same. Off by default. */
+void c0_tiff_drop_behind(struct c0_tiff_reader *r, int on);
 /* Reads from memory (the buffer must outlive the reader); name is for messages. */
 int c0_tiff_open_mem(const void *data, size_t size, const char *name, struct c0_tiff_reader **out);
 const struct c0_tiff_info *c0_tiff_get_info(const struct c0_tiff_reader *r);

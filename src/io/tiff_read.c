@@ -8,6 +8,7 @@
 #include "core/mem.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -31,6 +32,8 @@ struct c0_tiff_reader {
 	int64_t series_pages, per_series, stride;
 	int64_t *map;               /* selected channel: its file planes in order */
 	int allow_nonfinite;
+	int drop;                   /* c0_tiff_drop_behind */
+	uint64_t dropped;           /* the file's bytes up to here were given back to the kernel */
 };
 
 const char *c0_dtype_name(enum c0_dtype t)
@@ -445,6 +448,36 @@ C0_HOT_SAME static void convert(enum c0_dtype t, const uint8_t *src, size_t n, f
 
 static int read_strips(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64);
 
+void c0_tiff_drop_behind(struct c0_tiff_reader *r, int on)
+{
+	r->drop = on && !r->mem;
+}
+
+/* With c0_tiff_drop_behind, after a whole plane: the kernel is told that the
+ * file's bytes up to this page's last strip or tile are not wanted again
+ * (they stay on disk), a window at a time, so that it frees their page cache
+ * instead of evicting pages that other files will be read from again. A hint
+ * only: the bytes read are the same. (Asking for the bytes ahead as well,
+ * POSIX_FADV_WILLNEED, measured no faster: docs/speed.md.) */
+#define DROP_WINDOW ((uint64_t)32 << 20)
+static void drop_behind(struct c0_tiff_reader *r)
+{
+	const uint32_t n = TIFFIsTiled(r->tif) ? TIFFNumberOfTiles(r->tif) : TIFFNumberOfStrips(r->tif);
+	int err = 0;
+	if (!n)
+		return;
+	const uint64_t end = TIFFGetStrileOffsetWithErr(r->tif, n - 1, &err) +
+			     TIFFGetStrileByteCountWithErr(r->tif, n - 1, &err);
+	if (err)
+		return;
+	if (end < r->dropped)   /* a new pass from an earlier plane */
+		r->dropped = 0;
+	if (end - r->dropped < DROP_WINDOW)
+		return;
+	(void)posix_fadvise(TIFFFileno(r->tif), (off_t)r->dropped, (off_t)(end - r->dropped), POSIX_FADV_DONTNEED);
+	r->dropped = end;
+}
+
 /* rows [ya, yb) of a page into rows 0.. of the destination */
 static int read_page(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t yb, float *d32, double *d64)
 {
@@ -481,6 +514,8 @@ static int read_page(struct c0_tiff_reader *r, int64_t page, int64_t ya, int64_t
 			}
 	} else if ((st = read_strips(r, page, ya, yb, d32, d64)))
 		return st;
+	if (r->drop && ya == 0 && yb == H)   /* not after a band's rows: the page's other bands are still to be read */
+		drop_behind(r);
 	if (r->allow_nonfinite || (r->info.dtype != C0_F32 && r->info.dtype != C0_F64))
 		return C0_OK;
 	return check_finite(r, page, ya, yb, d32, d64);
