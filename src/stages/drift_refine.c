@@ -20,13 +20,14 @@ static int moved_back(struct c0_drift *d, int k, float *tmp)
 	return c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
 }
 
-/* block k moved back, re-measured against x->ref */
-static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tmp, int k)
+/* block k moved back (kept: already, or NULL), re-measured against x->ref */
+static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tmp, const float *kept, int k)
 {
 	const size_t n = (size_t)d->H * d->W;
-	int st = moved_back(d, k, tmp);
+	int st = kept ? C0_OK : moved_back(d, k, tmp);
+	kept = kept ? kept : tmp;
 	for (size_t i = 0; i < n; i++)
-		img[i] = tmp[i];
+		img[i] = kept[i];
 	double rx, ry;
 	drift_shift_of(x, img, 1, &rx, &ry);
 	d->bx[k] += rx, d->by[k] += ry;
@@ -47,13 +48,26 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float 
 	const size_t n = (size_t)d->H * d->W;
 	int st = C0_OK;
 	double moved = INFINITY;
+	/* the round's moved blocks, kept for their re-measure: one Fourier shift
+	 * a block a round instead of two (as much memory as the stack's block
+	 * means; without it, each is moved back again) */
+	float *mv = k1 - k0 > 1 ? malloc((size_t)(k1 - k0) * n * sizeof *mv) : NULL;
 	for (int round = 0; round < REFINE && moved > REFINE_TOL && k1 - k0 > 1 && !st; round++) {
 		moved = 0;
 		memset(ref, 0, n * sizeof *ref);
-		for (int k = k0; k < k1 && !st; k++) {
-			st = moved_back(d, k, tmp);
+		if (mv) {
+			struct c0_first_fail fail = { 0 };
+#pragma omp parallel for schedule(dynamic, 1) if (par)
+			for (int k = k0; k < k1; k++)
+				c0_first_fail_note(&fail, moved_back(d, k, mv + (size_t)(k - k0) * n));
+			st = fail.code ? c0_first_fail_raise(&fail) : C0_OK;
+		}
+		for (int k = k0; k < k1 && !st; k++) {   /* the blocks added in order: the same sums on any threads */
+			const float *m = mv ? mv + (size_t)(k - k0) * n : tmp;
+			if (!mv)
+				st = moved_back(d, k, tmp);
 			for (size_t i = 0; i < n; i++)
-				ref[i] += tmp[i];
+				ref[i] += m[i];
 		}
 		if (st)
 			break;
@@ -76,7 +90,7 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float 
 			for (int k = k0; k < k1; k++) {
 				const double x0 = d->bx[k], y0 = d->by[k];
 				if (!ts)
-					ts = remeasure(d, y, img, t, k);
+					ts = remeasure(d, y, img, t, mv ? mv + (size_t)(k - k0) * n : NULL, k);
 				moved = fmax(moved, fmax(fabs(d->bx[k] - x0), fabs(d->by[k] - y0)));
 			}
 			c0_first_fail_note(&fail, ts);
@@ -86,6 +100,7 @@ static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float 
 		if (fail.code)
 			st = c0_first_fail_raise(&fail);
 	}
+	free(mv);
 	return st;
 }
 
