@@ -207,18 +207,13 @@ static int read_stacks(const struct c0_drift_conf *c, struct c0_frames *f, int n
 {
 	int fail = -1;
 	const int side = c0_threads_side(n);
-#pragma omp parallel for schedule(dynamic, 1) if (side > 1)
-	for (int q = 0; q < n; q++) {
-		if (q >= side)
-			continue;
-		if (stack_pass(&f[q], block_len(c, f[q].count), c->psf_sigma_px, c->read_ahead, &sb[q]))
+	for (int pass = 0; pass < 2; pass++)
+#pragma omp parallel for schedule(dynamic, 1) if (!pass && side > 1)
+		for (int q = pass ? side : 0; q < (pass ? n : side); q++)
+			if (stack_pass(&f[q], block_len(c, f[q].count), c->psf_sigma_px, c->read_ahead, &sb[q]))
 #pragma omp critical(c0_drift_fail)
-			if (fail < 0 || q < fail)
-				fail = q;
-	}
-	for (int q = side; q < n; q++)
-		if (stack_pass(&f[q], block_len(c, f[q].count), c->psf_sigma_px, c->read_ahead, &sb[q]) && fail < 0)
-			fail = q;
+				if (fail < 0 || q < fail)
+					fail = q;
 	return fail >= 0 ? c0_fail(C0_EIO, "%s", sb[fail].msg) : C0_OK;
 }
 

@@ -13,25 +13,22 @@
 #define REFINE_TOL 0.01   /* ... until no block moves by more than this (pixels) in a round */
 #define SIGNIF 6   /* an axis is corrected when its drift exceeds this many noise sds */
 
-/* block k moved back by its shift, into tmp */
-static int moved_back(struct c0_drift *d, int k, float *tmp)
+/* block k moved back by its shift, into out */
+static int moved_back(struct c0_drift *d, int k, float *out)
 {
-	memcpy(tmp, d->bm[k], (size_t)d->H * d->W * sizeof *tmp);
-	return c0_fshift_apply(d->sh, tmp, d->bx[k], d->by[k]);
+	memcpy(out, d->bm[k], (size_t)d->H * d->W * sizeof *out);
+	return c0_fshift_apply(d->sh, out, d->bx[k], d->by[k]);
 }
 
-/* block k moved back (kept: already, or NULL), re-measured against x->ref */
-static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tmp, const float *kept, int k)
+/* block k, moved back (in moved), re-measured against x->ref */
+static void remeasure(struct c0_drift *d, struct xcorr *x, double *img, const float *moved, int k)
 {
 	const size_t n = (size_t)d->H * d->W;
-	int st = kept ? C0_OK : moved_back(d, k, tmp);
-	kept = kept ? kept : tmp;
 	for (size_t i = 0; i < n; i++)
-		img[i] = kept[i];
+		img[i] = moved[i];
 	double rx, ry;
 	drift_shift_of(x, img, 1, &rx, &ry);
 	d->bx[k] += rx, d->by[k] += ry;
-	return st;
 }
 
 /* The first estimates correlate each block with the first, one noisy block
@@ -41,61 +38,59 @@ static int remeasure(struct c0_drift *d, struct xcorr *x, double *img, float *tm
  * The trajectory stays relative to the first block.
  * Rounds on blocks k0..k1-1 until they stop moving (each round takes a part
  * of what is left: 2 rounds left a dim stack's drift 30 % short); par: the
- * blocks are re-measured side by side (one stack: the threads are not taken
- * by the stacks), each thread but the first with transforms of its own */
-static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, float *tmp, int k0, int k1, int par)
+ * blocks are moved back and re-measured side by side (one stack: the threads
+ * are not taken by the stacks), each thread but the first with transforms of
+ * its own */
+static int refine_range(struct c0_drift *d, struct xcorr *x, double *ref, int k0, int k1, int par)
 {
 	const size_t n = (size_t)d->H * d->W;
-	int st = C0_OK;
+	if (k1 - k0 < 2)
+		return C0_OK;
+	/* the round's moved blocks, for the reference and then their re-measure:
+	 * one Fourier shift a block a round (as much memory as the stack's block
+	 * means) */
+	float *mv = c0_alloc((size_t)(k1 - k0) * n, sizeof *mv);
+	int st = mv ? C0_OK : C0_ENOMEM;
 	double moved = INFINITY;
-	/* the round's moved blocks, kept for their re-measure: one Fourier shift
-	 * a block a round instead of two (as much memory as the stack's block
-	 * means; without it, each is moved back again) */
-	float *mv = k1 - k0 > 1 ? malloc((size_t)(k1 - k0) * n * sizeof *mv) : NULL;
-	for (int round = 0; round < REFINE && moved > REFINE_TOL && k1 - k0 > 1 && !st; round++) {
+	for (int round = 0; round < REFINE && moved > REFINE_TOL && !st; round++) {
 		moved = 0;
-		memset(ref, 0, n * sizeof *ref);
-		if (mv) {
-			struct c0_first_fail fail = { 0 };
+		struct c0_first_fail fail = { 0 };
 #pragma omp parallel for schedule(dynamic, 1) if (par)
-			for (int k = k0; k < k1; k++)
-				c0_first_fail_note(&fail, moved_back(d, k, mv + (size_t)(k - k0) * n));
-			st = fail.code ? c0_first_fail_raise(&fail) : C0_OK;
+		for (int k = k0; k < k1; k++)
+			c0_first_fail_note(&fail, moved_back(d, k, mv + (size_t)(k - k0) * n));
+		if (fail.code) {
+			st = c0_first_fail_raise(&fail);
+			break;
 		}
-		for (int k = k0; k < k1 && !st; k++) {   /* the blocks added in order: the same sums on any threads */
-			const float *m = mv ? mv + (size_t)(k - k0) * n : tmp;
-			if (!mv)
-				st = moved_back(d, k, tmp);
+		memset(ref, 0, n * sizeof *ref);
+		for (int k = k0; k < k1; k++) {   /* the blocks added in order: the same sums on any threads */
+			const float *m = mv + (size_t)(k - k0) * n;
 			for (size_t i = 0; i < n; i++)
 				ref[i] += m[i];
 		}
-		if (st)
-			break;
 		drift_spectrum(x, ref);
 		memcpy(x->ref, x->sp, x->ns * sizeof *x->ref);
-		struct c0_first_fail fail = { 0 };
 #pragma omp parallel if (par)
 		{
 			struct xcorr own, *y = x;
 			double *img = ref;
-			float *t = tmp;
 			int ts = C0_OK;
 			if (omp_get_thread_num() > 0) {
 				y = &own, ts = drift_xcorr_clone(&own, x);
-				img = c0_alloc(n, sizeof *img), t = c0_alloc(n, sizeof *t);
-				if (!ts && (!img || !t))
+				img = c0_alloc(n, sizeof *img);
+				if (!ts && !img)
 					ts = C0_ENOMEM;
 			}
 #pragma omp for schedule(dynamic, 1) reduction(max : moved)
 			for (int k = k0; k < k1; k++) {
 				const double x0 = d->bx[k], y0 = d->by[k];
 				if (!ts)
-					ts = remeasure(d, y, img, t, mv ? mv + (size_t)(k - k0) * n : NULL, k);
+					remeasure(d, y, img, mv + (size_t)(k - k0) * n, k);
 				moved = fmax(moved, fmax(fabs(d->bx[k] - x0), fabs(d->by[k] - y0)));
 			}
 			c0_first_fail_note(&fail, ts);
 			if (y != x)
-				drift_xcorr_free(&own), free(img), free(t);
+				drift_xcorr_free(&own), free(img);
 		}
 		if (fail.code)
 			st = c0_first_fail_raise(&fail);
@@ -187,17 +182,16 @@ static int refine_stacks(struct c0_drift *d, int q0, int q1, int side)
 	{
 		struct xcorr x;
 		double *ref = c0_alloc(n, sizeof *ref);
-		float *tmp = c0_alloc(n, sizeof *tmp);
 		int st = drift_xcorr_init(&x, d->H, d->W, d->sigma);
-		if (!st && (!ref || !tmp))
+		if (!st && !ref)
 			st = C0_ENOMEM;
 #pragma omp for schedule(dynamic, 1)
 		for (int q = q0; q < q1; q++)
 			if (!st)
-				st = refine_range(d, &x, ref, tmp, d->k0[q], d->k0[q + 1], par);
+				st = refine_range(d, &x, ref, d->k0[q], d->k0[q + 1], par);
 		c0_first_fail_note(&fail, st);
 		drift_xcorr_free(&x);
-		free(ref), free(tmp);
+		free(ref);
 	}
 	return fail.code ? c0_first_fail_raise(&fail) : C0_OK;
 }
