@@ -17,10 +17,11 @@ reads as it reads the simulator's.
 Prints a Markdown table, one row per member: the Jaccard index of the support at 40 and
 25 nm (one-to-one matching, as COL0RME's code scores it), its fine pixels against the
 truth's, depth.tif's median absolute and median signed error (nm; positive = deeper than
-the truth), and with --sweep the best Jaccard (40 nm) of a 16-point sweep of --lambda
-(1/70x to 16x the automatic lambda, ratio 1.6; whole runs, so that the sweep is of the
-support the run makes, pooled or not) with its multiple of the automatic lambda and
-the gap to it."""
+the truth), the depth offset one sd of the fitted fade leaves (report.json
+bleaching.depth_offset_sd_nm), and with --sweep the best Jaccard (40 nm) of a 16-point
+sweep of --lambda (1/70x to 16x the automatic lambda, ratio 1.6; whole runs, so that the
+sweep is of the support the run makes, pooled or not) with its multiple of the automatic
+lambda and the gap to it."""
 import argparse
 import json
 import os
@@ -100,7 +101,8 @@ def one(a, name):
     row = {"member": name, "j40": jaccard(a.cli, out + "/support.tif", d, 40),
            "j25": jaccard(a.cli, out + "/support.tif", d, 25), "pixels": int((sup > 0).sum()),
            "truth_pixels": int((tifffile.imread(d + "/truth_support.tif") > 0).sum()),
-           "depth_median": dep["median_abs_error_nm"], "depth_signed": dep["median_signed_error_nm"]}
+           "depth_median": dep["median_abs_error_nm"], "depth_signed": dep["median_signed_error_nm"],
+           "fade_sd": json.load(open(out + "/report.json"))["bleaching"].get("depth_offset_sd_nm", float("nan"))}
     if a.sweep:
         rel = json.load(open(out + "/report.json"))["support"][0]["lambda_relative"]
         best = (row["j40"], 1.0)
@@ -134,12 +136,14 @@ def main():
         os.makedirs(os.path.join(a.work, sub), exist_ok=True)
     with ThreadPoolExecutor(a.jobs) as ex:
         rows = list(ex.map(lambda n: one(a, n), names))
-    head = "| member | Jaccard 40 nm | Jaccard 25 nm | pixels (truth) | depth median (nm) | depth signed (nm) |"
+    head = ("| member | Jaccard 40 nm | Jaccard 25 nm | pixels (truth) | depth median (nm) | depth signed (nm) |"
+            " fade's sd as depth (nm) |")
     print(head + (" best of sweep (x auto) | gap |" if a.sweep else ""))
     print("|---" * (head.count("|") - 1 + (2 if a.sweep else 0)) + "|")
     for r in rows:
-        s = "| %s | %.3f | %.3f | %d (%d) | %.1f | %+.1f |" % (r["member"], r["j40"], r["j25"], r["pixels"],
-                                                           r["truth_pixels"], r["depth_median"], r["depth_signed"])
+        s = "| %s | %.3f | %.3f | %d (%d) | %.1f | %+.1f | %.1f |" % (
+            r["member"], r["j40"], r["j25"], r["pixels"], r["truth_pixels"], r["depth_median"], r["depth_signed"],
+            r["fade_sd"])
         if a.sweep:
             s += " %.3f (%.3g) | %+.3f |" % (r["best_j40"], r["best_times_auto"], r["j40"] - r["best_j40"])
         print(s, flush=True)

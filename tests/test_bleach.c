@@ -2,6 +2,8 @@
  * closed-form factors against the explicit mean, and bad options. */
 #include "check.h"
 #include "stages/bleach.h"
+#include "stages/depthfit.h"
+#include "optics/tirf.h"
 #include "io/frames.h"
 #include "core/err.h"
 #include "core/rng.h"
@@ -304,8 +306,46 @@ static void test_transient(void)
 		free(S[q]);
 }
 
+/* The first-order depth offset of a rate error against the depth fit
+ * itself: intensities of one depth, divided by factors off by e^{-tau dk},
+ * read by c0_depth_fit_y; stacks recorded in turn (tau alike) read none */
+static void test_depth_per_rate(void)
+{
+	const struct c0_tirf t = C0_TIRF_DEFAULTS;
+	const double ang[8] = { 62.5, 63.2, 64, 65, 66, 67, 68.5, 70 }, gain[8] = { 1, 1.1, 0.9, 1, 1.2, 1, 0.8, 1 };
+	double tau[8], same[8];
+	for (int q = 0; q < 8; q++)
+		tau[q] = 500 * q + 249.5, same[q] = 2000;
+	for (int nq = 3; nq <= 8; nq += 5)
+		for (double z = 50; z <= 300; z += 125) {
+			double per = 0, none = 1;
+			CHECK(!c0_bleach_depth_per_rate(&t, nq, ang, gain, tau, z, &per));
+			CHECK(!c0_bleach_depth_per_rate(&t, nq, ang, gain, same, z, &none));
+			CHECK(fabs(none) < 1e-9 * fabs(per));
+			const double dk = 5 / fabs(per);   /* a 5 nm offset */
+			float y0[8], y1[8], d[2];
+			const float *yy[2][8];
+			for (int q = 0; q < nq; q++) {
+				double p;
+				c0_tirf_p(&t, ang[q], &p);
+				y0[q] = (float)(gain[q] * c0_tirf_i0(&t, ang[q]) * exp(-p * z));
+				y1[q] = (float)(y0[q] * exp(tau[q] * dk));
+				yy[0][q] = &y0[q], yy[1][q] = &y1[q];
+			}
+			CHECK(!c0_depth_fit_y(&t, nq, ang, gain, 0, 500, yy[0], 1, NULL, &d[0]));
+			CHECK(!c0_depth_fit_y(&t, nq, ang, gain, 0, 500, yy[1], 1, NULL, &d[1]));
+			CHECK_CLOSE(d[0], z, 0.05);
+			printf("  %d angles, z %g nm: %.0f nm per unit rate; the fit moved %.3f nm, first order %.3f\n", nq, z, per,
+			       d[1] - d[0], per * dk);
+			CHECK_MSG(fabs(d[1] - d[0] - per * dk) < 0.05, "%d angles, z %g: fit moved %.3f nm, first order %.3f",
+				  nq, z, d[1] - d[0], per * dk);
+			CHECK(per < 0);   /* a rate too high brightens the later, steeper stacks: shallower */
+		}
+}
+
 int main(void)
 {
+	RUN(test_depth_per_rate);
 	RUN(test_transient);
 	RUN(test_sd_correlated);
 	RUN(test_rise);

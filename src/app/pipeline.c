@@ -190,6 +190,8 @@ static int volume(struct c0_result *r, const struct c0_run_conf *ct, const int *
 	c0_run_conf_angles(ct, &a);
 	if (!st)
 		st = c0_step_matirf(r, &a, &s->matirf, (const float *const *)img, h > 0 ? &pin : NULL, Ly, Lx, fine, 0);
+	if (!st)
+		st = c0_report_bleach_depth(r, &a, tirf, &s->matirf.tirf);
 	for (int i = 0; i < nq; i++)
 		free(img[i]), img[i] = NULL;
 	if (!st)
@@ -286,6 +288,7 @@ static int run_rest(const struct c0_run_conf *c, const struct c0_run_conf *ct, c
 		st = c0_step_render(r);
 	for (int q = 0; q < r->n; q++)
 		r->bleach_factor[q] = 1;
+	r->bleach_k_sd = NAN;
 	if (!st && three_d && !(st = c0_progress_stage("bleaching")))
 		st = c0_step_bleach(r, &s->bleach, f);
 	if (!st && three_d && !(st = c0_progress_stage("matirf")))

@@ -26,6 +26,8 @@ struct c0_result {
 	float **corrected;           /* n temporal means minus background, for the baseline */
 	struct c0_matirf_result vol, base;
 	double bleach_factor[C0_MAX_STACKS]; /* each stack's intensity is divided by this before MA-TIRF (1: none) */
+	double bleach_tau[C0_MAX_STACKS];    /* each stack's frames' mean time on the acquisition clock (frames) */
+	double bleach_k_sd;                  /* the fitted fade rate's sd (NAN: not estimated from the stacks) */
 	double vol_pixel_nm, z0_nm, dz_nm;
 	cJSON *timings;
 	struct c0_drift *drift;      /* after the drift step: the trajectory, and each stack's frame hook */

@@ -7,6 +7,7 @@
 #include "app/pipeline_conf.h"
 #include "app/report_json.h"
 #include "app/report_json_support.h"
+#include "report/html.h"
 #include "stages/lambda.h"
 #include "core/clock.h"
 #include "core/err.h"
@@ -234,6 +235,34 @@ static void bleach_warning(struct c0_result *r, const struct c0_bleach_conf *bc,
 	c0_result_warn(r, "bleaching: %s", msg);
 }
 
+/* The depth offset one sd of the fitted fade rate leaves, to first order
+ * (c0_bleach_depth_per_rate), at the depth map's median depth: every depth
+ * shares it, so no pooling averages it away, and the map's signed error is
+ * known no better (docs/defaults.md#bleach). In the report's bleaching object. */
+int c0_report_bleach_depth(struct c0_result *r, const struct c0_angles *a, const int *tirf, const struct c0_tirf *t)
+{
+	cJSON *o = cJSON_GetObjectItem(r->rep, "bleaching");
+	const size_t N = (size_t)r->vol.ny * r->vol.nx;
+	if (!o || !isfinite(r->bleach_k_sd) || !r->vol.depth)
+		return C0_OK;
+	double tau[C0_MAX_STACKS], per = 0;
+	float *z = c0_alloc(N, sizeof *z);
+	if (!z)
+		return C0_ENOMEM;
+	size_t m = 0;
+	for (size_t i = 0; i < N; i++)
+		if (r->vol.depth[i] > 0)
+			z[m++] = r->vol.depth[i];
+	for (int i = 0; i < a->n; i++)
+		tau[i] = r->bleach_tau[tirf[i]];
+	int st = m ? c0_bleach_depth_per_rate(t, a->n, a->deg, a->ngains ? a->gain : NULL, tau, c0_quantile(z, m, 0.5), &per)
+		   : C0_OK;
+	free(z);
+	if (!st && m)
+		cJSON_AddNumberToObject(o, "depth_offset_sd_nm", fabs(per) * r->bleach_k_sd);
+	return st;
+}
+
 int c0_step_bleach(struct c0_result *r, const struct c0_bleach_conf *bc0, struct c0_frames *f)
 {
 	const int n = r->n;
@@ -259,7 +288,8 @@ int c0_step_bleach(struct c0_result *r, const struct c0_bleach_conf *bc0, struct
 	if (st)
 		return st;
 	for (int q = 0; q < n; q++)
-		r->bleach_factor[q] = br.factor[q];
+		r->bleach_factor[q] = br.factor[q], r->bleach_tau[q] = br.start[q] + 0.5 * (double)(f[q].count - 1);
+	r->bleach_k_sd = bc.mode == C0_BLEACH_ESTIMATE ? br.k_sd : NAN;
 	c0_report_bleach(r->rep, &bc, &br, n);
 	if (windowed) {   /* the sample's part that stayed in the field (camera pixels of the first block) */
 		const double wv[4] = { win.x0, win.x1, win.y0, win.y1 };

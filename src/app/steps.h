@@ -24,3 +24,10 @@ int c0_step_support(struct c0_result *r, const struct c0_support_conf *sc, struc
  * from the frame sums and the fitted backgrounds (or the known factors, or
  * none) into r->bleach_factor and rep["bleaching"]. */
 int c0_step_bleach(struct c0_result *r, const struct c0_bleach_conf *bc, struct c0_frames *f);
+/* After the MA-TIRF step (the angles a, stack tirf[i] at a->deg[i]): the
+ * common depth offset one sd of an estimated fade rate leaves, at the depth
+ * map's median, as rep["bleaching"]["depth_offset_sd_nm"]; nothing where
+ * the fade was not estimated from the stacks. */
+struct c0_angles;
+struct c0_tirf;
+int c0_report_bleach_depth(struct c0_result *r, const struct c0_angles *a, const int *tirf, const struct c0_tirf *t);

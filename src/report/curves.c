@@ -244,6 +244,12 @@ void c0_fig_bleach(struct c0_html *h, const struct c0_rundir *d)
 		c0_html_add(h, " ");
 		c0_html_num(h, p, F[q]);
 	}
+	const double dsd = c0_json_num(d->rep, "bleaching.depth_offset_sd_nm", NAN);
+	if (isfinite(dsd)) {   /* the rate's sd as depth: every depth shares it */
+		c0_html_add(h, ". One sd of the rate moves every depth alike by ");
+		c0_html_num(h, "bleaching.depth_offset_sd_nm", dsd);
+		c0_html_add(h, " nm");
+	}
 	c0_html_add(h, "</figcaption></figure></div></section>\n");
 	free(start), free(F), free(ks);
 }

@@ -1,5 +1,6 @@
 #include "stages/bleach.h"
 #include "io/frames.h"
+#include "optics/tirf.h"
 #include "core/err.h"
 #include "core/mem.h"
 
@@ -153,6 +154,28 @@ void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, 
 		const double k = res->k, Tq = (double)T[q];
 		res->factor[q] = k != 0 ? exp(-k * res->start[q]) * expm1(-k * Tq) / expm1(-k) / Tq : 1;
 	}
+}
+
+int c0_bleach_depth_per_rate(const struct c0_tirf *t, int nq, const double *angles, const double *gain,
+			     const double *tau, double z, double *per_rate)
+{
+	double p[C0_BLEACH_MAX], w[C0_BLEACH_MAX], ws = 0, mt = 0, mp = 0, ctp = 0, cpp = 0;
+	*per_rate = 0;
+	if (nq > C0_BLEACH_MAX)
+		return c0_fail(C0_EINVAL, "bleaching: %d angles, at most %d", nq, C0_BLEACH_MAX);
+	for (int q = 0; q < nq; q++) {
+		int st = c0_tirf_p(t, angles[q], &p[q]);
+		if (st)
+			return st;
+		const double a = (gain ? gain[q] : 1) * c0_tirf_i0(t, angles[q]) * exp(-p[q] * z);
+		w[q] = a * a, ws += w[q];
+	}
+	for (int q = 0; q < nq && ws > 0; q++)
+		mt += w[q] * tau[q] / ws, mp += w[q] * p[q] / ws;
+	for (int q = 0; q < nq && ws > 0; q++)
+		ctp += w[q] * (tau[q] - mt) * (p[q] - mp), cpp += w[q] * (p[q] - mp) * (p[q] - mp);
+	*per_rate = cpp > 0 ? -ctp / cpp : 0;
+	return C0_OK;
 }
 
 int c0_bleach_repeat(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res)

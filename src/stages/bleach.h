@@ -74,6 +74,18 @@ int c0_bleach_fit(int n, const double *const *S, const int64_t *T, const double 
 void c0_bleach_clock(const struct c0_bleach_conf *c, int n, const int64_t *T, double *start);
 /* res->start and res->factor for rate k (res->k) and the frame counts. */
 void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, struct c0_bleach_result *res);
+/* The depth offset a rate error leaves, to first order. Stack q's intensity
+ * divided by a factor off by e^{-tau_q dk} (tau_q its frames' mean time on
+ * the acquisition clock) reads, in the single-depth fit (stages/depthfit.h)
+ * at depth z, every depth moved by dz = -dk cov_w(tau, p) / var_w(p): p_q
+ * the angle's inverse penetration depth, w_q = (g_q I0_q e^{-p_q z})^2 the
+ * fit's weights (gain may be NULL). *per_rate := dz / dk, in nm per unit
+ * rate (per frame); 0 where the angles do not differ. Stacks recorded one
+ * after another at rising angles give a fade that reads as depth; frames
+ * recorded in turn (tau alike) give none. */
+struct c0_tirf;
+int c0_bleach_depth_per_rate(const struct c0_tirf *t, int nq, const double *angles, const double *gain,
+			     const double *tau, double z, double *per_rate);
 /* Mode repeat: k_fit from c->repeat_ratio and the time between the midpoints
  * of the first and the last recorded stack (T their frame counts), k =
  * max(0, k_fit), then the factors; k_sd is NAN (one ratio). */

@@ -194,6 +194,11 @@ def test_fade_clamp(tmp):
                                                                sim["estimates"]["bleaching"]["rate_per_frame"], sg, sg0),
           file=sys.stderr)
     check(abs(sg) <= 2 and sg0 >= 4, "|signed| %.1f <= 2 nm with the rate at 0; the fit's factors read %+.1f >= 4" % (sg, sg0))
+    # the report's first-order offset per sd of the rate (docs/defaults.md#bleach) predicts the move from the
+    # rate at 0 to the fit's: 5.3 nm for the 5.5 measured
+    pred = b["depth_offset_sd_nm"] / b["rate_sd_per_frame"] * abs(k)
+    check(abs(sg0 - sg - pred) <= 0.3 * pred, "the fit's factors move the signed error by %.1f nm, the report's first "
+          "order %.1f (depth_offset_sd_nm %.2f)" % (sg0 - sg, pred, b["depth_offset_sd_nm"]))
 
 
 def test_close_pairs(tmp):
