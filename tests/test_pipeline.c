@@ -355,11 +355,12 @@ static void test_alloc_huge(void)
 		mode[0] = 0;
 	if (f)
 		fclose(f);
+	mode[strcspn(mode, "\n")] = 0;
 	const size_t n = 16u << 20;
 	char *big = c0_alloc(n, 1);
 	CHECK(big != NULL);
 	if (!big || !strstr(mode, "[madvise]") || thp_eligible(big + n / 2) < 0) {
-		printf("  (THP not in madvise mode here: '%.40s'; eligibility not checked)\n", mode);
+		printf("  (THP mode '%.40s', or smaps without THPeligible: eligibility not checked)\n", mode);
 		free(big);
 		return;
 	}

@@ -48,7 +48,7 @@ int c0_mem_fail(double bytes)
 }
 
 /* Large buffers ask for transparent huge pages where the kernel gives them
- * only on request (THP "madvise", as on Debian and Ubuntu): a first touch
+ * only on request (THP "madvise", a common default): a first touch
  * then faults in 2 MB at a time instead of 4 kB, and the covariance's lag
  * sums and the solves' grids miss the TLB less (docs/speed.md, "Huge
  * pages"). Only the 2 MB-aligned inside of the block is advised: its edges
