@@ -42,9 +42,10 @@ print("%-22s %-16.1f %-16.1f" % ("mean depth err (nm)", d["mean_abs_error_nm"], 
 print("%-22s %-16.1f %-16.1f" % ("median signed (nm)", d["median_signed_error_nm"], b["median_signed_error_nm"]))
 print("%-22s %-16.2f %-16.2f" % ("depth coverage", d["coverage"], b["coverage"]))
 bl = r["bleaching"]
-print("bleaching: simulated fade %.1f %% by the last stack, rate %.3g/frame; estimated %.3g +- %.2g/frame (%+.1f %%)"
+print("bleaching: simulated fade %.1f %% by the last stack, rate %.3g/frame; estimated %.3g +- %.2g/frame (%+.1f %%), "
+      "whose sd moves every depth by %.1f nm"
       % (100 * sim["fade_last_vs_first"], sim["rate_per_frame"], bl["rate_per_frame"], bl["rate_sd_per_frame"],
-         100 * (bl["rate_per_frame"] / sim["rate_per_frame"] - 1)))
+         100 * (bl["rate_per_frame"] / sim["rate_per_frame"] - 1), bl["depth_offset_sd_nm"]))
 print("without the bleaching correction: median depth err %.1f nm, median signed %+.1f nm (the fade reads as depth)"
       % (e0["median_abs_error_nm"], e0["median_signed_error_nm"]))
 print("seconds: simulate %.1f, support %.1f, intensity %.1f, matirf %.1f, baseline %.1f, eval %.1f; total %.1f"
