@@ -1,5 +1,6 @@
 /* Bleaching fit and factors (stages/bleach.h) on synthetic frame sums, the
- * closed-form factors against the explicit mean, and bad options. */
+ * closed-form factors against the explicit mean, the depth offset a rate
+ * error leaves against the depth fit, and bad options. */
 #include "check.h"
 #include "stages/bleach.h"
 #include "stages/depthfit.h"
