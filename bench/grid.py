@@ -98,7 +98,7 @@ def one(cli, work, name, k, sim_opts, seed, sweep, run_opts, maps, label=0):
                 if m == 1.0:
                     continue
                 o = os.path.join(work, "sweep", "%s_%g" % (key, m))
-                sh([cli, "support", "--fwhm", "229", "--threads", "1", "--force", "--lambda", "%.6g" % (rel * m),
+                sh([cli, "support", "--fwhm", "229", "--threads", "1", "--force", "--lambda", "%.17g" % (rel * m),
                     "-o", o] + run_opts + stacks)
                 j = json.loads(sh([cli, "eval", "--support", o + "/support.tif", "--support-truth",
                                    sim + "/truth_support.tif"]))["support"]["jaccard"]

@@ -108,7 +108,10 @@ def one(a, name):
         best = (row["j40"], 1.0)
         for m in SWEEP:
             o = os.path.join(a.work, "sweep", "%s_%.4g" % (name, m))
-            sh([a.cli, "run", "--angles", ang, "--threads", "1", "--force", "--frc", "0", "--lambda", "%.6g" % (rel * m),
+            # the FRC left on: without it a given lambda's covariance is the whole stack's, not the
+            # pooled frame halves' of the automatic run (stages/support.c), and the sweep would be
+            # of another estimator; lambda in full, so that 1x is the default's support bit for bit
+            sh([a.cli, "run", "--angles", ang, "--threads", "1", "--force", "--lambda", "%.17g" % (rel * m),
                 "-o", o] + optics + a.run_opts + stacks)
             best = max(best, (jaccard(a.cli, o + "/support.tif", d, 40), m))
         row["best_j40"], row["best_times_auto"] = best
