@@ -82,7 +82,7 @@ void c0_bleach_factors(const struct c0_bleach_conf *c, int n, const int64_t *T, 
  * fit's weights (gain may be NULL). *per_rate := dz / dk, in nm per unit
  * rate (per frame); 0 where the angles do not differ. Stacks recorded one
  * after another at rising angles give a fade that reads as depth; frames
- * recorded in turn (tau alike) give none. */
+ * recorded in turn (tau alike to a fraction of a frame) give next to none. */
 struct c0_tirf;
 int c0_bleach_depth_per_rate(const struct c0_tirf *t, int nq, const double *angles, const double *gain,
 			     const double *tau, double z, double *per_rate);
