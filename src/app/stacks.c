@@ -15,10 +15,7 @@
 
 int c0_stacks_keep_cached(const double *bytes, int n, double avail)
 {
-	double sum = 0;
-	for (int i = 0; i < n; i++)
-		sum += bytes[i];
-	if (!(avail > 0) || sum <= 0.75 * avail)
+	if (!(avail > 0))
 		return n;
 	int k = 0;
 	for (double kept = 0; k < n && kept + bytes[k] <= 0.75 * avail; k++)

@@ -242,17 +242,16 @@ static void bleach_warning(struct c0_result *r, const struct c0_bleach_conf *bc,
 int c0_report_bleach_depth(struct c0_result *r, const struct c0_angles *a, const int *tirf, const struct c0_tirf *t)
 {
 	cJSON *o = cJSON_GetObjectItem(r->rep, "bleaching");
-	const size_t N = (size_t)r->vol.ny * r->vol.nx;
-	if (!o || !isfinite(r->bleach_k_sd) || !r->vol.depth)
+	if (!o || !isfinite(r->bleach_k_sd) || !r->vol.depth || r->vol.M < 1)
 		return C0_OK;
 	double tau[C0_MAX_STACKS], per = 0;
-	float *z = c0_alloc(N, sizeof *z);
+	float *z = c0_alloc((size_t)r->vol.M, sizeof *z);   /* the depths are on the columns, 0 elsewhere */
 	if (!z)
 		return C0_ENOMEM;
 	size_t m = 0;
-	for (size_t i = 0; i < N; i++)
-		if (r->vol.depth[i] > 0)
-			z[m++] = r->vol.depth[i];
+	for (int k = 0; k < r->vol.M; k++)
+		if (r->vol.depth[r->vol.pixel[k]] > 0)
+			z[m++] = r->vol.depth[r->vol.pixel[k]];
 	for (int i = 0; i < a->n; i++)
 		tau[i] = r->bleach_tau[tirf[i]];
 	int st = m ? c0_bleach_depth_per_rate(t, a->n, a->deg, a->ngains ? a->gain : NULL, tau, c0_quantile(z, m, 0.5), &per)
