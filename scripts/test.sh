@@ -30,7 +30,7 @@ stage "AddressSanitizer + UndefinedBehaviorSanitizer build: tests" asan
 
 fuzz() {
   cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-        -DCOL0RME_FUZZ=ON -DC0_FUZZ_SECONDS="${C0_FUZZ_SECONDS:-30}" >/dev/null &&
+        -DCOL0RME_FUZZ=ON -DC0_FUZZ_SECONDS="${C0_FUZZ_SECONDS:-20}" >/dev/null &&
   cmake --build build-fuzz -j"$J" --target fuzz_tiff fuzz_cli >/dev/null &&
   ctest --test-dir build-fuzz --output-on-failure -j"$J" -R "fuzz_(tiff|cli)_run"
 }

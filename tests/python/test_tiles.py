@@ -22,7 +22,7 @@
 
 usage: test_tiles.py COL0RME [MPIRUN] [full|quick]
 (quick, the sanitizer build: the same paths on a 48x48 x 150-frame stack in
-16-pixel tiles, and the one-tile thread check on it, with the same bars
+16-pixel tiles, the one-tile thread check on it, 'run' on 3 stacks on 2 threads only, with the same bars
 but the Jaccard index and rx's L2 distance between tiles and one tile, set for
 96x96 x 300 frames in 40-pixel tiles: 16-pixel tiles are mostly border)
 """
@@ -172,15 +172,17 @@ with tempfile.TemporaryDirectory() as tmp:
     p = cli("simulate", "-o", sim3t, "--width", "48", "--height", "48", "--frames", "120", "--angles", "62,66,70",
             "--seed", "4", "--drift-nm", "80,-40")
     check(p.returncode == 0, "simulate 3 angles: " + p.stderr)
-    outs = [os.path.join(tmp, "run3_%d" % t) for t in (1, 2)]
-    for t, o in zip((1, 2), outs):
+    # (quick: only the 2 threads' path, under the sanitizer; the release build compares the files)
+    threads3 = (2,) if QUICK else (1, 2)
+    outs = [os.path.join(tmp, "run3_%d" % t) for t in threads3]
+    for t, o in zip(threads3, outs):
         p = cli("run", "--fwhm", "229", "--pixel-size", "100", "--angles", "62,66,70", "--tile", "24",
                 "--matirf-iterations", "300", "--threads", str(t), "-o", o,
                 *(os.path.join(sim3t, "stack_q0%d.tif" % q) for q in (1, 2, 3)))
         check(p.returncode == 0, "run on 3 stacks, %d threads: %s" % (t, p.stderr[-2000:]))
     if all(os.path.exists(os.path.join(o, "report.json")) for o in outs):
-        check(same_outputs(outs[0], outs[1]), "run on 3 stacks: 1 and 2 threads give different files")
-        check(json.load(open(os.path.join(outs[1], "report.json")))["drift"]["max_nm"] > 30, "run on 3 stacks: no drift found")
+        check(QUICK or same_outputs(outs[0], outs[1]), "run on 3 stacks: 1 and 2 threads give different files")
+        check(json.load(open(os.path.join(outs[-1], "report.json")))["drift"]["max_nm"] > 30, "run on 3 stacks: no drift found")
 
     # bad tile sizes: one line, nothing written
     big = str(W + 1)
