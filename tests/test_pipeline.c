@@ -16,6 +16,7 @@
 #include "sim/sim.h"
 #include "io/tiff.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -283,6 +284,12 @@ static int cmp_f(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
+static int cmp_d(const void *a, const void *b)
+{
+	const double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
 static void test_quantile(void)
 {
 	enum { N = 5003 };
@@ -306,6 +313,27 @@ static void test_quantile(void)
 		}
 	}
 	CHECK(c0_quantile(v, 0, 0.5) == 0);
+}
+
+/* c0_median against a sort, on both sides of its insertion sort's 16 values,
+ * with ties; c0_median_of the same on floats */
+static void test_median(void)
+{
+	unsigned u = 777;
+	for (size_t n = 1; n <= 41; n++) {
+		double v[41], s[41];
+		float f[41];
+		for (size_t i = 0; i < n; i++) {
+			u = u * 1103515245u + 12345u;
+			f[i] = (float)((u >> 8) % 9) - 4.5f, v[i] = s[i] = f[i];
+		}
+		qsort(s, n, sizeof *s, cmp_d);
+		const double want = n % 2 ? s[n / 2] : (s[n / 2 - 1] + s[n / 2]) / 2;
+		CHECK_MSG(c0_median_of(f, n) == want, "n %zu: %g vs %g", n, c0_median_of(f, n), want);
+		CHECK_MSG(c0_median(v, n) == want, "n %zu: %g vs %g", n, c0_median(v, n), want);
+		CHECK(memcmp(v, s, n * sizeof *v) == 0);   /* sorted in place */
+	}
+	CHECK(isnan(c0_median(NULL, 0)));
 }
 
 /* How many stacks the page cache keeps between the passes: the first ones
@@ -375,6 +403,7 @@ int main(void)
 	RUN(test_param_defaults);
 	RUN(test_files_and_arrays);
 	RUN(test_quantile);
+	RUN(test_median);
 	RUN(test_keep_cached);
 	RUN(test_alloc_huge);
 	return CHECK_DONE();

@@ -7,6 +7,7 @@
 #include "app/pipeline_conf.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -15,24 +16,6 @@
 #define REGION_FRAMES 20     /* frames of the first stack for the region test */
 #define REGION_MIN_RHO 0.05  /* below: the map's pattern is not in the stack */
 #define REGION_PATTERN 0.5   /* ADU: a flatter offset map cannot be placed */
-
-static int cmp_float(const void *a, const void *b)
-{
-	float x = *(const float *)a, y = *(const float *)b;
-	return (x > y) - (x < y);
-}
-
-static double median(const float *v, size_t n)
-{
-	float *w = c0_alloc(n, sizeof *w);
-	if (!w)
-		return NAN;
-	memcpy(w, v, n * sizeof *w);
-	qsort(w, n, sizeof *w, cmp_float);
-	double m = n % 2 ? w[n / 2] : 0.5 * ((double)w[n / 2 - 1] + w[n / 2]);
-	free(w);
-	return m;
-}
 
 /* One plane of W x H from path; what: "offset", "variance" or "gain". */
 static int load_map(const char *path, const char *what, int W, int H, float **out)
@@ -127,13 +110,13 @@ static int region_check(const char *path, struct c0_frames *f, const float *off,
 		highpass(m, W, H, hm), highpass(o, W, H, ho);
 		for (size_t i = 0; i < n; i++)
 			a[i] = (float)fabs(ho[i]);
-		const double pat = 1.4826 * median(a, n);
+		const double pat = 1.4826 * c0_median_of(a, n);
 		for (size_t i = 0; i < n; i++)
 			a[i] = (float)fabs(hm[i]);
-		const double lim = 4 * 1.4826 * median(a, n), vmed = var ? median(var, n) : 0;
+		const double lim = 4 * 1.4826 * c0_median_of(a, n), vmed = var ? c0_median_of(var, n) : 0;
 		for (size_t i = 0; i < n; i++)
 			a[i] = (float)(m2[i] - m[i] * m[i]);
-		const double tmed = median(a, n);
+		const double tmed = c0_median_of(a, n);
 		double sxy = 0, sxx = 0, syy = 0;
 		for (size_t i = 0; i < n; i++)
 			if (fabs(hm[i]) <= lim && (!var || var[i] <= 4 * vmed) && quiet(a, W, H, i, tmed))
@@ -176,7 +159,7 @@ int c0_calib_attach(const struct c0_run_conf *c, struct c0_frames *f, int n, str
 		gain[i] = (float)(gm / gain[i]);
 	/* the read variance in those units, less its median: the support's noise
 	 * variance keeps the typical pixel's read noise */
-	double vmed = var ? median(var, np) : 0;
+	double vmed = var ? c0_median_of(var, np) : 0;
 	for (size_t i = 0; var && i < np; i++)
 		var[i] = (float)(var[i] * (gain ? (double)gain[i] * gain[i] : 1) - vmed);
 	for (int q = 0; q < n; q++)
@@ -185,7 +168,7 @@ int c0_calib_attach(const struct c0_run_conf *c, struct c0_frames *f, int n, str
 	r->cal_offset = off, r->cal_scale = gain, r->cal_noise = var;
 	cJSON *o = cJSON_AddObjectToObject(r->rep, "camera_calibration");
 	if (off) {
-		cJSON_AddNumberToObject(o, "offset_median_adu", median(off, np));
+		cJSON_AddNumberToObject(o, "offset_median_adu", c0_median_of(off, np));
 		if (!isnan(rho))
 			cJSON_AddNumberToObject(o, "offset_pattern_correlation", rho);
 	}

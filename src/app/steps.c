@@ -7,11 +7,11 @@
 #include "app/pipeline_conf.h"
 #include "app/report_json.h"
 #include "app/report_json_support.h"
-#include "report/html.h"
 #include "stages/lambda.h"
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,6 +1,7 @@
 #include "eval/metrics.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -89,17 +90,7 @@ double c0_psnr(const float *est, const float *truth, int H, int W, int margin)
 	return n && se > 0 ? 10 * log10(mx * mx / (se / n)) : INFINITY;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-	double x = *(const double *)a, y = *(const double *)b;
-	return (x > y) - (x < y);
-}
 
-static double median(double *v, int n)
-{
-	qsort(v, (size_t)n, sizeof *v, cmp_double);
-	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 int c0_depth_error(const float *est, int eh, int ew, const float *truth, const uint8_t *truth_mask, int th, int tw,
 		   int margin, struct c0_depth_err *out)
@@ -130,8 +121,8 @@ int c0_depth_error(const float *est, int eh, int ew, const float *truth, const u
 	*out = (struct c0_depth_err){ n, nt, 0, 0, 0 };
 	if (n) {
 		out->mean = sum / n;
-		out->median = median(a, n);
-		out->bias = median(e, n);
+		out->median = c0_median(a, (size_t)n);
+		out->bias = c0_median(e, (size_t)n);
 	}
 	free(e), free(a);
 	return C0_OK;

@@ -3,6 +3,7 @@
 #include "ops/covsum.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 
@@ -465,16 +466,6 @@ static int lag_index(const struct c0_cov *c, int dy, int dx)
 	return -1;
 }
 
-/* the median of m <= 4 values (the mean of the middle two for an even m) */
-static double median4(double *v, int m)
-{
-	for (int i = 1; i < m; i++)
-		for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
-			double t = v[j];
-			v[j] = v[j - 1], v[j - 1] = t;
-		}
-	return m % 2 ? v[m / 2] : (v[m / 2 - 1] + v[m / 2]) / 2;
-}
 
 int c0_cov_guard(struct c0_cov *c, double g, size_t *set)
 {
@@ -507,7 +498,7 @@ int c0_cov_guard(struct c0_cov *c, double g, size_t *set)
 			fill[i] = NAN;
 			if (!m || !isfinite(v[i]))
 				continue;
-			const double sig = fmax(0, s / m) / g, noise = fmax(0, median4(nb, m));
+			const double sig = fmax(0, s / m) / g, noise = fmax(0, c0_median(nb, (size_t)m));
 			if (v[i] > sig + margin * noise)
 				fill[i] = sig + noise;
 		}

@@ -115,8 +115,6 @@ void c0_img_panel(struct c0_html *h, const uint8_t *rgb, int w, int ht, double p
 void c0_cmap_grey(const float *img, size_t n, double lo, double hi, uint8_t *rgb);
 void c0_cmap_diverging(const float *img, size_t n, double s, uint8_t *rgb);
 void c0_cmap_depth(double t, double v, uint8_t *rgb);
-/* The q-th quantile (0..1) of n values (NaN skipped). */
-double c0_quantile(const float *v, size_t n, double q);
 /* Box-averages an image to at most C0_PAGE_MAX pixels a side (the page's
  * resolution; the TIFFs keep the full one); returns the factor (1: a copy). */
 #define C0_PAGE_MAX 512

@@ -2,6 +2,7 @@
  * bar, and the mean, render, depth and error-map sections. */
 #include "report/html.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -9,49 +10,6 @@
 #include <string.h>
 
 #define PANEL_CSS 184   /* a panel's width on the page, CSS pixels */
-
-/* the k-th smallest of a[0..n), k < n, in place: quickselect with a
- * three-way partition (a fine grid's values are mostly equal zeros, on which
- * a two-way one goes quadratic). The same value as a sort's a[k], in
- * expected linear time: sorting 67 M fine pixels took most of a 2048 x 2048
- * report. */
-static float select_k(float *a, size_t n, size_t k)
-{
-	size_t lo = 0, hi = n;
-	while (hi - lo > 1) {
-		float x = a[lo], y = a[lo + (hi - lo) / 2], z = a[hi - 1];
-		const float p = x < y ? (y < z ? y : x < z ? z : x) : (x < z ? x : y < z ? z : y);   /* median of 3 */
-		size_t lt = lo, i = lo, gt = hi;    /* [lo,lt) < p, [lt,i) == p, [gt,hi) > p */
-		while (i < gt) {
-			const float v = a[i];
-			if (v < p)
-				a[i++] = a[lt], a[lt++] = v;
-			else if (v > p)
-				a[i] = a[--gt], a[gt] = v;
-			else
-				i++;
-		}
-		if (k < lt)
-			hi = lt;
-		else if (k >= gt)
-			lo = gt;
-		else
-			return p;
-	}
-	return a[lo];
-}
-
-double c0_quantile(const float *v, size_t n, double q)
-{
-	float *s = c0_alloc(n ? n : 1, sizeof *s);
-	size_t m = 0;
-	for (size_t i = 0; s && i < n; i++)
-		if (!isnan(v[i]))
-			s[m++] = v[i];
-	const double r = m ? select_k(s, m, (size_t)fmin((double)m - 1, floor(q * (double)m))) : 0;
-	free(s);
-	return r;
-}
 
 int c0_page_bin(const float *img, int ny, int nx, float **out, int *oy, int *ox)
 {

@@ -2,6 +2,7 @@
  * the command line, a fixed default, or chosen from the data by a rule),
  * the timings and the command that reproduces the run. */
 #include "report/html.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -5,6 +5,7 @@
 #include "core/clock.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -26,18 +27,7 @@ static const double RHO = 2e-2, QUANT = 0.9, KAPPA = 4;
  * threshold: a fraction of the square of the l1 choice */
 static const double CEL0_GAMMA = 0.03;
 
-static int cmpd(const void *a, const void *b)
-{
-	double x = *(const double *)a, y = *(const double *)b;
-	return (x > y) - (x < y);
-}
 
-/* sorts v */
-static double median(double *v, size_t n)
-{
-	qsort(v, n, sizeof *v, cmpd);
-	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* C = A^T vec(R / norm) and tr(R / norm) */
 static void correlate(struct c0_covop *op, const struct c0_cov *cov, double norm, double *R, double *C, double *trR)
@@ -223,7 +213,7 @@ int c0_lambda_auto(const struct c0_support_conf *c, const struct c0_cov *a, cons
 	const double sig = noise_sd(hn);
 	const double sq = hquantile_above(h, KAPPA * sig, QUANT), sm = hquantile_above(h, KAPPA * sig, 0.5);
 	memcpy(d, op.n, L * sizeof *d);
-	choose(c, sig, sq, sm, lmax, lmax0, median(d, L), out);
+	choose(c, sig, sq, sm, lmax, lmax0, c0_median(d, L), out);
 	curve(h, hn, lmax, out);
 	free(h);
 	/* a check of the stated PSF, not a part of the rule: none when the band is too short */

@@ -3,6 +3,7 @@
 #include "ops/psi_omega.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/order.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -72,15 +73,6 @@ static int classes(const uint8_t *mask, int H, int W, int srf, int r, uint8_t *c
 	return C0_OK;
 }
 
-static double median_small(double *v, int n)
-{
-	for (int i = 1; i < n; i++)
-		for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
-			double t = v[j];
-			v[j] = v[j - 1], v[j - 1] = t;
-		}
-	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* c: the stacks' mean pairwise covariance over the FAR pixels */
 static double shared_variance(int n, const double *const *res, const uint8_t *cls, size_t N, int *nfar)
@@ -131,7 +123,7 @@ int c0_pattern_estimate(const struct c0_grid *g, int n, const double *const *res
 		double v[C0_MAX_STACKS];
 		for (int q = 0; q < n; q++)
 			v[q] = res[q][i];
-		med[i] = median_small(v, n);
+		med[i] = c0_median(v, (size_t)n);
 	}
 	if (!st)
 		s->common_var = shared_variance(n, res, cls, N, &s->far_pixels);
