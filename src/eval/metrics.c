@@ -90,8 +90,6 @@ double c0_psnr(const float *est, const float *truth, int H, int W, int margin)
 	return n && se > 0 ? 10 * log10(mx * mx / (se / n)) : INFINITY;
 }
 
-
-
 int c0_depth_error(const float *est, int eh, int ew, const float *truth, const uint8_t *truth_mask, int th, int tw,
 		   int margin, struct c0_depth_err *out)
 {

@@ -466,7 +466,6 @@ static int lag_index(const struct c0_cov *c, int dy, int dx)
 	return -1;
 }
 
-
 int c0_cov_guard(struct c0_cov *c, double g, size_t *set)
 {
 	const int w = c->W, h = c->H, lr = lag_index(c, 0, 1), ld = lag_index(c, 1, 0);

@@ -1,7 +1,6 @@
 #include "solve/nnqp.h"
 #include "core/c0math.h"
 
-#include <math.h>
 #include <string.h>
 
 #define VLOAD(v, p) memcpy(&(v), (p), sizeof(v))

@@ -27,8 +27,6 @@ static const double RHO = 2e-2, QUANT = 0.9, KAPPA = 4;
  * threshold: a fraction of the square of the l1 choice */
 static const double CEL0_GAMMA = 0.03;
 
-
-
 /* C = A^T vec(R / norm) and tr(R / norm) */
 static void correlate(struct c0_covop *op, const struct c0_cov *cov, double norm, double *R, double *C, double *trR)
 {

@@ -73,7 +73,6 @@ static int classes(const uint8_t *mask, int H, int W, int srf, int r, uint8_t *c
 	return C0_OK;
 }
 
-
 /* c: the stacks' mean pairwise covariance over the FAR pixels */
 static double shared_variance(int n, const double *const *res, const uint8_t *cls, size_t N, int *nfar)
 {
