@@ -7,6 +7,7 @@
 #include "io/tiff.h"
 #include "core/err.h"
 #include "core/mem.h"
+#include "core/order.h"
 #include "core/rng.h"
 
 #include <math.h>
@@ -90,23 +91,9 @@ double c0_sim_cam_variance(const struct c0_sim_conf *c, const struct c0_sim_cam 
 	return (double)m->sd[i] * m->sd[i] + (m->hot[i] ? c->hot_sd * c->hot_sd : 0) + 1.0 / 12;
 }
 
-static int cmp_float(const void *a, const void *b)
-{
-	float x = *(const float *)a, y = *(const float *)b;
-	return (x > y) - (x < y);
-}
-
 double c0_sim_cam_median_sd(const struct c0_sim_conf *c, const struct c0_sim_cam *m)
 {
-	const size_t n = (size_t)c->width * c->height;
-	float *v = c0_alloc(n, sizeof *v);
-	if (!v)
-		return NAN;
-	memcpy(v, m->sd, n * sizeof *v);
-	qsort(v, n, sizeof *v, cmp_float);
-	double med = n % 2 ? v[n / 2] : 0.5 * ((double)v[n / 2 - 1] + v[n / 2]);
-	free(v);
-	return med;
+	return c0_median_of(m->sd, (size_t)c->width * c->height);
 }
 
 /* Gamma(k, 1) for a whole k >= 1 (Marsaglia and Tsang 2000) */
