@@ -274,7 +274,11 @@ static int open_file(const char *path, const char *name, struct c0_tiff_reader *
 		return C0_ENOMEM;
 	snprintf(r->name, sizeof r->name, "%s", name);
 	TIFFOpenOptions *o = options(r);
-	r->tif = TIFFOpenExt(path, "rm", o);   /* read, not map: a mapped stack counts as resident memory */
+	/* r: read, not map (a mapped stack counts as resident memory); c: a
+	 * page's one uncompressed strip is read whole, not chopped by libtiff into
+	 * 8 kB strips of a seek and a read each (256 of each a 1024^2 uint16
+	 * frame: docs/speed.md, "Reading a frame in one read") */
+	r->tif = TIFFOpenExt(path, "rmc", o);
 	TIFFOpenOptionsFree(o);
 	return finish_open(r, out);
 }
@@ -308,7 +312,7 @@ int c0_tiff_open_mem(const void *data, size_t size, const char *name, struct c0_
 	r->mem = data;
 	r->memsize = size;
 	TIFFOpenOptions *o = options(r);
-	r->tif = TIFFClientOpenExt(name, "rm", (thandle_t)r, mem_read, mem_write, mem_seek, mem_close,
+	r->tif = TIFFClientOpenExt(name, "rmc", (thandle_t)r, mem_read, mem_write, mem_seek, mem_close,
 				   mem_size, mem_map, mem_unmap, o);
 	TIFFOpenOptionsFree(o);
 	return finish_open(r, out);
