@@ -276,8 +276,8 @@ static int open_file(const char *path, const char *name, struct c0_tiff_reader *
 	TIFFOpenOptions *o = options(r);
 	/* r: read, not map (a mapped stack counts as resident memory); c: a
 	 * page's one uncompressed strip is read whole, not chopped by libtiff into
-	 * 8 kB strips of a seek and a read each (256 of each a 1024^2 uint16
-	 * frame: docs/speed.md, "Reading a frame in one read") */
+	 * 8 kB strips of a seek and a read each (256 seeks and reads for a
+	 * 1024^2 uint16 frame: docs/speed.md, "Reading a frame in one read") */
 	r->tif = TIFFOpenExt(path, "rmc", o);
 	TIFFOpenOptionsFree(o);
 	return finish_open(r, out);
