@@ -226,6 +226,12 @@ static int check_magic(const char *name, const uint8_t *b, size_t n)
 	return ok ? C0_OK : c0_fail(C0_EFORMAT, "%s: not a TIFF file (bad magic number)", name);
 }
 
+/* Both opens' mode. r: read, not map (a mapped stack counts as resident
+ * memory); c: a page's one uncompressed strip is read whole, not chopped by
+ * libtiff into 8 kB strips of a seek and a read each (256 seeks and reads
+ * for a 1024^2 uint16 frame: docs/speed.md, "Reading a frame in one read") */
+#define OPEN_MODE "rmc"
+
 static TIFFOpenOptions *options(struct c0_tiff_reader *r)
 {
 	TIFFOpenOptions *o = TIFFOpenOptionsAlloc();
@@ -274,11 +280,7 @@ static int open_file(const char *path, const char *name, struct c0_tiff_reader *
 		return C0_ENOMEM;
 	snprintf(r->name, sizeof r->name, "%s", name);
 	TIFFOpenOptions *o = options(r);
-	/* r: read, not map (a mapped stack counts as resident memory); c: a
-	 * page's one uncompressed strip is read whole, not chopped by libtiff into
-	 * 8 kB strips of a seek and a read each (256 seeks and reads for a
-	 * 1024^2 uint16 frame: docs/speed.md, "Reading a frame in one read") */
-	r->tif = TIFFOpenExt(path, "rmc", o);
+	r->tif = TIFFOpenExt(path, OPEN_MODE, o);
 	TIFFOpenOptionsFree(o);
 	return finish_open(r, out);
 }
@@ -312,7 +314,7 @@ int c0_tiff_open_mem(const void *data, size_t size, const char *name, struct c0_
 	r->mem = data;
 	r->memsize = size;
 	TIFFOpenOptions *o = options(r);
-	r->tif = TIFFClientOpenExt(name, "rmc", (thandle_t)r, mem_read, mem_write, mem_seek, mem_close,
+	r->tif = TIFFClientOpenExt(name, OPEN_MODE, (thandle_t)r, mem_read, mem_write, mem_seek, mem_close,
 				   mem_size, mem_map, mem_unmap, o);
 	TIFFOpenOptionsFree(o);
 	return finish_open(r, out);
